@@ -1,0 +1,17 @@
+"""The key reference in cases/README.md is generated from the schema and stays in step with it."""
+from pathlib import Path
+
+from transient.schema import reference_markdown
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_case_reference_is_up_to_date():
+    text = (ROOT / "cases" / "README.md").read_text()
+    assert reference_markdown() in text, "regenerate with: python -m transient.schema"
+
+
+def test_readme_quick_start_commands():
+    text = (ROOT / "README.md").read_text()
+    assert "python -m pip install -e . && transient modes cases/pad_disc.toml" in text
+    assert 'python -m pip install -e ".[test]" && python -m pytest' in text

@@ -1,0 +1,61 @@
+"""Every shipped case runs through the command line and gives one physical number right."""
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from transient.case import load
+from transient.cli import main
+from transient.model import build_model
+
+CASES = Path(__file__).resolve().parent.parent / "cases"
+
+
+def run_modes(capsys, name, *overrides):
+    args = ["modes", str(CASES / name), "--json"]
+    for o in overrides:
+        args += ["--set", o]
+    assert main(args) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def total_mass(model):
+    return model.lumped_mass.sum() / 3
+
+
+def test_every_case_is_tested():
+    assert sorted(p.name for p in CASES.glob("*.toml")) == ["drilled_cube.toml", "pad_disc.toml"]
+
+
+def test_drilled_cube_mass_and_modes(capsys):
+    case = load(CASES / "drilled_cube.toml")
+    model = build_model(case)
+    lower = case["parts"]["lower"]["mesh"]
+    # the hole is a polygon inscribed in the circle, one vertex in the direction of each node of
+    # the O-grid square (half-width 3 background cells of 0.1/12 here)
+    r, t = lower["hole_radius"], np.linspace(-1.0, 1.0, 7)[:-1]
+    square = np.concatenate([np.c_[t, -np.ones(6)], np.c_[np.ones(6), t],
+                             np.c_[-t, np.ones(6)], np.c_[-np.ones(6), -t]])
+    angles = np.arctan2(square[:, 1], square[:, 0])
+    polygon = 0.5 * r ** 2 * np.sin(np.diff(np.r_[angles, angles[0] + 2 * np.pi])).sum()
+    volume = 2 * 0.1 ** 3 - polygon * 0.1
+    assert total_mass(model) == pytest.approx(7800.0 * volume, rel=1e-10)
+    out = run_modes(capsys, "drilled_cube.toml")
+    f = np.abs(out["frequencies_hz"])
+    # no contact stage yet: the upper cube floats freely (6 rigid modes) above the clamped one
+    assert np.sum(f < 1e-3 * f[6]) == 6 and f[6] > 1000
+
+
+def test_pad_disc_mass_and_modes_to_16khz(capsys):
+    case = load(CASES / "pad_disc.toml")
+    model = build_model(case)
+    d, p = case["parts"]["disc"]["mesh"], case["parts"]["pad"]["mesh"]
+    disc = np.pi * (d["outer_radius"] ** 2 - d["inner_radius"] ** 2) * d["thickness"] * 7850
+    sector = np.radians(p["angle"]) / 2 * (p["outer_radius"] ** 2 - p["inner_radius"] ** 2)
+    pad = sector * (p["lining_thickness"] * 2500 + p["backplate_thickness"] * 7850)
+    assert total_mass(model) == pytest.approx(disc + pad, rel=1e-4)   # curved hex20 edges
+    out = run_modes(capsys, "pad_disc.toml")
+    assert 20_000 <= out["ndof"] <= 100_000
+    f = np.array(out["frequencies_hz"])
+    assert f[-1] <= 16000 and len(f) > 30

@@ -1,0 +1,228 @@
+"""Element matrices of linear isotropic elasticity and their summation into CSR.
+
+Element matrices are COO triplets in compact form: the value of entry (3a+i, 3b+j) of cell e sits
+at blocks[e, 3a+i, 3b+j]; its row and column are the dofs 3 conn[e,a]+i and 3 conn[e,b]+j. The
+summation kernel builds the node graph once, then adds every block in place (no sort of triplets).
+"""
+import numpy as np
+
+from ..jit import njit
+
+
+@njit
+def _jacobian(X, nodes, dN, J):
+    """J[i, d] = dx_i / dxi_d at one point; returns det J and overwrites J with inv(J)^T."""
+    for i in range(3):
+        for d in range(3):
+            s = 0.0
+            for a in range(nodes.shape[0]):
+                s += X[nodes[a], i] * dN[a, d]
+            J[i, d] = s
+    det = (J[0, 0] * (J[1, 1] * J[2, 2] - J[1, 2] * J[2, 1])
+           - J[0, 1] * (J[1, 0] * J[2, 2] - J[1, 2] * J[2, 0])
+           + J[0, 2] * (J[1, 0] * J[2, 1] - J[1, 1] * J[2, 0]))
+    c00 = J[1, 1] * J[2, 2] - J[1, 2] * J[2, 1]
+    c01 = J[1, 2] * J[2, 0] - J[1, 0] * J[2, 2]
+    c02 = J[1, 0] * J[2, 1] - J[1, 1] * J[2, 0]
+    c10 = J[0, 2] * J[2, 1] - J[0, 1] * J[2, 2]
+    c11 = J[0, 0] * J[2, 2] - J[0, 2] * J[2, 0]
+    c12 = J[0, 1] * J[2, 0] - J[0, 0] * J[2, 1]
+    c20 = J[0, 1] * J[1, 2] - J[0, 2] * J[1, 1]
+    c21 = J[0, 2] * J[1, 0] - J[0, 0] * J[1, 2]
+    c22 = J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0]
+    inv = 1.0 / det if det != 0.0 else 0.0
+    # inv(J)^T equals the cofactor matrix divided by det J
+    J[0, 0], J[0, 1], J[0, 2] = c00 * inv, c01 * inv, c02 * inv
+    J[1, 0], J[1, 1], J[1, 2] = c10 * inv, c11 * inv, c12 * inv
+    J[2, 0], J[2, 1], J[2, 2] = c20 * inv, c21 * inv, c22 * inv
+    return det
+
+
+@njit
+def stiffness_blocks(X, conn, dN, w, lam, mu, blocks, min_det):
+    """Stiffness of every cell into blocks (ne, 3 nen, 3 nen); min det J per cell into min_det.
+
+    X (nn, 3) coordinates; conn (ne, nen); dN (ng, nen, 3) reference derivatives and w (ng)
+    weights of the quadrature rule; lam, mu (ne) Lame constants [Pa].
+    """
+    ne, nen = conn.shape
+    ng = w.shape[0]
+    J = np.empty((3, 3))
+    G = np.empty((nen, 3))
+    for e in range(ne):
+        nodes = conn[e]
+        Ke = blocks[e]
+        Ke[:, :] = 0.0
+        md = np.inf
+        for g in range(ng):
+            det = _jacobian(X, nodes, dN[g], J)
+            md = min(md, det)
+            for a in range(nen):
+                for i in range(3):
+                    G[a, i] = dN[g, a, 0] * J[i, 0] + dN[g, a, 1] * J[i, 1] + dN[g, a, 2] * J[i, 2]
+            c = w[g] * det
+            cl = c * lam[e]
+            cm = c * mu[e]
+            for a in range(nen):
+                ga0, ga1, ga2 = G[a, 0], G[a, 1], G[a, 2]
+                for b in range(a, nen):
+                    gb0, gb1, gb2 = G[b, 0], G[b, 1], G[b, 2]
+                    s = cm * (ga0 * gb0 + ga1 * gb1 + ga2 * gb2)
+                    r, q = 3 * a, 3 * b
+                    Ke[r, q] += cl * ga0 * gb0 + cm * ga0 * gb0 + s
+                    Ke[r, q + 1] += cl * ga0 * gb1 + cm * ga1 * gb0
+                    Ke[r, q + 2] += cl * ga0 * gb2 + cm * ga2 * gb0
+                    Ke[r + 1, q] += cl * ga1 * gb0 + cm * ga0 * gb1
+                    Ke[r + 1, q + 1] += cl * ga1 * gb1 + cm * ga1 * gb1 + s
+                    Ke[r + 1, q + 2] += cl * ga1 * gb2 + cm * ga2 * gb1
+                    Ke[r + 2, q] += cl * ga2 * gb0 + cm * ga0 * gb2
+                    Ke[r + 2, q + 1] += cl * ga2 * gb1 + cm * ga1 * gb2
+                    Ke[r + 2, q + 2] += cl * ga2 * gb2 + cm * ga2 * gb2 + s
+        for a in range(nen):
+            for b in range(a + 1, nen):
+                for i in range(3):
+                    for j in range(3):
+                        Ke[3 * b + j, 3 * a + i] = Ke[3 * a + i, 3 * b + j]
+        min_det[e] = md
+
+
+@njit
+def mass_blocks(X, conn, N, dN, w, rho, blocks):
+    """Scalar consistent mass of every cell into blocks (ne, nen, nen): rho int N_a N_b dV [kg]."""
+    ne, nen = conn.shape
+    ng = w.shape[0]
+    J = np.empty((3, 3))
+    for e in range(ne):
+        nodes = conn[e]
+        Me = blocks[e]
+        Me[:, :] = 0.0
+        for g in range(ng):
+            c = w[g] * _jacobian(X, nodes, dN[g], J) * rho[e]
+            for a in range(nen):
+                ca = c * N[g, a]
+                for b in range(a, nen):
+                    Me[a, b] += ca * N[g, b]
+        for a in range(nen):
+            for b in range(a + 1, nen):
+                Me[b, a] = Me[a, b]
+
+
+@njit
+def node_graph(cell_ptr, cell_nodes, n_nodes):
+    """Sorted neighbours of every node through shared cells, as CSR (ptr, idx).
+
+    Cells of any types are given as one flat list: the nodes of cell c are
+    cell_nodes[cell_ptr[c]:cell_ptr[c + 1]].
+    """
+    n_cells = cell_ptr.shape[0] - 1
+    count = np.zeros(n_nodes + 1, np.int64)
+    for c in range(n_cells):
+        for k in range(cell_ptr[c], cell_ptr[c + 1]):
+            count[cell_nodes[k] + 1] += 1
+    nc_ptr = np.cumsum(count)
+    nc_idx = np.empty(nc_ptr[-1], np.int64)
+    fill = nc_ptr[:-1].copy()
+    for c in range(n_cells):
+        for k in range(cell_ptr[c], cell_ptr[c + 1]):
+            n = cell_nodes[k]
+            nc_idx[fill[n]] = c
+            fill[n] += 1
+    mark = np.full(n_nodes, -1, np.int64)
+    ptr = np.zeros(n_nodes + 1, np.int64)
+    bound = 0
+    for n in range(n_nodes):
+        for k in range(nc_ptr[n], nc_ptr[n + 1]):
+            c = nc_idx[k]
+            bound += cell_ptr[c + 1] - cell_ptr[c]
+    idx = np.empty(bound, np.int64)
+    pos = 0
+    for n in range(n_nodes):
+        start = pos
+        for k in range(nc_ptr[n], nc_ptr[n + 1]):
+            c = nc_idx[k]
+            for q in range(cell_ptr[c], cell_ptr[c + 1]):
+                m = cell_nodes[q]
+                if mark[m] != n:
+                    mark[m] = n
+                    idx[pos] = m
+                    pos += 1
+        idx[start:pos].sort()
+        ptr[n + 1] = pos
+    return ptr, idx[:pos].copy()
+
+
+@njit
+def block_csr_pattern(ptr, idx):
+    """CSR pattern of the 3 x 3 dof blocks of a node graph (dof = 3 node + component)."""
+    n_nodes = ptr.shape[0] - 1
+    indptr = np.empty(3 * n_nodes + 1, np.int64)
+    indices = np.empty(9 * ptr[-1], np.int64)
+    indptr[0] = 0
+    for n in range(n_nodes):
+        deg = ptr[n + 1] - ptr[n]
+        for i in range(3):
+            r = 3 * n + i
+            start = 9 * ptr[n] + 3 * deg * i
+            indptr[r + 1] = start + 3 * deg
+            for k in range(deg):
+                for j in range(3):
+                    indices[start + 3 * k + j] = 3 * idx[ptr[n] + k] + j
+    return indptr, indices
+
+
+@njit
+def _find(idx, lo, hi, value):
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if idx[mid] < value:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit
+def add_vector_blocks(ptr, idx, conn, blocks, data):
+    """data += blocks (ne, 3 nen, 3 nen) summed into the block CSR pattern of (ptr, idx)."""
+    ne, nen = conn.shape
+    for e in range(ne):
+        for a in range(nen):
+            A = conn[e, a]
+            deg = ptr[A + 1] - ptr[A]
+            for b in range(nen):
+                k = _find(idx, ptr[A], ptr[A + 1], conn[e, b]) - ptr[A]
+                for i in range(3):
+                    base = 9 * ptr[A] + 3 * deg * i + 3 * k
+                    for j in range(3):
+                        data[base + j] += blocks[e, 3 * a + i, 3 * b + j]
+
+
+@njit
+def add_scalar_blocks(ptr, idx, conn, blocks, data):
+    """data += blocks (ne, nen, nen) times the 3 x 3 identity, into the block CSR pattern."""
+    ne, nen = conn.shape
+    for e in range(ne):
+        for a in range(nen):
+            A = conn[e, a]
+            deg = ptr[A + 1] - ptr[A]
+            for b in range(nen):
+                k = _find(idx, ptr[A], ptr[A + 1], conn[e, b]) - ptr[A]
+                v = blocks[e, a, b]
+                for i in range(3):
+                    data[9 * ptr[A] + 3 * deg * i + 3 * k + i] += v
+
+
+@njit
+def lumped_mass_hrz(conn, blocks, out):
+    """Diagonal (HRZ) lumping: each cell's diagonal scaled to its total mass, summed per node."""
+    ne, nen = conn.shape
+    for e in range(ne):
+        total = 0.0
+        diag = 0.0
+        for a in range(nen):
+            diag += blocks[e, a, a]
+            for b in range(nen):
+                total += blocks[e, a, b]
+        scale = total / diag
+        for a in range(nen):
+            out[conn[e, a]] += scale * blocks[e, a, a]

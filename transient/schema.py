@@ -1,0 +1,237 @@
+"""The case file schema: every key, its type, default, unit and meaning.
+
+Tables keyed by name (`[parts.NAME]`) give every value a dotted path. The schema drives
+validation (`case.py`), `--set` overrides, and the key reference in `cases/README.md`
+(`python -m transient.schema` prints it).
+"""
+from dataclasses import dataclass, field
+
+REQUIRED = object()
+
+
+@dataclass(frozen=True)
+class Value:
+    """A leaf value. kind: float, int, str, bool, floats, ints, strs (lists), choice."""
+    kind: str
+    doc: str
+    default: object = REQUIRED
+    unit: str = ""
+    length: int = 0            # exact list length when > 0
+    choices: tuple = ()
+    minimum: float = None      # inclusive bounds on numbers (and list items)
+    maximum: float = None
+    open_min: float = None     # exclusive bounds
+    open_max: float = None
+
+
+@dataclass(frozen=True)
+class Table:
+    doc: str
+    fields: dict
+    optional: bool = False     # an absent table is filled with its defaults
+
+
+@dataclass(frozen=True)
+class Named:
+    """Tables keyed by a user-chosen name, such as [parts.NAME]."""
+    doc: str
+    item: object
+    min_items: int = 0
+
+
+@dataclass(frozen=True)
+class Variant:
+    """A table whose fields depend on its `kind` key."""
+    doc: str
+    options: dict
+    common: dict = field(default_factory=dict)
+
+
+def _pos(doc, unit="", default=REQUIRED):
+    return Value("float", doc, default, unit, open_min=0.0)
+
+
+def _vec3(doc, unit="m", default=REQUIRED):
+    return Value("floats", doc, default, unit, length=3)
+
+
+ELEMENT = Value("choice", "element type of the generated mesh", "hex8",
+                choices=("hex8", "hex20", "tet4", "tet10"))
+
+MESH = Variant("mesh of the part: a generator or a file", {
+    "box": {
+        "size": Value("floats", "edge lengths along x, y, z", unit="m", length=3, open_min=0.0),
+        "divisions": Value("ints", "cells along x, y, z", length=3, minimum=1),
+        "origin": _vec3("corner with the smallest coordinates", default=[0.0, 0.0, 0.0]),
+        "element": ELEMENT,
+    },
+    "drilled_box": {
+        "size": Value("floats", "edge lengths along x, y, z", unit="m", length=3, open_min=0.0),
+        "divisions": Value("ints", "background cells along x, y, z", length=3, minimum=1),
+        "origin": _vec3("corner with the smallest coordinates", default=[0.0, 0.0, 0.0]),
+        "hole_center": Value("floats", "x, y of the axis of the hole (along z)", unit="m",
+                             length=2),
+        "hole_radius": _pos("radius of the hole", "m"),
+        "ogrid_cells": Value("int", "half-width in background cells of the square meshed as an "
+                             "O-grid around the hole (0: smallest that fits 1.5 radius)", 0,
+                             minimum=0),
+        "element": ELEMENT,
+    },
+    "annular_disc": {
+        "inner_radius": _pos("radius of the hub (inner) face", "m"),
+        "outer_radius": _pos("outer radius", "m"),
+        "thickness": _pos("thickness along z", "m"),
+        "divisions": Value("ints", "cells along radius, circumference, thickness", length=3,
+                           minimum=1),
+        "center": _vec3("centre of the lower face", default=[0.0, 0.0, 0.0]),
+        "element": ELEMENT,
+    },
+    "brake_pad": {
+        "inner_radius": _pos("inner radius of the annular sector", "m"),
+        "outer_radius": _pos("outer radius of the annular sector", "m"),
+        "angle": Value("float", "opening angle of the sector", unit="deg", open_min=0.0,
+                       maximum=360.0),
+        "center_angle": Value("float", "polar angle of the sector's middle", 90.0, "deg"),
+        "lining_thickness": _pos("thickness of the friction lining", "m"),
+        "backplate_thickness": _pos("thickness of the steel backplate", "m"),
+        "divisions": Value("ints", "cells along radius, angle, lining thickness, backplate "
+                           "thickness", length=4, minimum=1),
+        "z0": Value("float", "height of the friction face (bottom of the lining)", 0.0, "m"),
+        "center": Value("floats", "x, y of the axis of the sector", [0.0, 0.0], "m", length=2),
+        "element": ELEMENT,
+    },
+    "file": {
+        "path": Value("str", "mesh file read by meshio (Gmsh .msh, Abaqus .inp, VTU...), "
+                      "relative to the case file"),
+        "scale": _pos("factor applied to the coordinates (1e-3 for a file in mm)", "-", 1.0),
+        "translate": _vec3("translation applied after scaling", default=[0.0, 0.0, 0.0]),
+    },
+})
+
+SELECTION = Variant("named selection from geometry: nodes within tol, and the boundary faces "
+                    "whose nodes are all selected", {
+                        "plane": {
+                            "point": _vec3("a point of the plane"),
+                            "normal": Value("floats", "normal of the plane", length=3),
+                        },
+                        "box": {
+                            "min": _vec3("smallest corner"),
+                            "max": _vec3("largest corner"),
+                        },
+                        "cylinder": {
+                            "point": _vec3("a point of the axis"),
+                            "axis": Value("floats", "direction of the axis", length=3),
+                            "radius": _pos("radius of the cylindrical surface", "m"),
+                        },
+                    }, common={
+                        "tol": Value("float", "distance tolerance", 1e-9, "m", minimum=0.0),
+                    })
+
+PART = Table("a solid part", {
+    "mesh": MESH,
+    "material": Value("str", "name of the material of the part's cells"),
+    "region_materials": Value("table", "cell set name -> material name, overriding `material` "
+                              "on those cells", {}),
+    "sets": Named("named selections from geometry (mesh and generator sets are named too)",
+                  SELECTION),
+})
+
+MATERIAL = Table("linear isotropic elastic material", {
+    "E": _pos("Young's modulus", "Pa"),
+    "nu": Value("float", "Poisson's ratio", open_min=-1.0, open_max=0.5),
+    "rho": _pos("mass density", "kg/m^3"),
+})
+
+CONSTRAINT = Table("zero displacement of the nodes of a selection", {
+    "set": Value("str", "selection as PART.SET"),
+    "dofs": Value("strs", "clamped directions", ["x", "y", "z"], choices=("x", "y", "z")),
+})
+
+LOAD = Variant("constant load", {
+    "pressure": {
+        "set": Value("str", "face selection as PART.SET"),
+        "value": Value("float", "pressure, positive when pushing into the surface", unit="Pa"),
+    },
+    "force": {
+        "part": Value("str", "part carrying the force"),
+        "point": _vec3("the force goes to the node nearest this point"),
+        "vector": _vec3("force", "N"),
+    },
+    "gravity": {
+        "vector": _vec3("acceleration of gravity", "m/s^2"),
+        "parts": Value("strs", "parts it applies to (empty: all)", []),
+    },
+})
+
+SENSOR = Table("displacement observed at a point", {
+    "part": Value("str", "part observed"),
+    "point": _vec3("the node nearest this point is observed"),
+    "direction": Value("floats", "direction observed", [0.0, 0.0, 1.0], length=3),
+})
+
+SOLVER = Table("solution settings", {
+    "modes": Table("modal analysis", {
+        "count": Value("int", "number of modes (when fmax is 0)", 20, minimum=1),
+        "fmax": Value("float", "compute all modes up to this frequency (0: use count)", 0.0,
+                      "Hz", minimum=0.0),
+        "shift": Value("float", "shift of shift-invert Lanczos, below the first frequency; a "
+                       "negative value keeps free parts' rigid modes solvable", -1.0, "Hz"),
+    }, optional=True),
+    "linear_solver": Value("choice", "sparse factorization: auto picks CHOLMOD if installed, "
+                           "else PARDISO, else SuperLU", "auto",
+                           choices=("auto", "cholmod", "pardiso", "superlu")),
+    "quadrature": Table("quadrature degrees of the element matrices (0: element default)", {
+        "stiffness": Value("int", "degree for K", 0, minimum=0),
+        "mass": Value("int", "degree for M", 0, minimum=0),
+    }, optional=True),
+}, optional=True)
+
+OUTPUT = Table("outputs", {
+    "vtu": Value("str", "write the model (and modes) to this VTU file, relative to the case "
+                 "file ('' = none)", ""),
+}, optional=True)
+
+CASE = Table("a case", {
+    "title": Value("str", "one-line description", ""),
+    "materials": Named("materials by name", MATERIAL, min_items=1),
+    "parts": Named("parts by name", PART, min_items=1),
+    "constraints": Named("constraints by name", CONSTRAINT),
+    "loads": Named("loads by name", LOAD),
+    "sensors": Named("sensors by name", SENSOR),
+    "solver": SOLVER,
+    "output": OUTPUT,
+})
+
+
+def reference(node=CASE, prefix=""):
+    """Markdown rows (path, type, default, unit, meaning) of every key under a schema node."""
+    rows = []
+    if isinstance(node, Table):
+        for key, sub in node.fields.items():
+            rows += reference(sub, f"{prefix}.{key}" if prefix else key)
+    elif isinstance(node, Named):
+        rows += reference(node.item, f"{prefix}.NAME")
+    elif isinstance(node, Variant):
+        rows.append((f"{prefix}.kind", "choice", "required", "",
+                     f"{node.doc}: one of {', '.join(node.options)}"))
+        for key, sub in node.common.items():
+            rows += reference(sub, f"{prefix}.{key}")
+        for kind, fields in node.options.items():
+            for key, sub in fields.items():
+                rows += reference(sub, f"{prefix}.{key} ({kind})")
+    else:
+        default = "required" if node.default is REQUIRED else repr(node.default)
+        kind = node.kind + (f"[{node.length}]" if node.length else "")
+        doc = node.doc + (f" ({', '.join(node.choices)})" if node.choices else "")
+        rows.append((prefix, kind, default, node.unit, doc))
+    return rows
+
+
+def reference_markdown():
+    lines = ["| key | type | default | unit | meaning |", "|---|---|---|---|---|"]
+    lines += [f"| `{p}` | {k} | {d} | {u} | {m} |" for p, k, d, u, m in reference()]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    print(reference_markdown())
