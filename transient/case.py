@@ -157,6 +157,11 @@ class _Validator:
             item = S.Value(kind[:-1], spec.doc, choices=spec.choices, minimum=spec.minimum,
                            maximum=spec.maximum, open_min=spec.open_min, open_max=spec.open_max)
             return [self.scalar(item, v, key, spec) for v in value]
+        if kind == "eps":
+            if value == "auto":
+                return value
+            return self.scalar(S.Value("float", spec.doc, minimum=spec.minimum,
+                                       maximum=spec.maximum), value, key, spec)
         if kind == "table":
             self.expect_table(value, key)
             for k, v in value.items():
@@ -205,7 +210,7 @@ def _describe(spec):
     kind = spec.kind
     base = {"float": "a number", "int": "an integer", "str": "a string", "bool": "true or false",
             "choice": "a string", "floats": "a list of numbers", "ints": "a list of integers",
-            "strs": "a list of strings"}[kind]
+            "strs": "a list of strings", "eps": "\"auto\" or a number"}[kind]
     if spec.length:
         base = base.replace("a list", f"a list of {spec.length}")
     bounds = []

@@ -11,7 +11,8 @@ REQUIRED = object()
 
 @dataclass(frozen=True)
 class Value:
-    """A leaf value. kind: float, int, str, bool, floats, ints, strs (lists), choice."""
+    """A leaf value. kind: float, int, str, bool, floats, ints, strs (lists), choice, table
+    (names to strings), eps (a float within bounds or the string "auto")."""
     kind: str
     doc: str
     default: object = REQUIRED
@@ -163,6 +164,35 @@ LOAD = Variant("constant load", {
     },
 })
 
+CONTACT = Table("a contact pair: two face sets of two parts, gap observed on the fine rule or a "
+                "coarser one, optionally regularized by the (1-eps)-compatible shapes", {
+    "surface1": Value("str", "first surface as PART.SET (the gap is positive when it lies "
+                      "outside part 2)"),
+    "surface2": Value("str", "second surface as PART.SET; its outward normal is the contact "
+                      "normal"),
+    "order": Value("int", "degree of the triangle Gauss rule of the fine rule on Gamma", 4,
+                   minimum=1, maximum=20),
+    "k": Value("float", "stiffness density of the gap energy and of linear penalty contact",
+               5e11, "Pa/m", open_min=0.0),
+    "rule": Value("choice", "contact points: fine (the exact rule on Gamma) or centre (one "
+                  "point per face of the master surface)", "fine", choices=("fine", "centre")),
+    "master": Value("choice", "surface whose face centres carry the centre rule", "surface1",
+                    choices=("surface1", "surface2")),
+    "regularized": Value("bool", "observe the gap through the (1-eps)-compatible shapes only",
+                         False),
+    "eps": Value("eps", "compatibility tolerance: shapes with sigma_i / max sigma <= eps are "
+                 "kept; \"auto\" puts it in the largest jump of the spectrum", "auto",
+                 minimum=0.0, maximum=1.0),
+    "formulation": Value("choice", "dual (regularized gap observation, eq. 15) or primal "
+                         "(interface dofs replaced by the kept shapes, eq. 11)", "dual",
+                         choices=("dual", "primal")),
+    "project": Value("choice", "dual: surfaces whose displacement is projected", "both",
+                     choices=("both", "surface1", "surface2")),
+    "norm": Value("choice", "norm of the pseudo-inverse of the dual projection: mass "
+                  "(interface mass C^T W C) or identity (the paper's)", "mass",
+                  choices=("mass", "identity")),
+})
+
 SENSOR = Table("displacement observed at a point", {
     "part": Value("str", "part observed"),
     "point": _vec3("the node nearest this point is observed"),
@@ -197,6 +227,7 @@ CASE = Table("a case", {
     "parts": Named("parts by name", PART, min_items=1),
     "constraints": Named("constraints by name", CONSTRAINT),
     "loads": Named("loads by name", LOAD),
+    "contact": Named("contact pairs by name", CONTACT),
     "sensors": Named("sensors by name", SENSOR),
     "solver": SOLVER,
     "output": OUTPUT,

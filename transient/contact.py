@@ -1,0 +1,114 @@
+"""Contact pairs of a case through the stages interface -> compatibility -> regularize -> rule.
+
+A stage runs only when the pair needs it: the fine rule without regularization does no
+eigendecomposition; `need_compatibility` forces it (for `transient compat`).
+"""
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from .compatibility import auto_eps, compatibility
+from .errors import CaseError
+from .interface import InterfaceError, build_interface
+from .model import resolve_set
+from .regularize import dual_projectors, primal_basis, regularized_rule
+from .rules import centre_rule
+from .selections import set_faces
+
+
+@dataclass(frozen=True)
+class ContactPair:
+    name: str
+    spec: dict                # the case's [contact.NAME] table
+    interface: object         # Interface (fine rule)
+    compat: object            # Compatibility, or None when not computed
+    eps: float                # eps used (None without compatibility)
+    rule: object              # the Rule whose observation the solvers use
+    primal: object            # T_eps for the primal formulation, else None
+    timings: dict             # stage -> seconds, in the order run
+
+    @property
+    def k(self):
+        return self.spec["k"]
+
+    def observation(self, ndof):
+        """(P, ndof) gap observation of the pair's rule in model dofs."""
+        return self.interface.observation(self.rule, ndof)
+
+
+def _surface(case, model, ref, key):
+    part, name = resolve_set(case, model.parts, ref, key)
+    faces = set_faces(part.mesh, name)
+    if not faces:
+        raise CaseError(case.path, key, f"selection '{ref}' holds no boundary face")
+    return part, faces
+
+
+def build_pair(case, model, name, need_compatibility=False):
+    spec = case["contact"][name]
+    key = f"contact.{name}"
+    timings = {}
+    t0 = time.perf_counter()
+    p1, faces1 = _surface(case, model, spec["surface1"], f"{key}.surface1")
+    p2, faces2 = _surface(case, model, spec["surface2"], f"{key}.surface2")
+    if p1.name == p2.name:
+        raise CaseError(case.path, f"{key}.surface2", "both surfaces belong to the same part")
+    try:
+        interface = build_interface(name, p1.mesh.points, faces1, p1.offset, p2.mesh.points,
+                                    faces2, p2.offset, spec["order"])
+    except InterfaceError as exc:
+        raise CaseError(case.path, key, str(exc)) from None
+    timings["interface"] = time.perf_counter() - t0
+
+    comp, eps, primal = None, None, None
+    if spec["regularized"] or need_compatibility:
+        t0 = time.perf_counter()
+        comp = compatibility(interface.fine, spec["k"])
+        eps = auto_eps(comp.normalized) if spec["eps"] == "auto" else spec["eps"]
+        timings["compatibility"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    rule = interface.fine if spec["rule"] == "fine" else centre_rule(interface, spec["master"])
+    if spec["rule"] != "fine":
+        timings["rule"] = time.perf_counter() - t0
+    if spec["regularized"]:
+        t0 = time.perf_counter()
+        if spec["formulation"] == "dual":
+            P1, P2 = dual_projectors(comp, eps, interface.fine, spec["project"], spec["norm"])
+            rule = regularized_rule(rule, P1, P2)
+        else:
+            primal = primal_basis(interface, comp, eps, model.ndof)
+        timings["regularize"] = time.perf_counter() - t0
+    return ContactPair(name, spec, interface, comp, eps, rule, primal, timings)
+
+
+def build_contact(case, model, need_compatibility=False):
+    """Every contact pair of the case, in file order."""
+    return [build_pair(case, model, name, need_compatibility) for name in case["contact"]]
+
+
+def contact_stiffness(pairs, ndof, active=None):
+    """Sum over pairs of C^T diag(k w) C on model dofs (linear penalty, all points active unless
+    `active` gives a bool mask per pair)."""
+    K = sp.csr_matrix((ndof, ndof))
+    for i, pair in enumerate(pairs):
+        C = pair.observation(ndof)
+        kw = pair.k * pair.rule.weights
+        if active is not None:
+            kw = kw * active[i]
+        K = K + (C.T @ sp.diags(kw) @ C).tocsr()
+    return K
+
+
+def contact_preload(pairs, ndof, active=None):
+    """Sum over pairs of -C^T diag(k w) g0: the force of the initial gaps under linear penalty."""
+    f = np.zeros(ndof)
+    for i, pair in enumerate(pairs):
+        C = pair.observation(ndof)
+        kw = pair.k * pair.rule.weights
+        if active is not None:
+            kw = kw * active[i]
+        f -= C.T @ (kw * pair.rule.gap0)
+    return f

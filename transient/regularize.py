@@ -1,0 +1,87 @@
+"""Regularized gap observation through the (1-eps)-compatible shapes (paper eq. 11-15).
+
+Dual: the displacement of surface n is replaced by its projection on the traces U_n of the kept
+shapes, g = C1 P1 q1 - C2 P2 q2 + g0 with P_n = U_n U_n^+; the pseudo-inverse is taken in the
+identity norm (the paper's choice) or in the interface mass norm W_n = C_n^T diag(w) C_n.
+Primal: the interface normal dofs are replaced by generalized coordinates, q = T_eps q_eps.
+"""
+from dataclasses import replace
+
+import numpy as np
+import scipy.sparse as sp
+
+RANK_TOL = 1e-10   # relative singular value below which a trace direction is dependent
+
+
+def _range_basis(U, tol=RANK_TOL):
+    """Orthonormal basis of the range of U (identity norm)."""
+    if U.shape[1] == 0:
+        return U
+    Q, s, _ = np.linalg.svd(U, full_matrices=False)
+    return Q[:, s > tol * s[0]] if s.size and s[0] > 0 else Q[:, :0]
+
+
+def projector(U, W=None):
+    """Projector (N, N) on range(U): orthogonal in the identity norm, or W-orthogonal."""
+    Q = _range_basis(U)
+    if W is None:
+        return Q @ Q.T
+    G = Q.T @ W @ Q
+    return Q @ np.linalg.solve(G, Q.T @ W)
+
+
+def interface_mass(rule):
+    """W1, W2: the interface mass matrices C_n^T diag(w) C_n of each side (dense)."""
+    w = sp.diags(rule.weights)
+    return (rule.C1.T @ w @ rule.C1).toarray(), (rule.C2.T @ w @ rule.C2).toarray()
+
+
+def dual_projectors(comp, eps, fine, project="both", norm="mass"):
+    """P1, P2 of the dual regularization; a side not projected keeps the identity."""
+    U1, U2 = comp.traces(eps)
+    W1, W2 = interface_mass(fine) if norm == "mass" else (None, None)
+    P1 = projector(U1, W1) if project in ("both", "surface1") else np.eye(comp.n1)
+    P2 = projector(U2, W2) if project in ("both", "surface2") else np.eye(comp.n2)
+    return P1, P2
+
+
+def regularized_rule(rule, P1, P2):
+    """The rule with its observation projected: C1 P1, C2 P2 (dense rows as CSR)."""
+    return replace(rule, C1=sp.csr_matrix(rule.C1 @ P1), C2=sp.csr_matrix(rule.C2 @ P2))
+
+
+def primal_basis(interface, comp, eps, ndof):
+    """T_eps (ndof, ndof - N1 - N2 + r1 + r2): all dofs but the interface normal ones, plus the
+    traces of the kept shapes on each side as generalized coordinates (paper eq. 11)."""
+    U1, U2 = comp.traces(eps)
+    blocks = []
+    normal_dofs = []
+    for side, U in ((interface.side1, U1), (interface.side2, U2)):
+        D = side.dof_map(ndof)                    # (N, ndof): rows are unit node normals
+        normal_dofs.append(D)
+        blocks.append(D.T @ sp.csr_matrix(_range_basis(U)))
+    N = sp.vstack(normal_dofs).tocsr()
+    # the complement: identity minus the normal directions of the interface nodes, spanned by
+    # the model dofs of those nodes projected off the normal, plus all other dofs
+    touched = np.unique(N.indices)
+    other = np.setdiff1d(np.arange(ndof), touched)
+    eye = sp.identity(ndof, format="csr")
+    comp_cols = [eye[:, other]]
+    for D in normal_dofs:
+        nodes = D.indices.reshape(-1, 3)[:, 0] // 3
+        normals = D.data.reshape(-1, 3)
+        for d in range(2):
+            t = _tangent(normals, d)
+            rows = (3 * nodes)[:, None] + np.arange(3)
+            cols = np.repeat(np.arange(len(nodes)), 3)
+            comp_cols.append(sp.csr_matrix((t.ravel(), (rows.ravel(), cols)),
+                                           shape=(ndof, len(nodes))))
+    return sp.hstack(comp_cols + blocks).tocsr()
+
+
+def _tangent(normals, which):
+    """Unit tangents (n, 3) orthogonal to unit normals: the first or second of a frame."""
+    ref = np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])
+    t1 = np.cross(normals, ref)
+    t1 /= np.linalg.norm(t1, axis=1)[:, None]
+    return t1 if which == 0 else np.cross(normals, t1)
