@@ -59,12 +59,25 @@ def compatibility(rule, k):
     return Compatibility(k, sigma, shapes, rule.C1.shape[1], rule.C2.shape[1], timings)
 
 
-def auto_eps(normalized, floor=ROUND_OFF):
-    """eps in the largest jump of the normalized spectrum (geometric mean of its two ends).
+CLEAN = 1e-6        # a jump out of round-off separates cleanly when it lands above this
+MIN_JUMP = 10.0     # a smaller ratio between neighbours is not a jump
+FALLBACK_EPS = 1e-3  # the paper's choice for dynamics when the spectrum has no jump
 
-    Values are floored at round-off so that ratios among zeros do not count as jumps.
+
+def auto_eps(normalized):
+    """eps in the largest jump of the normalized spectrum, and how it was found.
+
+    A jump that starts at round-off counts only if it lands above CLEAN (nested meshes: round-off
+    zeros, then incompatible shapes); otherwise the few shapes exactly representable on both sides
+    (constants, linear fields) would always win. eps is the geometric mean of the jump's ends.
+    Without a jump of at least MIN_JUMP, returns FALLBACK_EPS.
+    Returns (eps, 'jump at i' or 'no jump: fallback').
     """
-    s = np.log10(np.maximum(normalized, floor))
-    jumps = np.diff(s)
-    i = int(np.argmax(jumps))
-    return float(10 ** (0.5 * (s[i] + s[i + 1])))
+    s = np.maximum(np.asarray(normalized, float), 1e-300)
+    ratio = s[1:] / s[:-1]
+    valid = (s[:-1] >= ROUND_OFF) | (s[1:] >= CLEAN)
+    ratio = np.where(valid, ratio, 0.0)
+    i = int(np.argmax(ratio))
+    if ratio[i] < MIN_JUMP:
+        return FALLBACK_EPS, "no jump: fallback"
+    return float(np.sqrt(max(s[i], ROUND_OFF) * s[i + 1])), f"jump after {i + 1} shapes"

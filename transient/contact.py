@@ -25,6 +25,7 @@ class ContactPair:
     interface: object         # Interface (fine rule)
     compat: object            # Compatibility, or None when not computed
     eps: float                # eps used (None without compatibility)
+    eps_source: str           # where eps comes from: the case, or the automatic choice
     rule: object              # the Rule whose observation the solvers use
     primal: object            # T_eps for the primal formulation, else None
     timings: dict             # stage -> seconds, in the order run
@@ -62,11 +63,12 @@ def build_pair(case, model, name, need_compatibility=False):
         raise CaseError(case.path, key, str(exc)) from None
     timings["interface"] = time.perf_counter() - t0
 
-    comp, eps, primal = None, None, None
+    comp, eps, eps_source, primal = None, None, "", None
     if spec["regularized"] or need_compatibility:
         t0 = time.perf_counter()
         comp = compatibility(interface.fine, spec["k"])
-        eps = auto_eps(comp.normalized) if spec["eps"] == "auto" else spec["eps"]
+        eps, eps_source = (auto_eps(comp.normalized) if spec["eps"] == "auto"
+                           else (spec["eps"], "case"))
         timings["compatibility"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -81,7 +83,7 @@ def build_pair(case, model, name, need_compatibility=False):
         else:
             primal = primal_basis(interface, comp, eps, model.ndof)
         timings["regularize"] = time.perf_counter() - t0
-    return ContactPair(name, spec, interface, comp, eps, rule, primal, timings)
+    return ContactPair(name, spec, interface, comp, eps, eps_source, rule, primal, timings)
 
 
 def build_contact(case, model, need_compatibility=False):

@@ -27,7 +27,7 @@ def reference_centre(ftype):
     return np.array([0.0, 0.0]) if ELEMENTS[ftype].shape == "quad" else np.array([1 / 3, 1 / 3])
 
 
-def inverse(X2d, p, ftype, tol=1e-14, max_iter=30):
+def inverse(X2d, p, ftype, tol=1e-15, max_iter=30):
     """Reference coordinates (n, 2) of points p (n, 2) in faces given by their projected nodes.
 
     Newton on P(x(xi)) = p, from the face's reference centre. X2d (n, nfn, 2) are the node
@@ -39,7 +39,8 @@ def inverse(X2d, p, ftype, tol=1e-14, max_iter=30):
     n = len(p)
     xi = np.tile(reference_centre(ftype), (n, 1))
     done = np.zeros(n, bool)
-    scale = np.abs(X2d - X2d.mean(axis=1, keepdims=True)).max(axis=(1, 2)) + 1e-300
+    # round-off of the residual scales with the coordinates' magnitude, not the face's size
+    scale = np.abs(X2d).max(axis=(1, 2)) + 1e-300
     for _ in range(max_iter):
         N = el.shape_functions(xi)
         dN = el.shape_derivatives(xi)
@@ -50,7 +51,7 @@ def inverse(X2d, p, ftype, tol=1e-14, max_iter=30):
         step[:, 0] = (J[:, 1, 1] * r[:, 0] - J[:, 0, 1] * r[:, 1]) / det
         step[:, 1] = (-J[:, 1, 0] * r[:, 0] + J[:, 0, 0] * r[:, 1]) / det
         xi -= step
-        done = np.abs(r).max(axis=1) <= tol * scale
+        done = (np.abs(r).max(axis=1) <= tol * scale) | (np.abs(step).max(axis=1) <= 1e-13)
         if done.all():
             break
     return xi, done

@@ -1,0 +1,106 @@
+"""Static contact with linear penalty: the contact patch test, and regularization on the
+drilled cube against a conforming reference."""
+import numpy as np
+import pytest
+
+from transient.case import load
+from transient.contact import build_contact
+from transient.model import build_model
+from transient.static import solve_static
+
+E, NU, P, K = 2.1e11, 0.3, 1.0e6, 1.0e13
+
+PATCH = f"""
+[materials.steel]
+E = {E}
+nu = {NU}
+rho = 7800.0
+
+[parts.lower]
+material = "steel"
+[parts.lower.mesh]
+kind = "box"
+size = [1.0, 1.0, 0.5]
+divisions = [5, 5, 2]
+element = "hex8"
+
+[parts.upper]
+material = "steel"
+[parts.upper.mesh]
+kind = "box"
+size = [1.0, 1.0, 0.5]
+origin = [0.0, 0.0, 0.5]
+divisions = [3, 3, 2]
+element = "hex8"
+
+# rollers: the exact solution is a uniform stress -p e_z e_z, which both meshes represent
+[constraints.base]
+set = "lower.zmin"
+dofs = ["z"]
+[constraints.lower_x]
+set = "lower.xmin"
+dofs = ["x"]
+[constraints.lower_y]
+set = "lower.ymin"
+dofs = ["y"]
+[constraints.upper_x]
+set = "upper.xmin"
+dofs = ["x"]
+[constraints.upper_y]
+set = "upper.ymin"
+dofs = ["y"]
+
+[loads.top]
+kind = "pressure"
+set = "upper.zmax"
+value = {P}
+
+[contact.c]
+surface1 = "upper.zmin"
+surface2 = "lower.zmax"
+k = {K}
+"""
+
+
+def solve(tmp_path, text, overrides=()):
+    path = tmp_path / "case.toml"
+    path.write_text(text)
+    case = load(path, overrides)
+    model = build_model(case)
+    pairs = build_contact(case, model)
+    return model, pairs, solve_static(model, pairs)
+
+
+def lower_top_uz(model, solution):
+    part = model.parts["lower"]
+    nodes = part.mesh.node_sets["zmax"] + part.offset
+    return solution.u[3 * nodes + 2]
+
+
+@pytest.mark.parametrize("elements", [("hex8", "hex8"), ("hex20", "tet10"), ("tet4", "hex20")])
+def test_fine_rule_passes_the_contact_patch_test(tmp_path, elements):
+    overrides = [f"parts.lower.mesh.element={elements[0]}",
+                 f"parts.upper.mesh.element={elements[1]}"]
+    model, pairs, sol = solve(tmp_path, PATCH, overrides)
+    np.testing.assert_allclose(sol.pressures[0], P, rtol=1e-8)
+    np.testing.assert_allclose(sol.gaps[0], -P / K, rtol=1e-8)
+    # the lower block's top is flat: uz = -p h / E everywhere (uniaxial stress)
+    np.testing.assert_allclose(lower_top_uz(model, sol), -P * 0.5 / E, rtol=1e-8)
+
+
+def test_centre_rule_with_coarse_master_fails_the_patch_test(tmp_path):
+    model, pairs, sol = solve(tmp_path, PATCH, ["contact.c.rule=centre",
+                                                "contact.c.master=surface1"])
+    uz = lower_top_uz(model, sol)
+    exact = -P * 0.5 / E
+    # each of the 9 contact points pushes a dimple into the fine surface
+    assert len(sol.pressures[0]) == 9
+    assert np.abs(uz / exact - 1).max() > 0.05
+    assert uz.min() < exact
+
+
+def test_regularized_centre_rule_passes_it(tmp_path):
+    # the uniform field is compatible: regularizing keeps it and removes the dimples
+    model, pairs, sol = solve(tmp_path, PATCH, ["contact.c.rule=centre",
+                                                "contact.c.regularized=true"])
+    np.testing.assert_allclose(lower_top_uz(model, sol), -P * 0.5 / E, rtol=1e-6)
