@@ -219,6 +219,54 @@ def test_drilled_box_rejects_misfit(center, radius, k):
         drilled_box((1.0, 1.0, 1.0), (12, 12, 2), center, radius, ogrid_cells=k)
 
 
+# (size, divisions, hole centre, radius, origin, ogrid_cells): centred hole with the default k;
+# off-centre hole with k = 1 and the O-grid square on xmin (the most skewed plug).
+FILLED_PLANS = [((1.0, 1.0, 1.0), (12, 12, 4), (0.5, 0.5), 0.15, (0.0, 0.0, 0.0), 3),
+                ((0.6, 0.4, 0.05), (6, 4, 2), (1.13, 0.01), 0.05, (1.0, -0.2, 0.0), 1)]
+
+
+@pytest.mark.parametrize("plan", FILLED_PLANS)
+@pytest.mark.parametrize("element", VOLUME_TYPES)
+def test_filled_drilled_box(element, plan):
+    size, divisions, center, radius, origin, k = plan
+    mesh = drilled_box(size, divisions, center, radius, origin=origin, element=element,
+                       ogrid_cells=k, filled=True)
+    x, y, _ = (o + np.linspace(0.0, s, n + 1) for o, s, n in zip(origin, size, divisions))
+    hole = polygon_area(ogrid_hole(x, y, center, radius, k))
+    a, b, c = size
+    check_valid(mesh)
+    check_sets(mesh)
+    assert "hole" not in mesh.face_sets
+    assert volume(mesh) == pytest.approx(a * b * c, rel=1e-12)
+    assert boundary_area(mesh) == pytest.approx(2 * (a * b + b * c + c * a), rel=1e-12)
+    check_plane(mesh, "zmax", (0, 0, 1), a * b)
+    check_plane(mesh, "zmin", (0, 0, -1), a * b)
+    check_plane(mesh, "xmin", (-1, 0, 0), b * c)
+    plug = mesh.cell_sets["plug"][element]
+    assert volume(mesh, plug) == pytest.approx(hole * c, rel=1e-12)
+    # The plug is the hole polygon's prism: its nodes lie within the hole's radius.
+    (conn,) = mesh.cells.values()
+    assert np.linalg.norm(mesh.points[conn[plug], :2] - center, axis=-1).max() < radius + 1e-12
+    assert np.array_equal(mesh.cell_sets["all"][element], np.arange(mesh.n_cells))
+
+
+@pytest.mark.parametrize("plan", FILLED_PLANS)
+@pytest.mark.parametrize("element", VOLUME_TYPES)
+def test_filled_top_face_contains_drilled_top_face(element, plan):
+    """Every top face of the drilled block, midside nodes included, is one of the filled block:
+    a filled block placed on a drilled one meets it conformingly."""
+    size, divisions, center, radius, origin, k = plan
+    drilled, filled = (drilled_box(size, divisions, center, radius, origin=origin,
+                                   element=element, ogrid_cells=k, filled=f) for f in (False, True))
+    (top,) = drilled.face_sets["zmax"].values()
+    (filled_top,) = filled.face_sets["zmax"].values()
+    distance, image = cKDTree(filled.points).query(drilled.points[top.ravel()])
+    assert distance.max() < 1e-12 * max(size)
+    keys = {tuple(sorted(face)) for face in filled_top}
+    assert all(tuple(sorted(face)) in keys for face in image.reshape(top.shape))
+    assert len(filled_top) > len(top)
+
+
 # ----------------------------------------------------------------------------- disc
 
 @pytest.mark.parametrize("element", VOLUME_TYPES)

@@ -308,8 +308,64 @@ def _square_boundary(i0, j0, k):
     return np.column_stack([i, j])
 
 
-def _drilled_plan(x, y, hole_center, hole_radius, k):
-    """Cartesian plan with an O-grid of 8k x k quads around a polygonal hole."""
+def _ring_quads(ring):
+    """Quads (8k n, 2, 2) of an O-grid ring; ring[m, s] is node s of ray m, s = 0..n outwards.
+
+    Quads are ordered ray by ray (quad m n + s between rays m, m + 1 and layers s, s + 1).
+    """
+    nm, n = ring.shape[0], ring.shape[1] - 1
+    # Tangential index direction +x or +y on every side, as in the background grid, so that
+    # shared faces are split alike: counterclockwise on the bottom and right sides (m < 4k),
+    # clockwise on the top and left sides.
+    m = np.arange(nm)
+    m_next = (m + 1) % nm
+    ccw = m < nm // 2
+    tangential = np.stack([np.where(ccw, m, m_next), np.where(ccw, m_next, m)], axis=1)
+    radial = np.arange(n)[:, None] + np.arange(2)
+    return ring[tangential[:, None, :, None], radial[None, :, None, :]].reshape(-1, 2, 2)
+
+
+def _ray_layers(inner, outer, n):
+    """Points (n, 8k, 2) at fractions 0, 1/n, ..., (n - 1)/n of the way from inner to outer."""
+    s = np.arange(n)[:, None, None] / n
+    return inner + s * (outer - inner)
+
+
+def _plug(square_xy, center, radius, circle, circle_ids, first_id):
+    """Nodes and quads filling the hole polygon: a core grid and an inner O-grid ring.
+
+    The core is the O-grid square (grid square_xy, (2k + 1, 2k + 1, 2) [m]) scaled about the hole
+    centre until its farthest node lies at radius / sqrt(2), the corner of a centred square of
+    half-width radius / 2. Every core boundary node thus lies on the ray from the hole centre
+    through its circle node, so the k layers of the inner ring, like the outer ring, are convex
+    quads between rays, whatever the hole's offset from the square's centre node.
+
+    center : (2,) hole centre [m]; radius : hole radius [m]; circle : (8k, 2) hole polygon [m];
+    circle_ids : (8k,) its node ids; first_id : id of the first new node.
+    Returns the new nodes' parameters (n, 2) [m] and the quads (nq, 2, 2).
+    """
+    k = (len(square_xy) - 1) // 2
+    offset = square_xy - center
+    scale = radius / np.sqrt(2) / np.linalg.norm(offset, axis=-1).max()
+    core_xy = center + scale * offset
+    core = first_id + np.arange(core_xy[..., 0].size).reshape(core_xy.shape[:2])
+    boundary = _square_boundary(k, k, k)
+    inner = core[boundary[:, 0], boundary[:, 1]]
+    layers = _ray_layers(core_xy[boundary[:, 0], boundary[:, 1]], circle, k)[1:]
+    nm = 8 * k
+    ring = np.empty((nm, k + 1), dtype=np.int64)
+    ring[:, 0] = inner
+    ring[:, 1:k] = core.max() + 1 + np.arange(k - 1) * nm + np.arange(nm)[:, None]
+    ring[:, k] = circle_ids
+    params = np.vstack([core_xy.reshape(-1, 2), layers.reshape(-1, 2)])
+    return params, np.vstack([_grid_quads(core), _ring_quads(ring)])
+
+
+def _drilled_plan(x, y, hole_center, hole_radius, k, filled):
+    """Cartesian plan with an O-grid of 8k x k quads around a polygonal hole.
+
+    Returns the plan and the indices of the quads filling the hole (none unless filled).
+    """
     nx, ny = len(x) - 1, len(y) - 1
     i0, j0 = _ogrid_square(x, y, hole_center, hole_radius, k)
     gi, gj = np.meshgrid(np.arange(nx + 1), np.arange(ny + 1), indexing="ij")
@@ -326,49 +382,54 @@ def _drilled_plan(x, y, hole_center, hole_radius, k):
     center = np.asarray(hole_center, dtype=float)
     offset = square - center
     circle = center + hole_radius * offset / np.linalg.norm(offset, axis=1)[:, None]
-    s = np.arange(k)[:, None, None] / k
-    layers = (circle + s * (square - circle)).reshape(-1, 2)
+    layers = _ray_layers(circle, square, k).reshape(-1, 2)
     n_background = int(ids.max()) + 1
     nm = 8 * k
     ring = np.empty((nm, k + 1), dtype=np.int64)
     ring[:, :k] = n_background + np.arange(k) * nm + np.arange(nm)[:, None]
     ring[:, k] = ids[bij[:, 0], bij[:, 1]]
-    # Tangential index direction +x or +y on every side, as in the background grid, so that
-    # shared faces are split alike: counterclockwise on the bottom and right sides (m < 4k),
-    # clockwise on the top and left sides.
-    m = np.arange(nm)
-    m_next = (m + 1) % nm
-    ccw = m < 4 * k
-    tangential = np.stack([np.where(ccw, m, m_next), np.where(ccw, m_next, m)], axis=1)
-    radial = np.arange(k)[:, None] + np.arange(2)
-    ogrid = ring[tangential[:, None, :, None], radial[None, :, None, :]].reshape(-1, 2, 2)
+    ogrid = _ring_quads(ring)
 
     params = np.vstack([grid_xy.reshape(-1, 2)[~inside.ravel()], layers])
     quads = np.vstack([background, ogrid])
+    plug = np.arange(0)
+    if filled:
+        square_xy = grid_xy[i0 - k:i0 + k + 1, j0 - k:j0 + k + 1]
+        plug_params, plug_quads = _plug(square_xy, center, hole_radius, circle, ring[:, 0],
+                                         len(params))
+        plug = len(quads) + np.arange(len(plug_quads))
+        params = np.vstack([params, plug_params])
+        quads = np.vstack([quads, plug_quads])
     sides = {}
     for name, cells, axis, side in (("xmin", qi == 0, 0, 0), ("xmax", qi == nx - 1, 0, 1),
                                     ("ymin", qj == 0, 1, 0), ("ymax", qj == ny - 1, 1, 1)):
         sides[name] = [(np.flatnonzero(cells), axis, side)]
     ogrid_index = len(background) + np.arange(nm * k).reshape(nm, k)
-    sides["hole"] = [(ogrid_index[:, 0], 1, 0)]
+    if not filled:
+        sides["hole"] = [(ogrid_index[:, 0], 1, 0)]
     # A square side on the box boundary: its outer ring quads carry that boundary.
     outer = ogrid_index[:, k - 1].reshape(4, 2 * k)
     for sector, name, touches in ((0, "ymin", j0 == k), (1, "xmax", i0 == nx - k),
                                   (2, "ymax", j0 == ny - k), (3, "xmin", i0 == k)):
         if touches:
             sides[name].append((outer[sector], 1, 1))
-    return _Plan(params, quads, params[quads], sides)
+    return _Plan(params, quads, params[quads], sides), plug
 
 
 def drilled_box(size, divisions, hole_center, hole_radius, origin=(0.0, 0.0, 0.0),
-                element="hexahedron", ogrid_cells=None):
-    """Block with a cylindrical hole along z through its full height.
+                element="hexahedron", ogrid_cells=None, filled=False):
+    """Block with a cylindrical hole along z through its full height, or that block's plan filled.
 
     The plan is a Cartesian background of nx x ny cells in which a square of 2k x 2k cells,
     centred on the background grid node nearest the hole centre, is replaced by an O-grid:
     each of the 8k boundary nodes of the square is joined to the point of the circle at the same
     polar angle about the hole centre, with k radial layers in between. The hole is the polygon
     of those circle points; all edges are straight (quadratic midside nodes at edge midpoints).
+
+    Filled, the hole polygon is meshed too, by a core of 2k x 2k cells (the O-grid square scaled
+    down about the hole centre to a half-width of about radius / 2) joined to the polygon by an
+    inner O-grid ring of k layers. Outside the hole the nodes and faces are those of the drilled
+    block, so a filled block on a drilled one of the same plan meets it conformingly.
 
     Parameters
     ----------
@@ -380,11 +441,13 @@ def drilled_box(size, divisions, hole_center, hole_radius, origin=(0.0, 0.0, 0.0
     element : 'hexahedron', 'hexahedron20', 'tetra' or 'tetra10'.
     ogrid_cells : k, half-width of the O-grid square in background cells; by default the
         smallest k with k * min(dx, dy) >= 1.5 * hole_radius.
+    filled : mesh the hole too: a plain block with the drilled block's plan.
 
     Returns
     -------
-    Mesh with node and face sets 'xmin', 'xmax', 'ymin', 'ymax', 'zmin', 'zmax', 'hole' and
-    cell set 'all'.
+    Mesh with node and face sets 'xmin', 'xmax', 'ymin', 'ymax', 'zmin', 'zmax' and cell set
+    'all'; drilled, also the face set 'hole'; filled, also the cell set 'plug' (the cells in the
+    hole polygon).
 
     Raises
     ------
@@ -395,9 +458,12 @@ def drilled_box(size, divisions, hole_center, hole_radius, origin=(0.0, 0.0, 0.0
     nx, ny, nz = _check_divisions(divisions, 3)
     x, y, z = (o + np.linspace(0.0, s, n + 1) for o, s, n in zip(origin, size, (nx, ny, nz)))
     k = _ogrid_size(ogrid_cells, (size[0] / nx, size[1] / ny), hole_radius)
-    plan = _drilled_plan(x, y, hole_center, hole_radius, k)
+    plan, plug = _drilled_plan(x, y, hole_center, hole_radius, k, filled)
     hexes = _extrude(plan, z, "zmin", "zmax")
-    return _build_mesh(hexes, element, _identity, {"all": np.arange(len(hexes.corners))})
+    groups = {"all": np.arange(len(hexes.corners))}
+    if filled:
+        groups["plug"] = (np.arange(nz)[:, None] * len(plan.quads) + plug).ravel()
+    return _build_mesh(hexes, element, _identity, groups)
 
 
 def annular_disc(inner_radius, outer_radius, thickness, divisions, center=(0.0, 0.0, 0.0),

@@ -76,6 +76,8 @@ MESH = Variant("mesh of the part: a generator or a file", {
         "ogrid_cells": Value("int", "half-width in background cells of the square meshed as an "
                              "O-grid around the hole (0: smallest that fits 1.5 radius)", 0,
                              minimum=0),
+        "filled": Value("bool", "mesh the hole too (a plain block with the drilled block's plan)",
+                        False),
         "element": ELEMENT,
     },
     "annular_disc": {
