@@ -1,5 +1,7 @@
 """Static contact with linear penalty: the contact patch test, and regularization on the
 drilled cube against a conforming reference."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -7,6 +9,7 @@ from transient.case import load
 from transient.contact import build_contact
 from transient.model import build_model
 from transient.static import solve_static
+from transient.studies import drilled_cube_errors
 
 E, NU, P, K = 2.1e11, 0.3, 1.0e6, 1.0e13
 
@@ -104,3 +107,19 @@ def test_regularized_centre_rule_passes_it(tmp_path):
     model, pairs, sol = solve(tmp_path, PATCH, ["contact.c.rule=centre",
                                                 "contact.c.regularized=true"])
     np.testing.assert_allclose(lower_top_uz(model, sol), -P * 0.5 / E, rtol=1e-6)
+
+
+CUBE = Path(__file__).resolve().parent.parent / "cases" / "drilled_cube.toml"
+
+
+def test_drilled_cube_regularization_against_the_conforming_reference():
+    errors, _ = drilled_cube_errors(CUBE)
+    # the paper's ordering: the coarse centre rule dimples the fine side; regularized, it is at
+    # least 2x closer to the reference (measured 3.4x); the fine rule is closest
+    assert errors["centre regularized"] <= 0.5 * errors["centre"]
+    assert errors["fine"] < errors["centre regularized"]
+    assert errors["fine regularized"] < 2 * errors["fine"]
+    # the interface mass norm regularizes better than the identity norm (the default is mass)
+    identity, _ = drilled_cube_errors(CUBE, ["contact.interface.norm=identity"])
+    assert errors["centre regularized"] < identity["centre regularized"]
+    assert errors["fine regularized"] < identity["fine regularized"]
