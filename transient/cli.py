@@ -24,6 +24,11 @@ def _parser():
     p = sub.add_parser("modes", help="normal modes of the case's model")
     _case_args(p)
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p = sub.add_parser("compat", help="compatibility of a contact interface: fine rule, "
+                       "singular values of the gap energy, C(eps)")
+    _case_args(p)
+    p.add_argument("--pair", help="contact pair to report (default: the first)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     return parser
 
 
@@ -60,7 +65,51 @@ def _write_modes_vtu(case, model, modes, write_vtu):
     write_vtu(case.directory / case["output"]["vtu"], model.mesh(), point_data=data)
 
 
-COMMANDS = {"modes": cmd_modes}
+def cmd_compat(args):
+    import numpy as np
+    from .contact import build_pair
+    from .errors import CaseError
+    from .model import build_model
+    t0 = time.perf_counter()
+    case = load(args.case, args.overrides)
+    names = list(case["contact"])
+    if not names:
+        raise CaseError(case.path, "contact", "the case has no [contact.NAME] pair")
+    name = args.pair or names[0]
+    if name not in names:
+        raise CaseError(case.path, "contact", f"no pair '{name}' (pairs: {', '.join(names)})")
+    model = build_model(case)
+    t1 = time.perf_counter()
+    pair = build_pair(case, model, name, need_compatibility=True)
+    setup = time.perf_counter() - t1
+    comp, fine = pair.compat, pair.interface.fine
+    eps_grid = np.logspace(-16, 0, 65)
+    out = {"pair": name, "n_points": fine.n_points, "area": fine.area, "n_dof_1": comp.n1,
+           "n_dof_2": comp.n2, "sigma_max": float(comp.sigma.max()),
+           "singular_values": comp.normalized.tolist(),
+           "compatibility": {"eps": eps_grid.tolist(), "C": comp.curve(eps_grid).tolist()},
+           "eps": pair.eps, "eps_source": pair.eps_source, "kept": comp.kept(pair.eps),
+           "setup_s": setup, "timings": {**model.timings, **pair.timings,
+                                         **pair.interface.timings, **comp.timings,
+                                         "total": time.perf_counter() - t0}}
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"{case.path}: contact pair '{name}': {pair.spec['surface1']} / {pair.spec['surface2']}")
+    print(f"  fine rule: {fine.n_points} points (degree {pair.interface.order}), "
+          f"area {fine.area:.6g} m^2")
+    print(f"  interface normal dofs: {comp.n1} (surface 1) + {comp.n2} (surface 2)")
+    print(f"  eps = {pair.eps:.3g} ({pair.eps_source}): {out['kept']} compatible shapes kept, "
+          f"C(eps) = {comp.curve([pair.eps])[0]:.3f}")
+    print(f"  {'eps':>8} {'kept':>6} {'C(eps)':>8}")
+    for e in (1e-12, 1e-10, 1e-8, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1):
+        print(f"  {e:8.0e} {comp.kept(e):6d} {comp.curve([e])[0]:8.3f}")
+    print(f"  setup {setup:.2f} s (interface {pair.timings['interface']:.2f} s, "
+          f"compatibility {pair.timings['compatibility']:.2f} s)")
+    return 0
+
+
+COMMANDS = {"modes": cmd_modes, "compat": cmd_compat}
 
 
 def main(argv=None):
