@@ -123,3 +123,16 @@ def test_drilled_cube_regularization_against_the_conforming_reference():
     identity, _ = drilled_cube_errors(CUBE, ["contact.interface.norm=identity"])
     assert errors["centre regularized"] < identity["centre regularized"]
     assert errors["fine regularized"] < identity["fine regularized"]
+
+
+@pytest.mark.parametrize("rule", ["fine", "centre"])
+def test_primal_formulation_passes_the_patch_test(tmp_path, rule):
+    model, pairs, sol = solve(tmp_path, PATCH, [f"contact.c.rule={rule}",
+                                                "contact.c.regularized=true",
+                                                "contact.c.formulation=primal"])
+    pair = pairs[0]
+    r = pair.compat.kept(pair.eps)
+    n1, n2 = pair.interface.side1.n, pair.interface.side2.n
+    # eq. 11: the interface normal dofs are replaced by the traces of the r kept shapes
+    assert model.ndof - n1 - n2 < pair.primal.shape[1] <= model.ndof - n1 - n2 + 2 * r
+    np.testing.assert_allclose(lower_top_uz(model, sol), -P * 0.5 / E, rtol=1e-6)

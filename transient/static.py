@@ -52,6 +52,8 @@ def _basis(model, pairs):
     if len(primal) > 1:
         raise StaticError("at most one contact pair can use the primal formulation")
     P = primal[0]
-    # a column touching a fixed dof cannot keep it at zero: drop it
-    touching = np.unique(sp.csr_matrix(P[model.fixed]).indices)
+    # a column touching a fixed dof cannot keep it at zero: drop it (explicit zeros do not touch)
+    F = sp.csr_matrix(P[model.fixed])
+    F.eliminate_zeros()
+    touching = np.unique(F.indices)
     return P[:, np.setdiff1d(np.arange(P.shape[1]), touching)].tocsr()

@@ -15,6 +15,8 @@ RULES = {
     "centre": ("contact.interface.rule=centre", "contact.interface.regularized=false"),
     "centre regularized": ("contact.interface.rule=centre",
                            "contact.interface.regularized=true"),
+    "centre primal": ("contact.interface.rule=centre", "contact.interface.regularized=true",
+                      "contact.interface.formulation=primal"),
 }
 
 
