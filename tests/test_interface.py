@@ -154,3 +154,32 @@ def test_auto_eps_ignores_the_few_exactly_shared_fields_and_falls_back_without_a
     assert 3e-5 < eps < 8e-4
     eps, how = auto_eps(np.r_[np.full(4, 1e-17), np.geomspace(1e-9, 1.0, 500)])
     assert eps == FALLBACK_EPS and "fallback" in how
+
+
+def bump(mesh, amplitude, z_surface):
+    """The mesh with nodes moved along z by a smooth bump that vanishes at x, y = 0 and 1 and
+    fades away from the plane z = z_surface (both parts describe the same curved surface)."""
+    p = mesh.points.copy()
+    fade = np.clip(1 - np.abs(p[:, 2] - z_surface) / 0.5, 0, 1)
+    p[:, 2] += amplitude * np.sin(np.pi * p[:, 0]) * np.sin(np.pi * p[:, 1]) * fade
+    return type(mesh)(p, mesh.cells, mesh.node_sets, mesh.face_sets, mesh.cell_sets)
+
+
+def test_curved_quadratic_faces_close_to_planar():
+    a = 0.01      # bump height over a unit square: slopes up to 3%
+    lower = bump(box((1.0, 1.0, 0.5), (6, 6, 1), element="hexahedron20"), a, 0.5)
+    upper = bump(box((1.0, 1.0, 0.5), (4, 4, 1), origin=(0, 0, 0.5), element="tetra10"), a, 0.5)
+    interface = pair(upper, lower)
+    fine = interface.fine
+    # projected area exact; the two discretizations of the same surface agree to their
+    # quadratic interpolation error (~ (pi h)^3 a / 24 for the coarse side: 2% of a)
+    assert fine.area == pytest.approx(1.0, rel=1e-12)
+    assert np.abs(fine.gap0).max() < 0.02 * a
+    # normals follow the surface
+    assert np.abs(fine.normals[:, :2]).max() > 0.5 * np.pi * a
+    # normal dofs use node normals, which the two meshes approximate differently: a rigid
+    # translation leaves a gap of second order in the slope (exactly zero on planar interfaces)
+    X = np.vstack([upper.points, lower.points])
+    C = interface.observation(fine, 3 * len(X))
+    g = C @ np.tile([0.0, 0.0, 1.0], len(X))
+    assert np.abs(g).max() < (np.pi * a) ** 2

@@ -10,6 +10,11 @@ gap at point i is g_i = C1_i q1 - C2_i q2 + g0_i, positive when open; C^s_i hold
 functions of face s at point i acting on the normal dofs u_n = nbar_a . u_a of the interface nodes
 (nbar_a: node normals along +n). The contact force on the dofs is f = C^T diag(w) p(g) with
 C = [C1, -C2] and p >= 0 the contact pressure.
+
+Normal dofs keep the gap energy free of the tangential dofs (which would add spurious zero
+singular values). On planar interfaces every normal is n and rigid motions give a zero gap to
+round-off; on curved ones the node normals of the two meshes differ, and a rigid motion leaves a
+gap of second order in the slope: fine for surfaces close to planar, as brake interfaces are.
 """
 import time
 from dataclasses import dataclass
