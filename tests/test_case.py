@@ -141,3 +141,13 @@ def test_modes_json(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["ndof"] == 3 * 6 * 2 * 2 and len(out["frequencies_hz"]) == 4
     assert all(f > 0 for f in out["frequencies_hz"])
+
+
+def test_modes_export_to_vtu(tmp_path, capsys):
+    import meshio
+    path = write(tmp_path)
+    assert main(["modes", str(path), "--set", 'output.vtu="modes.vtu"']) == 0
+    mesh = meshio.read(tmp_path / "modes.vtu")
+    assert len(mesh.points) == 6 * 2 * 2
+    shapes = [k for k in mesh.point_data if k.startswith("mode_")]
+    assert len(shapes) == 4 and mesh.point_data[shapes[0]].shape == (24, 3)
