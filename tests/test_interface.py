@@ -183,3 +183,11 @@ def test_curved_quadratic_faces_close_to_planar():
     C = interface.observation(fine, 3 * len(X))
     g = C @ np.tile([0.0, 0.0, 1.0], len(X))
     assert np.abs(g).max() < (np.pi * a) ** 2
+
+
+def test_fine_points_all_carry_weight():
+    # clipped polygons have collinear vertices; their degenerate fan triangles are dropped
+    lower = drilled_box((0.1, 0.1, 0.1), (12, 12, 2), (0.05, 0.05), 0.015, element="tetra10")
+    upper = box((0.1, 0.1, 0.1), (4, 4, 1), origin=(0, 0, 0.1))
+    fine = pair(upper, lower).fine
+    assert fine.weights.min() > 1e-9 * fine.weights.max()

@@ -29,7 +29,60 @@ def _parser():
     _case_args(p)
     p.add_argument("--pair", help="contact pair to report (default: the first)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    _plot_parser(sub)
     return parser
+
+
+def _plot_parser(sub):
+    """`transient plot KIND ...`: one sub-subcommand per kind of picture."""
+    kinds = sub.add_parser("plot", help="pictures (PNG) of a case").add_subparsers(
+        dest="kind", required=True)
+    p = kinds.add_parser("compat", help="compatibility of each contact pair: shapes, singular "
+                         "values and C(eps), raw and regularized gap observation")
+    _case_args(p)
+    p.add_argument("--out", required=True, metavar="DIR", help="directory of the PNG files")
+    p.add_argument("--pair", metavar="NAME", help="only this contact pair")
+    p.add_argument("--shapes", metavar="I,J,...", help="shape numbers to draw, from 1 by "
+                   "increasing incompatibility (default: the first, the last kept, two beyond)")
+
+
+def cmd_plot(args):
+    return {"compat": _plot_compat}[args.kind](args)
+
+
+def _plot_compat(args):
+    from .contact import build_pair
+    from .model import build_model
+    from .plots import RenderingUnavailable, check_shapes, parse_shapes, plot_compat
+    try:
+        shapes = parse_shapes(args.shapes) if args.shapes is not None else None
+    except ValueError as exc:
+        raise CaseError(args.case, "--shapes", str(exc)) from None
+    case = load(args.case, args.overrides)
+    names = list(case["contact"])
+    if not names:
+        raise CaseError(case.path, "contact", "the case has no [contact.NAME] pair")
+    if args.pair is not None and args.pair not in names:
+        raise CaseError(case.path, "contact", f"no pair '{args.pair}' "
+                        f"(pairs: {', '.join(names)})")
+    model = build_model(case)
+    pairs = [build_pair(case, model, name, need_compatibility=True)
+             for name in names if args.pair in (None, name)]
+    for pair in pairs:
+        try:
+            check_shapes(shapes or [], pair.compat)
+        except ValueError as exc:
+            raise CaseError(case.path, "--shapes", f"pair '{pair.name}': {exc}") from None
+    for pair in pairs:
+        try:
+            paths = plot_compat(pair, args.out, shapes)
+        except RenderingUnavailable as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 1
+        except OSError as exc:
+            raise CaseError(case.path, "--out", str(exc)) from None
+        print("\n".join(str(p) for p in paths))
+    return 0
 
 
 def cmd_modes(args):
@@ -109,7 +162,7 @@ def cmd_compat(args):
     return 0
 
 
-COMMANDS = {"modes": cmd_modes, "compat": cmd_compat}
+COMMANDS = {"modes": cmd_modes, "compat": cmd_compat, "plot": cmd_plot}
 
 
 def main(argv=None):

@@ -189,6 +189,10 @@ def triangle_points(verts, m, degree):
     b = verts[tri_poly, tri_k]
     c = verts[tri_poly, tri_k + 1]
     det = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    # clipping leaves collinear or repeated vertices: their fan triangles carry no area
+    polygon = np.bincount(tri_poly, weights=np.abs(det), minlength=len(m))
+    keep = np.abs(det) > 1e-12 * polygon[tri_poly]
+    a, b, c, det, tri_poly = a[keep], b[keep], c[keep], det[keep], tri_poly[keep]
     pts = (a[:, None, :] + xi[None, :, 0:1] * (b - a)[:, None, :]
            + xi[None, :, 1:2] * (c - a)[:, None, :])
     wts = np.abs(det)[:, None] * w[None, :]
