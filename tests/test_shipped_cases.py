@@ -42,9 +42,12 @@ def test_drilled_cube_mass_and_modes(capsys):
     volume = 2 * 0.1 ** 3 - polygon * 0.1
     assert total_mass(model) == pytest.approx(7800.0 * volume, rel=1e-10)
     out = run_modes(capsys, "drilled_cube.toml")
-    f = np.abs(out["frequencies_hz"])
-    # no contact stage yet: the upper cube floats freely (6 rigid modes) above the clamped one
-    assert np.sum(f < 1e-3 * f[6]) == 6 and f[6] > 1000
+    f = np.array(out["frequencies_hz"])
+    # tied contact and rollers hold the upper cube: no rigid mode left; without the contact the
+    # upper cube would keep its vertical translation
+    assert f[0] > 1000 and out["contact"][0]["points"] > 0
+    free = run_modes(capsys, "drilled_cube.toml", "contact.interface.k=1e-3")
+    assert abs(free["frequencies_hz"][0]) < 1e-3 * f[0]
 
 
 def test_pad_disc_mass_and_modes_to_16khz(capsys):

@@ -86,30 +86,52 @@ def _plot_compat(args):
 
 
 def cmd_modes(args):
+    from .contact import build_contact, contact_stiffness
+    from .meshfile import write_vtu
     from .model import build_model
     from .modes import normal_modes
-    from .meshfile import write_vtu
     t0 = time.perf_counter()
     case = load(args.case, args.overrides)
     model = build_model(case)
+    pairs = build_contact(case, model)
+    # contact enters the modes as tied (bilateral linear) springs of density k on the pair's rule
+    K = model.K + contact_stiffness(pairs, model.ndof) if pairs else model.K
     settings = case["solver"]["modes"]
-    modes = normal_modes(model.K, model.M, model.fixed, settings["count"], settings["fmax"],
+    modes = normal_modes(K, model.M, model.fixed, settings["count"], settings["fmax"],
                          settings["shift"], case["solver"]["linear_solver"])
-    timings = {**model.timings, **modes.timings, "total": time.perf_counter() - t0}
+    stage_times = {f"contact.{p.name}.{k}": v for p in pairs for k, v in p.timings.items()}
+    timings = {**model.timings, **stage_times, **modes.timings,
+               "total": time.perf_counter() - t0}
     if case["output"]["vtu"]:
         _write_modes_vtu(case, model, modes, write_vtu)
+    contact = [_pair_summary(p) for p in pairs]
     if args.json:
         print(json.dumps({"frequencies_hz": modes.frequencies.tolist(), "ndof": model.ndof,
                           "free_dofs": int((~model.fixed).sum()), "backend": modes.backend,
-                          "timings": timings}))
+                          "contact": contact, "timings": timings}))
         return 0
     print(f"{case.path}: {model.ndof} dofs ({int((~model.fixed).sum())} free), "
           f"{len(model.parts)} part(s), factorization: {modes.backend}")
+    for c in contact:
+        print(f"  contact {c['pair']}: tied, k = {c['k']:.3g} Pa/m, rule {c['rule']} "
+              f"({c['points']} points)" + (f", regularized eps = {c['eps']:.3g}"
+                                           if c["regularized"] else ""))
     print(f"{'mode':>5} {'frequency [Hz]':>16}")
     for i, f in enumerate(modes.frequencies, 1):
         print(f"{i:>5} {f:16.6g}")
     print("time: " + ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
     return 0
+
+
+def _pair_summary(pair):
+    out = {"pair": pair.name, "rule": pair.spec["rule"], "regularized": pair.spec["regularized"],
+           "k": pair.k, "points": pair.rule.n_points, "area": pair.rule.area, "eps": pair.eps,
+           "kept": pair.compat.kept(pair.eps) if pair.compat else None}
+    if pair.coarse is not None:
+        out["coarse"] = {"m": len(pair.coarse.chosen), "energy_error": pair.coarse.energy_error,
+                         "weighting": pair.coarse.weighting,
+                         "setup_s": pair.timings["coarse_rule"]}
+    return out
 
 
 def _write_modes_vtu(case, model, modes, write_vtu):
@@ -142,6 +164,10 @@ def cmd_compat(args):
            "singular_values": comp.normalized.tolist(),
            "compatibility": {"eps": eps_grid.tolist(), "C": comp.curve(eps_grid).tolist()},
            "eps": pair.eps, "eps_source": pair.eps_source, "kept": comp.kept(pair.eps),
+           "coarse": None if pair.coarse is None else {
+               "m": len(pair.coarse.chosen), "energy_error": pair.coarse.energy_error,
+               "setup_s": pair.timings["coarse_rule"], "rank": pair.coarse.rank,
+               "weighting": pair.coarse.weighting, "area_error": pair.coarse.area_error},
            "setup_s": setup, "timings": {**model.timings, **pair.timings,
                                          **pair.interface.timings, **comp.timings,
                                          "total": time.perf_counter() - t0}}
@@ -157,6 +183,10 @@ def cmd_compat(args):
     print(f"  {'eps':>8} {'kept':>6} {'C(eps)':>8}")
     for e in (1e-12, 1e-10, 1e-8, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1):
         print(f"  {e:8.0e} {comp.kept(e):6d} {comp.curve([e])[0]:8.3f}")
+    if pair.coarse is not None:
+        c = pair.coarse
+        print(f"  greedy rule: {len(c.chosen)} points (rank {c.rank}), weights {c.weighting}, "
+              f"energy error {c.energy_error:.2e}, area error {c.area_error:.1e}")
     print(f"  setup {setup:.2f} s (interface {pair.timings['interface']:.2f} s, "
           f"compatibility {pair.timings['compatibility']:.2f} s)")
     return 0

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from .coarse import select, side_bases
 from .compatibility import auto_eps, compatibility
 from .errors import CaseError
 from .interface import InterfaceError, build_interface
@@ -28,6 +29,7 @@ class ContactPair:
     eps_source: str           # where eps comes from: the case, or the automatic choice
     rule: object              # the Rule whose observation the solvers use
     primal: object            # T_eps for the primal formulation, else None
+    coarse: object            # CoarseRule of the greedy rule, else None
     timings: dict             # stage -> seconds, in the order run
 
     @property
@@ -63,7 +65,11 @@ def build_pair(case, model, name, need_compatibility=False):
         raise CaseError(case.path, key, str(exc)) from None
     timings["interface"] = time.perf_counter() - t0
 
-    comp, eps, eps_source, primal = None, None, "", None
+    comp, eps, eps_source, primal, coarse = None, None, "", None, None
+    greedy = spec["rule"] == "greedy"
+    if greedy and not spec["regularized"]:
+        raise CaseError(case.path, f"{key}.regularized", "the greedy rule selects points on the "
+                        "regularized observation: set regularized = true")
     if spec["regularized"] or need_compatibility:
         t0 = time.perf_counter()
         comp = compatibility(interface.fine, spec["k"])
@@ -72,18 +78,34 @@ def build_pair(case, model, name, need_compatibility=False):
         timings["compatibility"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    rule = interface.fine if spec["rule"] == "fine" else centre_rule(interface, spec["master"])
-    if spec["rule"] != "fine":
-        timings["rule"] = time.perf_counter() - t0
+    if spec["rule"] == "centre" or (greedy and spec["candidates"] != "fine"):
+        master = spec["master"] if spec["rule"] == "centre" else spec["candidates"]
+        rule = centre_rule(interface, master)
+        timings["centre_rule"] = time.perf_counter() - t0
+    else:
+        rule = interface.fine
     if spec["regularized"]:
         t0 = time.perf_counter()
         if spec["formulation"] == "dual":
             P1, P2 = dual_projectors(comp, eps, interface.fine, spec["project"], spec["norm"])
             rule = regularized_rule(rule, P1, P2)
+            fine = regularized_rule(interface.fine, P1, P2) if greedy else None
         else:
             primal = primal_basis(interface, comp, eps, model.ndof)
+            fine = interface.fine
         timings["regularize"] = time.perf_counter() - t0
-    return ContactPair(name, spec, interface, comp, eps, eps_source, rule, primal, timings)
+    if greedy:
+        t0 = time.perf_counter()
+        B1, B2 = side_bases(comp, eps)
+        try:
+            coarse = select(rule, fine if spec["candidates"] != "fine" else rule, B1, B2,
+                            spec["points"], spec["tolerance"], spec["weights"])
+        except ValueError as exc:
+            raise CaseError(case.path, f"{key}.weights", str(exc)) from None
+        rule = coarse.rule
+        timings["coarse_rule"] = time.perf_counter() - t0
+    return ContactPair(name, spec, interface, comp, eps, eps_source, rule, primal, coarse,
+                       timings)
 
 
 def build_contact(case, model, need_compatibility=False):
@@ -93,14 +115,22 @@ def build_contact(case, model, need_compatibility=False):
 
 def contact_stiffness(pairs, ndof, active=None):
     """Sum over pairs of C^T diag(k w) C on model dofs (linear penalty, all points active unless
-    `active` gives a bool mask per pair)."""
+    `active` gives a bool mask per pair).
+
+    Formed on the interface normal dofs first (N1 + N2 square, dense for regularized rules),
+    then lifted to the model dofs by the node normals: never a dense (points x dofs) product.
+    """
     K = sp.csr_matrix((ndof, ndof))
     for i, pair in enumerate(pairs):
-        C = pair.observation(ndof)
-        kw = pair.k * pair.rule.weights
+        rule = pair.rule
+        kw = pair.k * rule.weights
         if active is not None:
             kw = kw * active[i]
-        K = K + (C.T @ sp.diags(kw) @ C).tocsr()
+        B = sp.hstack([sp.csr_matrix(rule.C1), -sp.csr_matrix(rule.C2)]).tocsr()
+        A = (B.T @ sp.diags(kw) @ B).tocsr()
+        D = sp.vstack([pair.interface.side1.dof_map(ndof),
+                       pair.interface.side2.dof_map(ndof)]).tocsr()
+        K = K + (D.T @ A @ D).tocsr()
     return K
 
 

@@ -176,8 +176,21 @@ CONTACT = Table("a contact pair: two face sets of two parts, gap observed on the
                    minimum=1, maximum=20),
     "k": Value("float", "stiffness density of the gap energy and of linear penalty contact",
                5e11, "Pa/m", open_min=0.0),
-    "rule": Value("choice", "contact points: fine (the exact rule on Gamma) or centre (one "
-                  "point per face of the master surface)", "fine", choices=("fine", "centre")),
+    "rule": Value("choice", "contact points: fine (the exact rule on Gamma), centre (one "
+                  "point per face of the master surface) or greedy (a coarse rule selected on "
+                  "the regularized observation)", "fine", choices=("fine", "centre", "greedy")),
+    "candidates": Value("choice", "greedy: candidate points, the fine points or the face "
+                        "centres of a surface", "fine", choices=("fine", "surface1", "surface2")),
+    "points": Value("int", "greedy: number of points m (0: the rank of the kept shapes; more "
+                    "restarts the selection)", 0, minimum=0),
+    "tolerance": Value("float", "greedy: stop when the largest remaining row norm falls below "
+                       "this fraction of the largest", 1e-8, open_min=0.0, maximum=1.0),
+    "weights": Value("choice", "greedy: nearest (each fine weight to its nearest point: exact "
+                     "area, best tied frequencies), nnls (non-negative least squares on the gap "
+                     "energy of the kept subspace and the area), best (the lower energy error of "
+                     "the two) or exact (NNLS over all candidates: the energy reproduced exactly, "
+                     "with as many points as needed; small interfaces only)", "nearest",
+                     choices=("nearest", "nnls", "best", "exact")),
     "master": Value("choice", "surface whose face centres carry the centre rule", "surface1",
                     choices=("surface1", "surface2")),
     "regularized": Value("bool", "observe the gap through the (1-eps)-compatible shapes only",
