@@ -116,6 +116,8 @@ class _Validator:
                 out[k] = self.named(spec, {}, sub)
             elif isinstance(spec, S.Table) and spec.optional:
                 out[k] = self.table(spec, {}, sub)
+            elif isinstance(spec, S.Variant) and spec.default:
+                out[k] = self.variant(spec, {"kind": spec.default}, sub)
             elif isinstance(spec, S.Value) and spec.default is not S.REQUIRED:
                 out[k] = copy.deepcopy(spec.default)
             else:

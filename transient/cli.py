@@ -24,6 +24,18 @@ def _parser():
     p = sub.add_parser("modes", help="normal modes of the case's model")
     _case_args(p)
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p = sub.add_parser("run", help="transient: preload, then time integration to solver.t_end, "
+                       "streamed to an HDF5 history")
+    _case_args(p)
+    p.add_argument("-o", "--output", help="HDF5 file (default: output.file, or the case's "
+                   "name with .h5)")
+    p.add_argument("--resume", action="store_true", help="continue the run stored in the "
+                   "output file from its last checkpoint (after an abort, or to a later t_end)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--json", action="store_true", help="print a JSON summary")
+    p = sub.add_parser("info", help="summary of an HDF5 history")
+    p.add_argument("file", help="HDF5 file written by transient run")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p = sub.add_parser("compat", help="compatibility of a contact interface: fine rule, "
                        "singular values of the gap energy, C(eps)")
     _case_args(p)
@@ -192,7 +204,49 @@ def cmd_compat(args):
     return 0
 
 
-COMMANDS = {"modes": cmd_modes, "compat": cmd_compat, "plot": cmd_plot}
+def cmd_run(args):
+    import os
+    from pathlib import Path
+    from .run import run
+    case = load(args.case, args.overrides)
+    path = Path(args.output) if args.output else case.directory / (
+        case["output"]["file"] or Path(case.path).with_suffix(".h5").name)
+    if args.resume and not path.exists():
+        raise CaseError(path, "", "--resume: no history file to resume")
+    quiet = args.quiet or args.json or os.environ.get("CI") or not sys.stderr.isatty()
+    result = run(case, path, resume=args.resume, progress=not quiet)
+    if args.json:
+        print(json.dumps({"file": result.path, "status": result.status, "steps": result.steps,
+                          "t_end": result.t_end, "dt": result.dt,
+                          "dt_critical": result.dt_critical, "stages": result.stages,
+                          "timings": result.timings, "energy_drift": result.energy_drift}))
+    else:
+        print(f"{case.path}: {result.status}, {result.steps} steps of {result.dt:.4g} s "
+              f"(critical {result.dt_critical:.4g} s) to t = {result.t_end:.6g} s")
+        print("stages: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.stages.items()))
+        print(f"kernel {result.timings['kernel']:.2f} s, total {result.timings['total']:.2f} s,"
+              f" energy drift {result.energy_drift:.2e}; history: {result.path}")
+    if result.status != "complete":
+        print(f"error: run {result.status}", file=sys.stderr)
+        return 130 if result.status.endswith("interrupted") else 3
+    return 0
+
+
+def cmd_info(args):
+    from pathlib import Path
+    from .history import format_summary, summary
+    path = Path(args.file)
+    if not path.exists():
+        raise CaseError(path, "", "file not found")
+    try:
+        d = summary(path)
+    except (OSError, KeyError, ValueError) as exc:
+        raise CaseError(path, "", f"not a transient history: {exc}") from None
+    print(json.dumps(d) if args.json else format_summary(d))
+    return 0
+
+
+COMMANDS = {"run": cmd_run, "info": cmd_info, "modes": cmd_modes, "compat": cmd_compat, "plot": cmd_plot}
 
 
 def main(argv=None):

@@ -12,7 +12,7 @@ import scipy.sparse as sp
 from .coarse import select, side_bases
 from .compatibility import auto_eps, compatibility
 from .errors import CaseError
-from .interface import InterfaceError, build_interface
+from .interface import InterfaceError, build_interface, build_wall_interface
 from .model import resolve_set
 from .regularize import dual_projectors, primal_basis, regularized_rule
 from .rules import centre_rule
@@ -55,12 +55,28 @@ def build_pair(case, model, name, need_compatibility=False):
     timings = {}
     t0 = time.perf_counter()
     p1, faces1 = _surface(case, model, spec["surface1"], f"{key}.surface1")
-    p2, faces2 = _surface(case, model, spec["surface2"], f"{key}.surface2")
-    if p1.name == p2.name:
-        raise CaseError(case.path, f"{key}.surface2", "both surfaces belong to the same part")
+    wall = bool(spec["wall_point"])
     try:
-        interface = build_interface(name, p1.mesh.points, faces1, p1.offset, p2.mesh.points,
-                                    faces2, p2.offset, spec["order"])
+        if wall:
+            if len(spec["wall_point"]) != 3 or spec["surface2"]:
+                raise CaseError(case.path, f"{key}.wall_point", "a wall takes a point [x, y, z] "
+                                "and no surface2")
+            if spec["regularized"] or spec["rule"] != "fine":
+                raise CaseError(case.path, f"{key}.rule", "a rigid wall is observed by the fine "
+                                "rule only (no second mesh to be compatible with)")
+            interface = build_wall_interface(name, p1.mesh.points, faces1, p1.offset,
+                                             spec["wall_point"], spec["wall_normal"],
+                                             spec["order"])
+        else:
+            if not spec["surface2"]:
+                raise CaseError(case.path, f"{key}.surface2", "missing: a second surface as "
+                                "PART.SET, or a wall_point")
+            p2, faces2 = _surface(case, model, spec["surface2"], f"{key}.surface2")
+            if p1.name == p2.name:
+                raise CaseError(case.path, f"{key}.surface2",
+                                "both surfaces belong to the same part")
+            interface = build_interface(name, p1.mesh.points, faces1, p1.offset,
+                                        p2.mesh.points, faces2, p2.offset, spec["order"])
     except InterfaceError as exc:
         raise CaseError(case.path, key, str(exc)) from None
     timings["interface"] = time.perf_counter() - t0
@@ -113,9 +129,10 @@ def build_contact(case, model, need_compatibility=False):
     return [build_pair(case, model, name, need_compatibility) for name in case["contact"]]
 
 
-def contact_stiffness(pairs, ndof, active=None):
+def contact_stiffness(pairs, ndof, active=None, kw=None):
     """Sum over pairs of C^T diag(k w) C on model dofs (linear penalty, all points active unless
-    `active` gives a bool mask per pair).
+    `active` gives a bool mask per pair); `kw` gives instead the stiffness w k_t of every point
+    per pair (a nonlinear law's tangent).
 
     Formed on the interface normal dofs first (N1 + N2 square, dense for regularized rules),
     then lifted to the model dofs by the node normals: never a dense (points x dofs) product.
@@ -123,11 +140,11 @@ def contact_stiffness(pairs, ndof, active=None):
     K = sp.csr_matrix((ndof, ndof))
     for i, pair in enumerate(pairs):
         rule = pair.rule
-        kw = pair.k * rule.weights
+        kw_i = pair.k * rule.weights if kw is None else kw[i]
         if active is not None:
-            kw = kw * active[i]
+            kw_i = kw_i * active[i]
         B = sp.hstack([sp.csr_matrix(rule.C1), -sp.csr_matrix(rule.C2)]).tocsr()
-        A = (B.T @ sp.diags(kw) @ B).tocsr()
+        A = (B.T @ sp.diags(kw_i) @ B).tocsr()
         D = sp.vstack([pair.interface.side1.dof_map(ndof),
                        pair.interface.side2.dof_map(ndof)]).tocsr()
         K = K + (D.T @ A @ D).tocsr()

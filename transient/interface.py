@@ -305,3 +305,36 @@ def build_interface(name, points1, faces1, offset1, points2, faces2, offset2, de
     rule = make_rule(frame, origin, side1, side2, p2d, w, local[owner, 0], local[owner, 1])
     timings = {"clipping": t_clip - t0, "fine_rule": time.perf_counter() - t_clip}
     return Interface(name, frame, origin, side1, side2, rule, local, degree, timings)
+
+
+def build_wall_interface(name, points1, faces1, offset1, wall_point, wall_normal, degree=4):
+    """Fine rule between a surface of part 1 and a rigid plane (the wall): a triangle Gauss rule
+    on each face's projection; side 2 is empty. wall_normal points out of the wall."""
+    t0 = time.perf_counter()
+    n = np.asarray(wall_normal, float)
+    n = n / np.linalg.norm(n)
+    t1 = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
+    t1 /= np.linalg.norm(t1)
+    frame = np.vstack([t1, np.cross(n, t1), n])
+    origin = np.asarray(wall_point, float)
+    types1, list1 = _flatten(faces1)
+    poly, counts, _, _ = _polygons(points1, types1, list1, frame, origin, reverse=True)
+    area = _polygon_area(poly, counts)
+    faces = np.flatnonzero(area > 0)       # faces turned away from the wall cannot touch it
+    if len(faces) == 0:
+        raise InterfaceError("no face of the surface faces the wall")
+    p2d, w, owner = triangle_points(poly[faces], counts[faces], degree)
+    side1 = _side(points1, types1, list1, faces, offset1, -1.0)
+    # on a wall every normal is the wall's: node normals included
+    side1 = Side(side1.points, side1.face_types, side1.faces, side1.nodes,
+                 np.tile(n, (side1.n, 1)), offset1)
+    side2 = Side(np.zeros((0, 3)), np.zeros(0, np.int64), [], np.zeros(0, np.int64),
+                 np.zeros((0, 3)), 0)
+    xi1, x1, _ = _map_points(points1, side1.face_types, side1.faces, owner, p2d, frame, origin)
+    gap0 = (x1 - origin) @ n
+    C1 = _observation(side1.face_types, side1.faces, owner, xi1, side1.nodes)
+    C2 = sp.csr_matrix((len(w), 0))
+    rule = Rule(x1, w, np.tile(n, (len(w), 1)), gap0, owner, np.zeros(len(w), np.int64), C1, C2)
+    pairs = np.stack([np.arange(len(faces)), np.zeros(len(faces), np.int64)], axis=1)
+    timings = {"fine_rule": time.perf_counter() - t0}
+    return Interface(name, frame, origin, side1, side2, rule, pairs, degree, timings)

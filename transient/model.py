@@ -36,7 +36,8 @@ class Model:
     M: sp.csr_matrix             # consistent mass [kg] on all dofs
     lumped_mass: np.ndarray      # (ndof,) HRZ-lumped mass [kg]
     fixed: np.ndarray            # (ndof,) bool, dofs clamped to zero
-    load: np.ndarray             # (ndof,) constant load [N]
+    load: np.ndarray             # (ndof,) sum of the loads [N]
+    load_patterns: dict          # load name -> (ndof,) its nodal forces [N]
     sensor_names: tuple
     sensors: sp.csr_matrix       # (n_sensors, ndof) observation of the sensors [-]
     timings: dict                # stage -> seconds
@@ -153,9 +154,11 @@ def _fixed(case, parts, ndof):
     return fixed
 
 
-def _load(case, parts, points, M):
-    f = np.zeros(3 * len(points))
+def _loads(case, parts, points, M):
+    """Nodal forces of every load, by name."""
+    out = {}
     for lname, spec in case["loads"].items():
+        f = np.zeros(3 * len(points))
         key = f"loads.{lname}"
         if spec["kind"] == "pressure":
             part, sname = resolve_set(case, parts, spec["set"], f"{key}.set")
@@ -175,7 +178,8 @@ def _load(case, parts, points, M):
                 p = _part(case, parts, pname, f"{key}.parts")
                 acc[p.offset:p.offset + p.mesh.n_nodes] = spec["vector"]
             f += M @ acc.ravel()
-    return f
+        out[lname] = f
+    return out
 
 
 def _part(case, parts, name, key):
@@ -220,7 +224,8 @@ def build_model(case):
     timings["assembly"] = time.perf_counter() - t0
 
     fixed = _fixed(case, parts, 3 * len(points))
-    load = _load(case, parts, points, ops.M)
+    patterns = _loads(case, parts, points, ops.M)
+    load = sum(patterns.values(), np.zeros(3 * len(points)))
     names, sensors = _sensors(case, parts, 3 * len(points))
-    return Model(points, parts, ops.K, ops.M, ops.lumped_mass, fixed, load, names, sensors,
-                 timings)
+    return Model(points, parts, ops.K, ops.M, ops.lumped_mass, fixed, load, patterns, names,
+                 sensors, timings)

@@ -46,6 +46,7 @@ class Variant:
     doc: str
     options: dict
     common: dict = field(default_factory=dict)
+    default: str = None        # kind taken when the table is absent (None: required)
 
 
 def _pos(doc, unit="", default=REQUIRED):
@@ -150,19 +151,36 @@ CONSTRAINT = Table("zero displacement of the nodes of a selection", {
     "dofs": Value("strs", "clamped directions", ["x", "y", "z"], choices=("x", "y", "z")),
 })
 
-LOAD = Variant("constant load", {
+def _signal_variant():
+    """The `signal` table of a load, from the signals module's fields."""
+    from .signals import SIGNAL_DOC, SIGNAL_FIELDS
+    options = {}
+    for kind, fields in SIGNAL_FIELDS.items():
+        options[kind] = {key: Value(typ, doc, REQUIRED if default is None else default,
+                                    "" if unit == "-" else unit)
+                         for key, (typ, default, unit, doc) in fields.items()}
+    return Variant(SIGNAL_DOC + " (constant: the preload, in equilibrium at t = 0)", options,
+                   default="constant")
+
+
+SIGNAL = _signal_variant()
+
+LOAD = Variant("load: its nodal forces times its time signal", {
     "pressure": {
         "set": Value("str", "face selection as PART.SET"),
         "value": Value("float", "pressure, positive when pushing into the surface", unit="Pa"),
+        "signal": SIGNAL,
     },
     "force": {
         "part": Value("str", "part carrying the force"),
         "point": _vec3("the force goes to the node nearest this point"),
         "vector": _vec3("force", "N"),
+        "signal": SIGNAL,
     },
     "gravity": {
         "vector": _vec3("acceleration of gravity", "m/s^2"),
         "parts": Value("strs", "parts it applies to (empty: all)", []),
+        "signal": SIGNAL,
     },
 })
 
@@ -171,7 +189,21 @@ CONTACT = Table("a contact pair: two face sets of two parts, gap observed on the
     "surface1": Value("str", "first surface as PART.SET (the gap is positive when it lies "
                       "outside part 2)"),
     "surface2": Value("str", "second surface as PART.SET; its outward normal is the contact "
-                      "normal"),
+                      "normal ('' with a wall)", ""),
+    "wall_point": Value("floats", "a point of a rigid plane wall replacing surface 2 ([] : no "
+                        "wall)", [], "m"),
+    "wall_normal": Value("floats", "normal of the wall, pointing out of it towards surface 1",
+                         [0.0, 0.0, 1.0], length=3),
+    "law": Table("contact law of the transient (p >= 0 as a function of the gap g)", {
+        "kind": Value("choice", "exponential p0 exp(-lambda g) with a linear continuation, "
+                      "linear (unilateral penalty k max(-g, 0)) or bilateral (tied, -k g)",
+                      "linear", choices=("exponential", "linear", "bilateral")),
+        "p0": Value("float", "exponential: pressure at zero gap", 1e4, "Pa", open_min=0.0),
+        "lambda": Value("float", "exponential: decay rate (tangent at pressure p: lambda p)",
+                        5e5, "1/m", open_min=0.0),
+        "p_lin": Value("float", "exponential: pressure beyond which the law continues linearly "
+                       "(no overflow at any penetration)", 1e9, "Pa", open_min=0.0),
+    }, optional=True),
     "order": Value("int", "degree of the triangle Gauss rule of the fine rule on Gamma", 4,
                    minimum=1, maximum=20),
     "k": Value("float", "stiffness density of the gap energy and of linear penalty contact",
@@ -222,6 +254,36 @@ SOLVER = Table("solution settings", {
         "shift": Value("float", "shift of shift-invert Lanczos, below the first frequency; a "
                        "negative value keeps free parts' rigid modes solvable", -1.0, "Hz"),
     }, optional=True),
+    "scheme": Value("choice", "time integration: explicit (central differences)", "explicit",
+                    choices=("explicit",)),
+    "t_end": Value("float", "simulated time after the preload", 0.0, "s", minimum=0.0),
+    "dt": Value("float", "time step (0: 0.9 times the critical step for explicit, 1/(20 fmax) "
+                "otherwise)", 0.0, "s", minimum=0.0),
+    "force_dt": Value("bool", "run explicit with dt above the critical step anyway", False),
+    "chunk": Value("int", "steps per kernel call (output and checks between calls)", 2000,
+                   minimum=1),
+    "drift_tolerance": Value("float", "stop when the energy balance drifts by more than this "
+                             "fraction of the peak total energy", 0.05, open_min=0.0),
+    "damping": Table("damping", {
+        "modal": Value("float", "modal damping ratio of every mode (reduced model)", 0.0,
+                       minimum=0.0),
+        "alpha": Value("float", "Rayleigh mass-proportional coefficient", 0.0, "1/s",
+                       minimum=0.0),
+        "beta": Value("float", "Rayleigh stiffness-proportional coefficient", 0.0, "s",
+                      minimum=0.0),
+    }, optional=True),
+    "reduction": Table("reduced model: normal modes up to fmax plus static responses", {
+        "enabled": Value("bool", "integrate a reduced model (false: the full model)", False),
+        "fmax": Value("float", "normal modes of the preloaded structure up to this frequency",
+                      16000.0, "Hz", open_min=0.0),
+        "statics": Value("bool", "add static responses to the contact point loads and the load "
+                         "patterns", True),
+    }, optional=True),
+    "newton": Table("implicit scheme and preload", {
+        "tolerance": Value("float", "relative residual of the Newton iterations", 1e-10,
+                           open_min=0.0),
+        "max_iter": Value("int", "iteration cap (non-convergence stops the run)", 50, minimum=1),
+    }, optional=True),
     "linear_solver": Value("choice", "sparse factorization: auto picks CHOLMOD if installed, "
                            "else PARDISO, else SuperLU", "auto",
                            choices=("auto", "cholmod", "pardiso", "superlu")),
@@ -234,7 +296,18 @@ SOLVER = Table("solution settings", {
 OUTPUT = Table("outputs", {
     "vtu": Value("str", "write the model (and modes) to this VTU file, relative to the case "
                  "file ('' = none)", ""),
+    "file": Value("str", "HDF5 history of `transient run`, relative to the case file ('': the "
+                  "case's name with .h5)", ""),
+    "every": Value("int", "store one step in this many", 1, minimum=1),
+    "sensors": Value("bool", "store the sensors' histories", True),
+    "contact": Value("bool", "store gap and pressure at the contact points", False),
+    "energy": Value("bool", "store the energy balance terms", True),
 }, optional=True)
+
+INITIAL = Table("initial velocity of a part (impact)", {
+    "part": Value("str", "part set in motion"),
+    "velocity": _vec3("velocity", "m/s"),
+})
 
 CASE = Table("a case", {
     "title": Value("str", "one-line description", ""),
@@ -244,6 +317,7 @@ CASE = Table("a case", {
     "loads": Named("loads by name", LOAD),
     "contact": Named("contact pairs by name", CONTACT),
     "sensors": Named("sensors by name", SENSOR),
+    "initial": Named("initial velocities by name", INITIAL),
     "solver": SOLVER,
     "output": OUTPUT,
 })
@@ -258,7 +332,8 @@ def reference(node=CASE, prefix=""):
     elif isinstance(node, Named):
         rows += reference(node.item, f"{prefix}.NAME")
     elif isinstance(node, Variant):
-        rows.append((f"{prefix}.kind", "choice", "required", "",
+        rows.append((f"{prefix}.kind", "choice", repr(node.default) if node.default else
+                     "required", "",
                      f"{node.doc}: one of {', '.join(node.options)}"))
         for key, sub in node.common.items():
             rows += reference(sub, f"{prefix}.{key}")

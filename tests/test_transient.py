@@ -1,0 +1,174 @@
+"""Transient runs: bar impact against 1D wave theory, two bars exchanging velocities, clean
+aborts, bit-for-bit resume, and only the stages a scene needs."""
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from transient.case import load
+from transient.cli import main
+from transient.history import summary
+from transient.run import run
+
+CASES = Path(__file__).resolve().parent.parent / "cases"
+L, C_WAVE, V0 = 0.1, np.sqrt(2.1e11 / 7800.0), 1.0
+
+
+def run_case(tmp_path, text_or_path, overrides=(), name="run.h5"):
+    path = Path(text_or_path) if isinstance(text_or_path, Path) else tmp_path / "case.toml"
+    if not isinstance(text_or_path, Path):
+        path.write_text(text_or_path)
+    case = load(path, list(overrides))
+    out = tmp_path / name
+    return run(case, out), out
+
+
+def series(path):
+    with h5py.File(path, "r") as f:
+        return {k: f[k][...] for k in ("time",)} | {
+            name: f[name][...] for name in _names(f)}
+
+
+def _names(f):
+    names = []
+    f.visititems(lambda n, o: names.append(n) if isinstance(o, h5py.Dataset)
+                 and not n.startswith("checkpoint") else None)
+    return names
+
+
+@pytest.mark.parametrize("scheme", ["explicit"])
+def test_bar_on_a_rigid_wall(tmp_path, scheme):
+    result, out = run_case(tmp_path, CASES / "bar_impact.toml", [f"solver.scheme={scheme}"])
+    assert result.status == "complete"
+    s = series(out)
+    t, p = s["time"], s["contact/wall/pressure"].max(axis=1)
+    on = np.flatnonzero(p > 0)
+    duration = t[on[-1]] - t[on[0]]
+    assert duration == pytest.approx(2 * L / C_WAVE, rel=0.02)
+    after = t > t[on[-1]] + 5e-6
+    rebound = np.polyfit(t[after], s["sensors/tail"][after], 1)[0]
+    assert rebound == pytest.approx(-V0, rel=0.02)
+    kinetic0 = s["energy/kinetic"][0]
+    assert s["energy/kinetic"][after].mean() == pytest.approx(kinetic0, rel=0.01)
+    # the contact pressure of a 1D impact: rho c v0
+    assert np.median(p[on]) == pytest.approx(7800.0 * C_WAVE * V0, rel=0.1)
+
+
+TWO_BARS = """
+[materials.steel]
+E = 2.1e11
+nu = 0.0
+rho = 7800.0
+
+[parts.left]
+material = "steel"
+[parts.left.mesh]
+kind = "box"
+size = [0.1, 0.01, 0.01]
+divisions = [60, 1, 1]
+
+[parts.right]
+material = "steel"
+[parts.right.mesh]
+kind = "box"
+size = [0.1, 0.01, 0.01]
+origin = [0.10001, 0.0, 0.0]
+divisions = [60, 1, 1]
+
+[initial.hit]
+part = "left"
+velocity = [1.0, 0.0, 0.0]
+
+# two deformable tips on one penalty spring: half the wall's k keeps each event resolved
+[contact.impact]
+surface1 = "left.xmax"
+surface2 = "right.xmin"
+k = 1.0e14
+
+[sensors.left_tail]
+part = "left"
+point = [0.0, 0.005, 0.005]
+direction = [1.0, 0.0, 0.0]
+
+[sensors.right_tail]
+part = "right"
+point = [0.20001, 0.005, 0.005]
+direction = [1.0, 0.0, 0.0]
+
+[solver]
+t_end = 1.0e-4
+"""
+
+
+def test_two_identical_bars_exchange_velocities(tmp_path):
+    result, out = run_case(tmp_path, TWO_BARS)
+    assert result.status == "complete"
+    s = series(out)
+    t = s["time"]
+    late = t > 6.5e-5      # contact from 10 us to about 10 + 2 L / c = 48.5 us
+    v_left = np.polyfit(t[late], s["sensors/left_tail"][late], 1)[0]
+    v_right = np.polyfit(t[late], s["sensors/right_tail"][late], 1)[0]
+    assert abs(v_left) < 0.02 * V0
+    assert v_right == pytest.approx(V0, rel=0.02)
+
+
+def test_unstable_run_aborts_cleanly_and_keeps_its_history(tmp_path, capsys):
+    case = tmp_path / "bar.toml"
+    case.write_text((CASES / "bar_impact.toml").read_text())
+    out = tmp_path / "bad.h5"
+    code = main(["run", str(case), "-o", str(out), "--quiet", "--set", "solver.dt=4e-7",
+                 "--set", "solver.force_dt=true", "--set", "solver.chunk=50"])
+    assert code == 3
+    assert "aborted" in capsys.readouterr().err
+    info = summary(out)
+    assert info["status"].startswith("aborted: ")
+    assert info["steps"] > 1
+    with h5py.File(out, "r") as f:
+        assert np.all(np.isfinite(f["time"][...]))
+
+
+def test_dt_above_critical_is_refused(tmp_path, capsys):
+    code = main(["run", str(CASES / "bar_impact.toml"), "-o", str(tmp_path / "x.h5"),
+                 "--set", "solver.dt=4e-7"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "solver.dt" in err and "critical step" in err and "Traceback" not in err
+
+
+def test_resumed_run_equals_an_uninterrupted_one_bit_for_bit(tmp_path):
+    base = ["solver.chunk=100", "solver.t_end=6e-5"]
+    whole, whole_path = run_case(tmp_path, CASES / "bar_impact.toml", base, "whole.h5")
+    half, part_path = run_case(tmp_path, CASES / "bar_impact.toml",
+                               ["solver.chunk=100", "solver.t_end=3e-5"], "part.h5")
+    assert half.status == "complete" and half.steps < whole.steps
+    case = load(CASES / "bar_impact.toml", base)
+    resumed = run(case, part_path, resume=True)
+    assert resumed.status == "complete" and resumed.steps == whole.steps
+    a, b = series(whole_path), series(part_path)
+    assert a.keys() == b.keys()
+    for name in a:
+        np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+
+
+def test_info_json(tmp_path, capsys):
+    result, out = run_case(tmp_path, CASES / "bar_impact.toml", ["solver.t_end=2e-5"])
+    assert main(["info", str(out), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    for key in ("status", "steps", "t_end", "timings", "energy_drift"):
+        assert key in d
+    assert d["status"] == "complete" and d["energy_drift"] < 1e-2
+
+
+def test_stages_only_what_the_scene_needs(tmp_path):
+    # no contact pair: no contact stage; fine rule: no compatibility; no reduction asked: none
+    text = TWO_BARS.split("[contact.impact]")[0] + TWO_BARS.split("k = 1.0e14")[1]
+    result, out = run_case(tmp_path, text, ["solver.t_end=1e-6"])
+    assert "contact" not in result.stages and "reduction" not in result.stages
+    result, out = run_case(tmp_path, TWO_BARS, ["solver.t_end=1e-6"])
+    assert "contact" in result.stages and "reduction" not in result.stages
+    with h5py.File(out, "r") as f:
+        stages = json.loads(f.attrs["stages"])
+        assert set(stages) == set(result.stages)
+        assert "contact/impact/gap" not in f          # not requested: not stored

@@ -1,0 +1,72 @@
+"""Contact laws p(g): pressure p >= 0 [Pa] as a function of the gap g [m] (g < 0: penetration).
+
+Chosen by an integer code inside kernels (no function objects passed to cached kernels).
+params (4,) per law:
+  EXPONENTIAL: p0 [Pa], lambda [1/m], g_lin [m]: p = p0 exp(-lambda g) for g >= g_lin, and below
+      g_lin the linear continuation with the same value and slope (no overflow at any penetration).
+  LINEAR: k [Pa/m]: unilateral penalty p = k max(-g, 0).
+  BILATERAL: k [Pa/m]: tied, p = -k g (tension allowed).
+tangent k_t = -dp/dg >= 0; potential Phi(g) = integral from g to infinity of p (for the energy;
+bilateral: 1/2 k g^2).
+"""
+import numpy as np
+
+from ..jit import njit
+
+EXPONENTIAL, LINEAR, BILATERAL = 0, 1, 2
+NAMES = {"exponential": EXPONENTIAL, "linear": LINEAR, "bilateral": BILATERAL}
+
+
+@njit
+def pressure(code, params, g):
+    """(p, k_t) at gap g."""
+    if code == EXPONENTIAL:
+        p0, lam, g_lin = params[0], params[1], params[2]
+        if g >= g_lin:
+            p = p0 * np.exp(-lam * g)
+            return p, lam * p
+        p_lin = p0 * np.exp(-lam * g_lin)
+        return p_lin + lam * p_lin * (g_lin - g), lam * p_lin
+    k = params[0]
+    if code == LINEAR:
+        if g < 0.0:
+            return -k * g, k
+        return 0.0, 0.0
+    return -k * g, k
+
+
+@njit
+def potential(code, params, g):
+    """Phi(g) with p = -dPhi/dg, Phi >= 0 [J/m^2]."""
+    if code == EXPONENTIAL:
+        p0, lam, g_lin = params[0], params[1], params[2]
+        if g >= g_lin:
+            return p0 / lam * np.exp(-lam * g)
+        p_lin = p0 * np.exp(-lam * g_lin)
+        d = g_lin - g
+        return p_lin / lam + p_lin * d + 0.5 * lam * p_lin * d * d
+    k = params[0]
+    if code == LINEAR:
+        return 0.5 * k * g * g if g < 0.0 else 0.0
+    return 0.5 * k * g * g
+
+
+def law_params(spec, k):
+    """(code, params) of a validated [contact.NAME.law] table; k: the pair's stiffness density."""
+    code = NAMES[spec["kind"]]
+    params = np.zeros(4)
+    if code == EXPONENTIAL:
+        p0, lam = spec["p0"], spec["lambda"]
+        # the law turns linear where the pressure reaches p_lin
+        params[:3] = p0, lam, -np.log(spec["p_lin"] / p0) / lam
+    else:
+        params[0] = k
+    return code, params
+
+
+@njit
+def evaluate(code, params, g, p, kt, phi):
+    """Vector version: p, k_t and Phi at gaps g (m,) with per-point code (m,), params (m, 4)."""
+    for i in range(g.shape[0]):
+        p[i], kt[i] = pressure(code[i], params[i], g[i])
+        phi[i] = potential(code[i], params[i], g[i])

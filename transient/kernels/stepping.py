@@ -1,0 +1,282 @@
+"""Time stepping kernels: each call integrates a chunk of steps and returns; no Python per step.
+
+The system, in reduced coordinates (M = I) or on the free dofs of the full model:
+    M a + c v + K_lin q = F(t) + C^T [w (p(g) + k_t* (g - g0))],   g = C q + g0,
+where K_lin = K + C^T diag(w k_t*) C is the stiffness linearized at the preload (k_t*: contact
+tangent there), so the contact rows only carry the nonlinear remainder, which vanishes to first
+order around the preload. F(t) = sum_j patterns_j s_j(t).
+
+Energies (stored per output row): kinetic, strain (structure only: 1/2 q^T K q), contact
+(sum w Phi(g)), external work, dissipated; their balance kinetic + strain + contact - work +
+dissipated is constant.
+
+Contact points carry their own law: code (m,) and params (m, 4) (see laws.py), so pairs with
+different laws share one set of rows.
+
+Status codes returned: OK, NOT_FINITE (NaN/Inf in the state), NO_CONVERGENCE (implicit).
+"""
+import numba
+import numpy as np
+
+from ..jit import njit, njit_fast, njit_parallel
+from .laws import potential, pressure
+from ..signals import signal_values
+
+OK, NOT_FINITE, NO_CONVERGENCE = 0, 1, 2
+KINETIC, STRAIN, CONTACT, WORK, DISSIPATED = 0, 1, 2, 3, 4
+
+
+@njit_parallel
+def remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf):
+    """f = C^T [w (p(g) + k_t* (g - g0))] in one pass over the rows of C (m, n).
+
+    Rows are split in blocks, one per thread, each adding into its own row of fbuf; also fills
+    gap and press (m,). Returns (contact potential, 1/2 sum w k_t* (g - g0)^2).
+    """
+    m, n = C.shape
+    nb = blocks.shape[0] - 1
+    phi = np.zeros(nb)
+    lin = np.zeros(nb)
+    for b in numba.prange(nb):
+        fb = fbuf[b]
+        fb[:] = 0.0
+        for i in range(blocks[b], blocks[b + 1]):
+            row = C[i]
+            s = 0.0
+            for j in range(n):
+                s += row[j] * q[j]
+            g = g0[i] + s
+            p, _ = pressure(code[i], params[i], g)
+            r = w[i] * (p + kt0[i] * s)
+            for j in range(n):
+                fb[j] += r * row[j]
+            gap[i] = g
+            press[i] = p
+            phi[b] += w[i] * potential(code[i], params[i], g)
+            lin[b] += 0.5 * w[i] * kt0[i] * s * s
+    for j in range(n):
+        acc = 0.0
+        for b in range(nb):
+            acc += fbuf[b, j]
+        f[j] = acc
+    return phi.sum(), lin.sum()
+
+
+@njit_fast
+def _external(t, patterns, sig, svals, fext):
+    """fext = patterns^T s(t) for the reduced or full dofs."""
+    signal_values(t, sig[0], sig[1], sig[2], sig[3], sig[4], svals)
+    fext[:] = 0.0
+    for j in range(patterns.shape[0]):
+        s = svals[j]
+        if s != 0.0:
+            for k in range(fext.shape[0]):
+                fext[k] += s * patterns[j, k]
+
+
+@njit_fast
+def _finite(x):
+    for k in range(x.shape[0]):
+        if not np.isfinite(x[k]):
+            return False
+    return True
+
+
+@njit_fast
+def _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e):
+    out_t[row] = t
+    for k in range(S.shape[0]):
+        s = 0.0
+        for j in range(q.shape[0]):
+            s += S[k, j] * q[j]
+        out_s[row, k] = s
+    if out_g.shape[1] > 0:
+        out_g[row] = gap
+        out_p[row] = press
+    out_e[row] = energy
+
+
+@njit_fast
+def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0, code,
+                     params, patterns, sig, S, blocks, out_t, out_s, out_g, out_p, out_e):
+    """Central differences (velocity Verlet) on the reduced system, diagonal damping taken
+    implicitly in the half step. state (4, n): q, v, a, and state[3, 0] the time.
+    acc (2,): external work and dissipated energy so far. Returns (status, steps done)."""
+    q, v, a = state[0], state[1], state[2]
+    t = state[3, 0]
+    n = q.shape[0]
+    m = C.shape[0]
+    f = np.empty(n)
+    fext = np.empty(n)
+    fext_old = np.empty(n)
+    svals = np.empty(patterns.shape[0])
+    gap = np.empty(m)
+    press = np.empty(m)
+    fbuf = np.empty((blocks.shape[0] - 1, n))
+    energy = np.empty(5)
+    dq = np.empty(n)
+    _external(t, patterns, sig, svals, fext_old)
+    row = 0
+    for step in range(1, n_steps + 1):
+        power = 0.0
+        for k in range(n):
+            vh = v[k] + 0.5 * dt * a[k]
+            dq[k] = dt * vh
+            power += damp[k] * v[k] * v[k]
+            q[k] += dq[k]
+            v[k] = vh
+        t += dt
+        _external(t, patterns, sig, svals, fext)
+        phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf)
+        kin = 0.0
+        strain = -lin
+        work = 0.0
+        for k in range(n):
+            # trapezoid: exact work of loads constant or linear over the step
+            work += 0.5 * (fext_old[k] + fext[k]) * dq[k]
+            fk = fext[k] + f[k] - omega2[k] * q[k]
+            vn = (v[k] + 0.5 * dt * fk) / (1.0 + 0.5 * dt * damp[k])
+            a[k] = fk - damp[k] * vn
+            v[k] = vn
+            fext_old[k] = fext[k]
+            kin += 0.5 * vn * vn
+            strain += 0.5 * omega2[k] * q[k] * q[k]
+            power += damp[k] * vn * vn
+        acc[0] += work
+        acc[1] += 0.5 * dt * power
+        if not (_finite(q) and _finite(v)):
+            state[3, 0] = t
+            return NOT_FINITE, step
+        if step % every == 0:
+            energy[KINETIC] = kin
+            energy[STRAIN] = strain
+            energy[CONTACT] = phi
+            energy[WORK] = acc[0]
+            energy[DISSIPATED] = acc[1]
+            _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
+            row += 1
+    state[3, 0] = t
+    return OK, n_steps
+
+
+@njit_fast
+def _csr_matvec(indptr, indices, data, x, out):
+    for i in range(out.shape[0]):
+        s = 0.0
+        for k in range(indptr[i], indptr[i + 1]):
+            s += data[k] * x[indices[k]]
+        out[i] = s
+
+
+@njit_fast
+def remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press):
+    """Sparse version of remainder_dense (rows of a CSR matrix C)."""
+    f[:] = 0.0
+    phi = 0.0
+    lin = 0.0
+    for i in range(g0.shape[0]):
+        s = 0.0
+        for k in range(Cp[i], Cp[i + 1]):
+            s += Cd[k] * q[Ci[k]]
+        g = g0[i] + s
+        p, _ = pressure(code[i], params[i], g)
+        r = w[i] * (p + kt0[i] * s)
+        for k in range(Cp[i], Cp[i + 1]):
+            f[Ci[k]] += r * Cd[k]
+        gap[i] = g
+        press[i] = p
+        phi += w[i] * potential(code[i], params[i], g)
+        lin += 0.5 * w[i] * kt0[i] * s * s
+    return phi, lin
+
+
+@njit_fast
+def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w, kt0, code,
+                  params, patterns, sig, S, out_t, out_s, out_g, out_p, out_e):
+    """Central differences on the free dofs of the full model: K = (indptr, indices, data) of
+    K_lin (CSR), lumped mass (n,), Rayleigh damping alpha M (implicit in the half step) and
+    beta K (on the half-step velocity); C and S dense-free CSR triplets. Same state and outputs
+    as explicit_reduced."""
+    q, v, a = state[0], state[1], state[2]
+    t = state[3, 0]
+    n = q.shape[0]
+    m = g0.shape[0]
+    Kp, Ki, Kd = K
+    Cp, Ci, Cd = C
+    f = np.empty(n)
+    ku = np.empty(n)
+    kv = np.empty(n)
+    fext = np.empty(n)
+    fext_old = np.empty(n)
+    dq = np.empty(n)
+    svals = np.empty(patterns.shape[0])
+    gap = np.empty(m)
+    press = np.empty(m)
+    energy = np.empty(5)
+    _external(t, patterns, sig, svals, fext_old)
+    _csr_matvec(Kp, Ki, Kd, v, kv)
+    power_old = 0.0
+    for k in range(n):
+        power_old += alpha * mass[k] * v[k] * v[k] + beta * v[k] * kv[k]
+    row = 0
+    for step in range(1, n_steps + 1):
+        for k in range(n):
+            vh = v[k] + 0.5 * dt * a[k]
+            dq[k] = dt * vh
+            q[k] += dq[k]
+            v[k] = vh
+        t += dt
+        _external(t, patterns, sig, svals, fext)
+        phi, lin = remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press)
+        _csr_matvec(Kp, Ki, Kd, q, ku)
+        if beta != 0.0:
+            _csr_matvec(Kp, Ki, Kd, v, kv)
+        work = 0.0
+        kin = 0.0
+        strain = -lin
+        power = 0.0
+        for k in range(n):
+            work += 0.5 * (fext_old[k] + fext[k]) * dq[k]
+            fk = fext[k] + f[k] - ku[k]
+            if beta != 0.0:
+                fk -= beta * kv[k]
+            vn = (v[k] + 0.5 * dt * fk / mass[k]) / (1.0 + 0.5 * dt * alpha)
+            a[k] = fk / mass[k] - alpha * vn
+            v[k] = vn
+            fext_old[k] = fext[k]
+            kin += 0.5 * mass[k] * vn * vn
+            strain += 0.5 * q[k] * ku[k]
+            power += alpha * mass[k] * vn * vn
+            if beta != 0.0:
+                power += beta * vn * kv[k]
+        acc[0] += work
+        acc[1] += 0.5 * dt * (power_old + power)
+        power_old = power
+        if not (_finite(q) and _finite(v)):
+            state[3, 0] = t
+            return NOT_FINITE, step
+        if step % every == 0:
+            energy[KINETIC] = kin
+            energy[STRAIN] = strain
+            energy[CONTACT] = phi
+            energy[WORK] = acc[0]
+            energy[DISSIPATED] = acc[1]
+            _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
+            row += 1
+    state[3, 0] = t
+    return OK, n_steps
+
+
+@njit_fast
+def _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e):
+    Sp, Si, Sd = S
+    out_t[row] = t
+    for k in range(Sp.shape[0] - 1):
+        s = 0.0
+        for j in range(Sp[k], Sp[k + 1]):
+            s += Sd[j] * q[Si[j]]
+        out_s[row, k] = s
+    if out_g.shape[1] > 0:
+        out_g[row] = gap
+        out_p[row] = press
+    out_e[row] = energy

@@ -1,0 +1,424 @@
+"""`transient run`: the stages of a transient, then the time integration streamed to HDF5.
+
+Stages (each runs only if the scene needs it, and is timed): model, contact, preload,
+linearization, reduction, time step, integration. The kernels integrate chunks of steps; between
+chunks Python appends the outputs to the history, writes a checkpoint, checks the energy balance
+and the critical step, and moves the progress bar.
+"""
+import json
+import sys
+import time
+from dataclasses import dataclass, field
+
+import h5py
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from . import __version__
+from .contact import build_contact, contact_stiffness
+from .contactset import stack
+from .errors import CaseError, RunAborted
+from .history import CASE_TEXT, History, load_checkpoint
+from .kernels import stepping
+from .model import build_model
+from .preload import PreloadError, solve_preload
+from .reduction import reduced_basis
+from .signals import compile_signals
+
+ENERGY_TERMS = ("kinetic", "strain", "contact", "external_work", "dissipated")
+
+
+@dataclass
+class Problem:
+    """What the kernels integrate, in reduced coordinates or on the free dofs."""
+    reduced: bool
+    state: np.ndarray        # (4, n): q, v, a, and [3, 0] the time
+    acc: np.ndarray          # (2,) external work and dissipated energy
+    dt: float
+    dt_critical: float       # explicit stability limit at the preload (inf when not explicit)
+    args: tuple              # the kernel's system arguments
+    n_points: int
+    sensor_names: tuple
+    contact_slices: dict
+    store_contact: bool
+    stages: dict = field(default_factory=dict)
+    meta: dict = field(default_factory=dict)
+    initial_energy: np.ndarray = None
+
+
+def _timed(stages, name, fn, *args, **kwargs):
+    t0 = time.perf_counter()
+    out = fn(*args, **kwargs)
+    stages[name] = time.perf_counter() - t0
+    return out
+
+
+def _signals(case):
+    specs = [case["loads"][name]["signal"] for name in case["loads"]]
+    return compile_signals(specs)
+
+
+def _initial_velocity(case, model):
+    v = np.zeros(model.ndof)
+    for name, spec in case["initial"].items():
+        if spec["part"] not in model.parts:
+            raise CaseError(case.path, f"initial.{name}.part", f"unknown part '{spec['part']}' "
+                            f"(parts: {', '.join(model.parts)})")
+        dofs = model.part_dofs(spec["part"]).reshape(-1, 3)
+        v[dofs] = spec["velocity"]
+    v[model.fixed] = 0.0
+    return v
+
+
+def _critical_kt(contacts, preload):
+    """Contact tangent for the critical step: the preload's, and k for penalty laws (they may
+    close during the run)."""
+    kt = preload.tangent.copy()
+    penalty = contacts.code != 0
+    kt[penalty] = np.maximum(kt[penalty], contacts.params[penalty, 0])
+    return kt
+
+
+def _blocks(m):
+    """Row blocks of the contact pass, one per Numba thread."""
+    import numba
+    nb = max(1, min(numba.get_num_threads(), m // 64 or 1))
+    return np.linspace(0, m, nb + 1).astype(np.int64)
+
+
+def prepare(case, quiet=True):
+    """Model, contact, preload, linearization and (optionally) reduction of a case."""
+    solver = case["solver"]
+    stages = {}
+    model = _timed(stages, "model", build_model, case)
+    pairs = _timed(stages, "contact", build_contact, case, model) if case["contact"] else []
+    contacts = stack(pairs, model.ndof)
+    patterns = [model.load_patterns[name] for name in case["loads"]]
+    constant = sum((p for p, name in zip(patterns, case["loads"])
+                    if case["loads"][name]["signal"]["kind"] == "constant"),
+                   np.zeros(model.ndof))
+    try:
+        preload = _timed(stages, "preload", solve_preload, model.K, model.fixed, constant,
+                         contacts, solver["linear_solver"], solver["newton"]["tolerance"],
+                         solver["newton"]["max_iter"])
+    except PreloadError as exc:
+        raise CaseError(case.path, "loads", str(exc)) from None
+    if preload.iterations == 0:
+        del stages["preload"]
+    t0 = time.perf_counter()
+    kw = [contacts.weights[s] * preload.tangent[s] for s in contacts.slices.values()]
+    K_lin = (model.K + contact_stiffness(pairs, model.ndof, kw=kw)).tocsr() if pairs else model.K
+    if pairs:
+        stages["linearization"] = time.perf_counter() - t0
+    v0 = _initial_velocity(case, model)
+    sig = _signals(case)
+    damping = solver["damping"]
+    reduction = solver["reduction"]
+    if reduction["enabled"]:
+        problem = _reduced(case, model, contacts, preload, K_lin, patterns, v0, sig, stages)
+    else:
+        if damping["modal"] > 0:
+            raise CaseError(case.path, "solver.damping.modal", "modal damping needs the reduced "
+                            "model (solver.reduction.enabled = true); use alpha and beta")
+        problem = _full(case, model, contacts, preload, K_lin, patterns, v0, sig, stages)
+    problem.meta.update({
+        "preload_iterations": preload.iterations, "preload_residual": preload.residual,
+        "n_points": contacts.n_points,
+        "pairs": {p.name: {"rule": p.spec["rule"], "points": p.rule.n_points,
+                           "regularized": p.spec["regularized"], "eps": p.eps,
+                           "law": p.spec["law"]["kind"]} for p in pairs}})
+    return problem
+
+
+def _reduced(case, model, contacts, preload, K_lin, patterns, v0, sig, stages):
+    solver = case["solver"]
+    reduction = solver["reduction"]
+    free = np.flatnonzero(~model.fixed)
+    loads = [np.asarray(contacts.C.T.todense()) if reduction["statics"] and contacts.n_points
+             else np.zeros((model.ndof, 0))]
+    if reduction["statics"]:
+        loads += [np.stack(patterns, axis=1)] if patterns else []
+    loads.append(K_lin @ preload.u[:, None])          # its response is the preload itself
+    statics = np.hstack(loads)
+    basis = _timed(stages, "reduction", reduced_basis, K_lin, model.M, model.fixed,
+                   reduction["fmax"], statics, solver["linear_solver"])
+    T = basis.T
+    MT = model.M @ T
+    q0 = MT.T @ preload.u
+    v = MT.T @ v0
+    omega2 = basis.omega2
+    damping = solver["damping"]
+    omega = np.sqrt(omega2)
+    damp = 2 * damping["modal"] * omega + damping["alpha"] + damping["beta"] * omega2
+    Cr = np.ascontiguousarray(contacts.C @ T)
+    kt0 = preload.tangent
+    P = _patterns([T.T @ p for p in patterns], T.shape[1])
+    S = np.ascontiguousarray(model.sensors @ T)
+    state = np.zeros((4, len(omega2)))
+    state[0], state[1] = q0, v
+    kt_crit = _critical_kt(contacts, preload)
+    dt_crit = _reduced_critical_step(omega2, Cr, contacts.weights * (kt_crit - kt0))
+    blocks = _blocks(contacts.n_points)
+    args = (omega2, damp, Cr, contacts.gap0, contacts.weights, kt0, contacts.code,
+            contacts.params, P, sig, S, blocks)
+    problem = Problem(True, state, np.zeros(2), 0.0, dt_crit, args, contacts.n_points,
+                      tuple(model.sensor_names), contacts.slices, case["output"]["contact"],
+                      stages)
+    problem.meta.update({"reduced_dofs": len(omega2), "normal_modes": basis.n_modes,
+                         "basis_timings": basis.timings,
+                         "basis_projection_error": float(
+                             np.linalg.norm(T @ q0 - preload.u)
+                             / max(np.linalg.norm(preload.u), 1e-300)),
+                         "free_dofs": len(free)})
+    _initial_acceleration(problem)
+    return problem
+
+
+def _reduced_critical_step(omega2, Cr, dkw):
+    """2 / omega_max of diag(omega^2) + Cr^T diag(dkw) Cr (Lanczos on the small dense matrix)."""
+    A = np.diag(omega2) + (Cr.T * dkw) @ Cr if len(dkw) else np.diag(omega2)
+    lam = np.linalg.eigvalsh(0.5 * (A + A.T))[-1]
+    return 2.0 / np.sqrt(lam) if lam > 0 else np.inf
+
+
+def _full(case, model, contacts, preload, K_lin, patterns, v0, sig, stages):
+    t0 = time.perf_counter()
+    free = np.flatnonzero(~model.fixed)
+    Kf = K_lin[free][:, free].tocsr()
+    mass = model.lumped_mass[free]
+    Cf = contacts.C[:, free].tocsr()
+    kt0 = preload.tangent
+    damping = case["solver"]["damping"]
+    kt_crit = _critical_kt(contacts, preload)
+    Kc = (Kf + (Cf.T @ sp.diags(contacts.weights * (kt_crit - kt0)) @ Cf)).tocsr()
+    dt_crit = _full_critical_step(Kc, mass)
+    stages["time_step"] = time.perf_counter() - t0
+    P = _patterns([p[free] for p in patterns], len(free))
+    S = sp.csr_matrix(model.sensors[:, free])
+    state = np.zeros((4, len(free)))
+    state[0], state[1] = preload.u[free], v0[free]
+    args = (_csr(Kf), mass, damping["alpha"], damping["beta"], _csr(Cf), contacts.gap0,
+            contacts.weights, kt0, contacts.code, contacts.params, P, sig, _csr(S))
+    problem = Problem(False, state, np.zeros(2), 0.0, dt_crit, args, contacts.n_points,
+                      tuple(model.sensor_names), contacts.slices, case["output"]["contact"],
+                      stages)
+    problem.meta["free_dofs"] = len(free)
+    _initial_acceleration(problem)
+    return problem
+
+
+def _patterns(vectors, n):
+    """Load patterns as rows (J, n) for the kernels."""
+    return np.ascontiguousarray(np.array(vectors, dtype=float).reshape(len(vectors), n))
+
+
+def _csr(A):
+    A = sp.csr_matrix(A)
+    return (A.indptr.astype(np.int64), A.indices.astype(np.int64), A.data.astype(np.float64))
+
+
+def _full_critical_step(K, mass):
+    """2 / omega_max for M^-1 K with a diagonal mass (Lanczos on D^-1/2 K D^-1/2)."""
+    d = sp.diags(1.0 / np.sqrt(mass))
+    A = (d @ K @ d).tocsr()
+    v0 = np.ones(A.shape[0])      # a fixed start: the same dt on every run of a case
+    lam = spla.eigsh(A, k=1, which="LA", return_eigenvectors=False, tol=1e-6, v0=v0)[0]
+    # Lanczos converges from below: a small margin keeps the estimate an upper bound
+    return 2.0 / np.sqrt(1.01 * lam)
+
+
+def kernel_of(problem):
+    return stepping.explicit_reduced if problem.reduced else stepping.explicit_full
+
+
+def _initial_acceleration(problem):
+    """a(0) and the initial energies from the forces at the initial state (a step of length 0)."""
+    state = problem.state.copy()
+    out = _outputs(problem, 1)
+    kernel_of(problem)(state, problem.acc.copy(), 1, 1, 0.0, *problem.args, *out)
+    problem.state[2] = state[2]
+    problem.initial_energy = out[-1][0].copy()
+
+
+def _outputs(problem, rows):
+    ns = len(problem.sensor_names)
+    m = problem.n_points if problem.store_contact else 0
+    return (np.zeros(rows), np.zeros((rows, ns)), np.zeros((rows, m)), np.zeros((rows, m)),
+            np.zeros((rows, 5)))
+
+
+def _layout(problem):
+    layout = {"time": ()}
+    layout.update({f"sensors/{name}": () for name in problem.sensor_names})
+    if problem.store_contact:
+        for name, s in problem.contact_slices.items():
+            n = s.stop - s.start
+            layout[f"contact/{name}/gap"] = (n,)
+            layout[f"contact/{name}/pressure"] = (n,)
+    layout.update({f"energy/{term}": () for term in ENERGY_TERMS})
+    return layout
+
+
+def _rows(problem, out, n):
+    t, s, g, p, e = (x[:n] for x in out)
+    rows = {"time": t}
+    rows.update({f"sensors/{name}": s[:, k] for k, name in enumerate(problem.sensor_names)})
+    if problem.store_contact:
+        for name, sl in problem.contact_slices.items():
+            rows[f"contact/{name}/gap"] = g[:, sl]
+            rows[f"contact/{name}/pressure"] = p[:, sl]
+    rows.update({f"energy/{term}": e[:, k] for k, term in enumerate(ENERGY_TERMS)})
+    return rows
+
+
+def _balance(e):
+    return e[..., 0] + e[..., 1] + e[..., 2] - e[..., 3] + e[..., 4]
+
+
+@dataclass(frozen=True)
+class RunResult:
+    path: str
+    status: str
+    steps: int
+    t_end: float
+    dt: float
+    dt_critical: float
+    stages: dict
+    timings: dict
+    energy_drift: float
+
+
+def choose_dt(case, problem, stored=None):
+    """The time step: the case's, checked against the critical step, or an automatic one; a
+    resumed run keeps the one stored in its history."""
+    solver = case["solver"]
+    dt = solver["dt"] if stored is None else stored
+    if dt == 0.0:
+        dt = 0.9 * problem.dt_critical
+        if not np.isfinite(dt):
+            raise CaseError(case.path, "solver.dt", "no stiffness bounds the step: give dt")
+    elif dt > problem.dt_critical and not solver["force_dt"]:
+        raise CaseError(case.path, "solver.dt", f"{dt:.3e} s is above the critical step of "
+                        f"central differences {problem.dt_critical:.3e} s (set solver.force_dt "
+                        "= true to run anyway)")
+    return dt
+
+
+def run(case, path, resume=False, progress=None):
+    """Integrate a case to solver.t_end, streaming to the HDF5 file at path.
+
+    Returns a RunResult; a run that stops early (NaN, energy drift, Ctrl-C) keeps every chunk
+    in the file, marked `aborted: <reason>`, and its status says so.
+    """
+    solver, output = case["solver"], case["output"]
+    t_start = time.perf_counter()
+    problem = prepare(case)
+    stored = _stored_dt(path) if resume else None
+    dt = choose_dt(case, problem, stored)
+    every = output["every"]
+    chunk = max(every, solver["chunk"] // every * every)
+    n_total = int(round(solver["t_end"] / dt))
+    meta = {CASE_TEXT: case.text, "case_path": str(case.path),
+            "overrides": list(case.overrides), "version": __version__, "dt": dt,
+            "dt_critical": problem.dt_critical, "scheme": solver["scheme"],
+            "reduced": problem.reduced, "steps_planned": n_total, "every": every,
+            "stages": problem.stages, **problem.meta}
+    step = 0
+    if resume:
+        try:
+            saved = load_checkpoint(path)
+        except (ValueError, KeyError) as exc:
+            raise CaseError(path, "", f"--resume: {exc}") from None
+        history = History.open_for_resume(path)
+        problem.state[:] = saved["state"]
+        problem.acc[:] = saved["acc"]
+        step = int(saved["step"][0])
+    else:
+        history = History.create(path, meta, _layout(problem), overwrite=True,
+                                 expected_rows=n_total // every + 1)
+        first = _outputs(problem, 1)
+        first[0][0] = problem.state[3, 0]
+        first[1][0] = _sensors_now(problem)
+        first[4][0] = problem.initial_energy
+        history.append(_rows(problem, first, 1))
+    kernel = kernel_of(problem)
+    out = _outputs(problem, chunk // every)
+    e0 = _balance(problem.initial_energy)
+    peak = max(abs(e0), 1e-300)
+    drift = 0.0
+    status = "complete"
+    t_kernel = 0.0
+    bar = _progress_bar(progress, n_total, step)
+    with history:
+        try:
+            while step < n_total:
+                n = min(chunk, n_total - step)
+                t0 = time.perf_counter()
+                code, done = kernel(problem.state, problem.acc, n, every, dt, *problem.args,
+                                    *out)
+                t_kernel += time.perf_counter() - t0
+                rows = done // every
+                if rows:
+                    history.append(_rows(problem, out, rows))
+                    totals = _balance(out[4][:rows])
+                    peak = max(peak, np.abs(totals).max())
+                    drift = max(drift, np.abs(totals - e0).max() / peak)
+                step += done
+                history.checkpoint({"state": problem.state, "acc": problem.acc,
+                                    "step": np.array([step])})
+                bar.update(done)
+                if code == stepping.NOT_FINITE:
+                    raise RunAborted(f"state not finite at t = {problem.state[3, 0]:.6g} s")
+                if drift > solver["drift_tolerance"]:
+                    raise RunAborted(f"energy balance drifted by {drift:.2e} of the peak energy "
+                                     f"(tolerance {solver['drift_tolerance']:g}) at "
+                                     f"t = {problem.state[3, 0]:.6g} s")
+        except RunAborted as exc:
+            status = f"aborted: {exc}"
+        except KeyboardInterrupt:
+            status = "aborted: interrupted"
+        finally:
+            bar.close()
+        history.finish(status, _timings(problem, t_kernel, t_start))
+    return RunResult(str(path), status, step, float(problem.state[3, 0]), dt,
+                     problem.dt_critical, problem.stages, _timings(problem, t_kernel, t_start),
+                     drift)
+
+
+def _stored_dt(path):
+    try:
+        with h5py.File(path, "r") as f:
+            return float(f.attrs["dt"])
+    except (OSError, KeyError) as exc:
+        raise CaseError(path, "", f"--resume: not a transient history ({exc})") from None
+
+
+def _sensors_now(problem):
+    q = problem.state[0]
+    S = problem.args[-2 if problem.reduced else -1]
+    if problem.reduced:
+        return S @ q
+    indptr, indices, data = S
+    return sp.csr_matrix((data, indices, indptr), shape=(len(indptr) - 1, len(q))) @ q
+
+
+def _timings(problem, t_kernel, t_start):
+    setup = sum(problem.stages.values())
+    return {"setup": setup, "kernel": t_kernel, "total": time.perf_counter() - t_start}
+
+
+class _NoBar:
+    def update(self, n):
+        pass
+
+    def close(self):
+        pass
+
+
+def _progress_bar(progress, total, initial):
+    if not progress:
+        return _NoBar()
+    from tqdm import tqdm
+    return tqdm(total=total, initial=initial, unit="step", file=sys.stderr, leave=False,
+                smoothing=0.1)
