@@ -69,7 +69,8 @@ def test_drilled_cube_greedy_rule_of_rank_size_beats_the_centre_rule():
 
 def test_pad_disc_coarse_rule_within_one_percent_on_30_tied_modes():
     path = CASES / "pad_disc.toml"
-    ref, fine = tied_frequencies(path, ["contact.pad_disc.regularized=true"])
+    ref, fine = tied_frequencies(path, ["contact.pad_disc.rule=fine",
+                                        "contact.pad_disc.regularized=true"])
     f, pair = tied_frequencies(path, ["contact.pad_disc.rule=greedy",
                                       "contact.pad_disc.regularized=true"])
     assert pair.rule.n_points <= fine.rule.n_points / 5

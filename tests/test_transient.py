@@ -172,3 +172,57 @@ def test_stages_only_what_the_scene_needs(tmp_path):
         stages = json.loads(f.attrs["stages"])
         assert set(stages) == set(result.stages)
         assert "contact/impact/gap" not in f          # not requested: not stored
+
+
+CANTILEVER = """
+[materials.steel]
+E = 2.1e11
+nu = 0.3
+rho = 7800.0
+
+[parts.beam]
+material = "steel"
+[parts.beam.mesh]
+kind = "box"
+size = [0.5, 0.05, 0.05]
+divisions = [20, 2, 2]
+element = "hex8"
+
+[constraints.root]
+set = "beam.xmin"
+
+# a 2 kHz sine at the tip, below the reduction's fmax
+[loads.shake]
+kind = "force"
+part = "beam"
+point = [0.5, 0.025, 0.05]
+vector = [0.0, 0.0, 100.0]
+[loads.shake.signal]
+kind = "sine"
+frequency = 2000.0
+
+[sensors.tip]
+part = "beam"
+point = [0.5, 0.025, 0.05]
+direction = [0.0, 0.0, 1.0]
+
+[solver]
+scheme = "explicit"
+t_end = 1.0e-3
+[solver.reduction]
+fmax = 40000.0
+"""
+
+
+@pytest.mark.parametrize("scheme", ["explicit", "exponential"])
+def test_reduced_model_agrees_with_the_full_one_without_contact(tmp_path, scheme):
+    full, full_path = run_case(tmp_path, CANTILEVER, ["solver.t_end=4e-3"], "full.h5")
+    steps = full.steps
+    assert steps >= 1000
+    reduced, red_path = run_case(tmp_path, CANTILEVER, [
+        "solver.reduction.enabled=true", f"solver.scheme={scheme}", f"solver.dt={full.dt}",
+        "solver.mass=lumped",
+        "solver.force_dt=true", "solver.t_end=4e-3"], "reduced.h5")
+    assert reduced.steps == steps and "reduction" in reduced.stages
+    a, b = series(full_path)["sensors/tip"], series(red_path)["sensors/tip"]
+    assert np.sqrt(np.mean((a - b) ** 2)) / np.sqrt(np.mean(a ** 2)) < 1e-3

@@ -135,10 +135,10 @@ def select(candidates, fine, B1, B2, m=0, tol=1e-8, weighting="nearest"):
     else:
         chosen, residual = greedy_rows(R, target, tol, target > k)
         t_select = time.perf_counter() - t0
-        options = {"nnls": nnls_weights(R[chosen], E_fine, fine.area),
-                   "nearest": nearest_weights(candidates.points[chosen], fine)}
-        if weighting != "best":
-            options = {weighting: options[weighting]}
+        makers = {"nnls": lambda: nnls_weights(R[chosen], E_fine, fine.area),
+                  "nearest": lambda: nearest_weights(candidates.points[chosen], fine)}
+        names = list(makers) if weighting == "best" else [weighting]
+        options = {name: makers[name]() for name in names}
     R_sel = R[chosen]
     errors = {name: energy_error(R_sel, w, E_fine) for name, w in options.items()}
     best = min(errors, key=errors.get)

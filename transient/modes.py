@@ -23,13 +23,15 @@ def frequencies_hz(eigenvalues):
     return np.sign(eigenvalues) * np.sqrt(np.abs(eigenvalues)) / (2 * np.pi)
 
 
-def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto"):
+def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto", solve=None):
     """Lowest modes of (K, M) with the fixed dofs clamped.
 
     count : number of modes when fmax is 0; otherwise the first batch size.
     fmax : all modes up to this frequency [Hz] (the batch grows until one is above it).
     shift : shift frequency [Hz] of shift-invert, negative values meaning -(2 pi shift)^2, so that
         K - sigma M stays positive definite even with rigid-body modes.
+    solve : optional callable applying (K - sigma M)^-1 on the free dofs (a factorization made
+        elsewhere, e.g. lowrank.ContactSolver); otherwise K - sigma M is factorized here.
     """
     ndof = K.shape[0]
     free = np.arange(ndof) if fixed is None else np.flatnonzero(~np.asarray(fixed))
@@ -46,7 +48,8 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
         return _modes(lam[keep], vec[:, keep], free, ndof, "dense", timings)
 
     t0 = time.perf_counter()
-    solve = factorize((Kf - sigma * Mf).tocsr(), backend, definite=sigma <= 0)
+    if solve is None:
+        solve = factorize((Kf - sigma * Mf).tocsr(), backend, definite=sigma <= 0)
     timings["factorization"] = time.perf_counter() - t0
     op = spla.LinearOperator((n, n), matvec=solve, dtype=float)
     v0 = np.random.default_rng(0).standard_normal(n)

@@ -10,7 +10,6 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from .linsolve import factorize
 from .modes import normal_modes
 
 
@@ -23,29 +22,29 @@ class Basis:
     timings: dict
 
 
-def reduced_basis(K_lin, M, fixed, fmax, statics, backend="auto", shift_hz=1.0):
-    """Basis of the modes of (K_lin, M) up to fmax [Hz] and the responses K_lin^-1 statics.
+def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz):
+    """Basis of the modes of (K_lin, M) up to fmax [Hz] and the responses to static loads.
 
-    statics (ndof, s): load vectors (contact point loads C_i^T, load patterns) and displacement
-    vectors to represent exactly (the preload). A small negative shift keeps the static solve
-    defined when a part floats (no closed contact, no constraint).
+    statics (ndof, s): load vectors (contact point loads C_i^T, load patterns, and K_lin u for a
+    displacement u to represent, such as the preload). solve applies (K_lin - sigma M)^-1 on the
+    free dofs, sigma = -(2 pi shift_hz)^2: the small shift keeps floating parts solvable.
     """
     t0 = time.perf_counter()
     free = np.flatnonzero(~fixed)
-    modes = normal_modes(K_lin, M, fixed, count=40, fmax=fmax, shift=-shift_hz,
-                         backend=backend)
+    modes = normal_modes(K_lin, M, fixed, count=40, fmax=fmax, shift=-shift_hz, solve=solve)
     t_modes = time.perf_counter() - t0
     Phi = modes.shapes[free]
     X = Phi
     if statics.shape[1]:
-        sigma = -(2 * np.pi * shift_hz) ** 2
-        Kf = (K_lin[free][:, free] - sigma * M[free][:, free]).tocsr()
-        S = factorize(Kf, backend)(np.asfortranarray(statics[free]))
+        S = solve(np.asfortranarray(statics[free]))
         X = np.hstack([Phi, np.atleast_2d(S.T).T])
     t_static = time.perf_counter() - t0 - t_modes
     Mf = M[free][:, free]
     Kf = K_lin[free][:, free]
-    # drop directions that the others already span (M-norm), then diagonalize
+    # unit M-norm columns (static responses to unit loads are tiny), then drop directions the
+    # others already span, then diagonalize
+    norms = np.sqrt(np.einsum("ij,ij->j", X, Mf @ X))
+    X = X[:, norms > 0] / norms[norms > 0]
     Mr = X.T @ (Mf @ X)
     lam, V = np.linalg.eigh(Mr)
     keep = lam > 1e-12 * lam.max()
@@ -57,3 +56,20 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, backend="auto", shift_hz=1.0):
     timings = {"modes": t_modes, "statics": t_static,
                "orthonormalization": time.perf_counter() - t0 - t_modes - t_static}
     return Basis(T, np.maximum(omega2, 0.0), len(modes.frequencies), statics.shape[1], timings)
+
+
+def exponential_coefficients(omega2, damp, dt):
+    """Per mode of x'' + c x' + omega^2 x = F(t), F linear over a step of length dt:
+    (n, 8) = [E11, E12, E21, E22, G0x, G0v, G1x, G1v] with
+    (x, v)(dt) = E (x, v)(0) + G0 F(0) + G1 (F(dt) - F(0)), from the exponential of the
+    augmented matrix [[A, B, 0], [0, 0, 1/dt], [0, 0, 0]] (Van Loan), exact for every omega."""
+    out = np.empty((len(omega2), 8))
+    aug = np.zeros((4, 4))
+    aug[0, 1] = 1.0
+    aug[1, 2] = 1.0
+    aug[2, 3] = 1.0 / dt
+    for k, (w2, c) in enumerate(zip(omega2, damp)):
+        aug[1, 0], aug[1, 1] = -w2, -c
+        X = sla.expm(aug * dt)
+        out[k] = X[0, 0], X[0, 1], X[1, 0], X[1, 1], X[0, 2], X[1, 2], X[0, 3], X[1, 3]
+    return out

@@ -20,20 +20,22 @@ from .contact import build_contact, contact_stiffness
 from .contactset import stack
 from .errors import CaseError, RunAborted
 from .history import CASE_TEXT, History, load_checkpoint
+from .lowrank import ContactSolver
 from .kernels import stepping
 from .model import build_model
 from .preload import PreloadError, solve_preload
-from .reduction import reduced_basis
+from .reduction import exponential_coefficients, reduced_basis
 from .signals import compile_signals
 
 ENERGY_TERMS = ("kinetic", "strain", "contact", "external_work", "dissipated")
+SHIFT_HZ = 1.0     # -(2 pi SHIFT_HZ)^2 shifts K so that floating parts stay solvable
 
 
 @dataclass
 class Problem:
     """What the kernels integrate, in reduced coordinates or on the free dofs."""
     reduced: bool
-    state: np.ndarray        # (4, n): q, v, a, and [3, 0] the time
+    state: np.ndarray        # (5, n): q, v, a, [3, 0] the time, forces of the previous step
     acc: np.ndarray          # (2,) external work and dissipated energy
     dt: float
     dt_critical: float       # explicit stability limit at the preload (inf when not explicit)
@@ -98,10 +100,18 @@ def prepare(case, quiet=True):
     constant = sum((p for p, name in zip(patterns, case["loads"])
                     if case["loads"][name]["signal"]["kind"] == "constant"),
                    np.zeros(model.ndof))
+    free = np.flatnonzero(~model.fixed)
+    contact_force0 = contacts.force(np.zeros(model.ndof))[0]
+    needs_preload = bool(np.any(constant) or np.any(contact_force0))
+    cs = None
+    if needs_preload or solver["reduction"]["enabled"]:
+        cs = _timed(stages, "factorization", ContactSolver, model.K[free][:, free],
+                    model.M[free][:, free], contacts.C[:, free], -(2 * np.pi * SHIFT_HZ) ** 2,
+                    solver["linear_solver"])
     try:
-        preload = _timed(stages, "preload", solve_preload, model.K, model.fixed, constant,
-                         contacts, solver["linear_solver"], solver["newton"]["tolerance"],
-                         solver["newton"]["max_iter"])
+        preload = _timed(stages, "preload", solve_preload, model.K, model.fixed,
+                         constant if needs_preload else np.zeros(model.ndof), contacts, cs,
+                         solver["newton"]["tolerance"], solver["newton"]["max_iter"])
     except PreloadError as exc:
         raise CaseError(case.path, "loads", str(exc)) from None
     if preload.iterations == 0:
@@ -115,12 +125,20 @@ def prepare(case, quiet=True):
     sig = _signals(case)
     damping = solver["damping"]
     reduction = solver["reduction"]
+    if solver["scheme"] == "exponential" and not reduction["enabled"]:
+        raise CaseError(case.path, "solver.scheme", "the exponential scheme integrates the "
+                        "modes of a reduced model: set solver.reduction.enabled = true")
     if reduction["enabled"]:
-        problem = _reduced(case, model, contacts, preload, K_lin, patterns, v0, sig, stages)
+        M = sp.diags(model.lumped_mass).tocsr() if solver["mass"] == "lumped" else model.M
+        problem = _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages,
+                           cs.solver(contacts.weights * preload.tangent))
     else:
         if damping["modal"] > 0:
             raise CaseError(case.path, "solver.damping.modal", "modal damping needs the reduced "
                             "model (solver.reduction.enabled = true); use alpha and beta")
+        if solver["mass"] == "consistent":
+            raise CaseError(case.path, "solver.mass", "central differences on the full model "
+                            "need the lumped mass: use lumped (or auto), or a reduced model")
         problem = _full(case, model, contacts, preload, K_lin, patterns, v0, sig, stages)
     problem.meta.update({
         "preload_iterations": preload.iterations, "preload_residual": preload.residual,
@@ -131,7 +149,7 @@ def prepare(case, quiet=True):
     return problem
 
 
-def _reduced(case, model, contacts, preload, K_lin, patterns, v0, sig, stages):
+def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages, solve):
     solver = case["solver"]
     reduction = solver["reduction"]
     free = np.flatnonzero(~model.fixed)
@@ -141,10 +159,10 @@ def _reduced(case, model, contacts, preload, K_lin, patterns, v0, sig, stages):
         loads += [np.stack(patterns, axis=1)] if patterns else []
     loads.append(K_lin @ preload.u[:, None])          # its response is the preload itself
     statics = np.hstack(loads)
-    basis = _timed(stages, "reduction", reduced_basis, K_lin, model.M, model.fixed,
-                   reduction["fmax"], statics, solver["linear_solver"])
+    basis = _timed(stages, "reduction", reduced_basis, K_lin, M, model.fixed,
+                   reduction["fmax"], statics, solve, SHIFT_HZ)
     T = basis.T
-    MT = model.M @ T
+    MT = M @ T
     q0 = MT.T @ preload.u
     v = MT.T @ v0
     omega2 = basis.omega2
@@ -155,7 +173,7 @@ def _reduced(case, model, contacts, preload, K_lin, patterns, v0, sig, stages):
     kt0 = preload.tangent
     P = _patterns([T.T @ p for p in patterns], T.shape[1])
     S = np.ascontiguousarray(model.sensors @ T)
-    state = np.zeros((4, len(omega2)))
+    state = np.zeros((5, len(omega2)))
     state[0], state[1] = q0, v
     kt_crit = _critical_kt(contacts, preload)
     dt_crit = _reduced_critical_step(omega2, Cr, contacts.weights * (kt_crit - kt0))
@@ -196,7 +214,7 @@ def _full(case, model, contacts, preload, K_lin, patterns, v0, sig, stages):
     stages["time_step"] = time.perf_counter() - t0
     P = _patterns([p[free] for p in patterns], len(free))
     S = sp.csr_matrix(model.sensors[:, free])
-    state = np.zeros((4, len(free)))
+    state = np.zeros((5, len(free)))
     state[0], state[1] = preload.u[free], v0[free]
     args = (_csr(Kf), mass, damping["alpha"], damping["beta"], _csr(Cf), contacts.gap0,
             contacts.weights, kt0, contacts.code, contacts.params, P, sig, _csr(S))
@@ -232,12 +250,28 @@ def kernel_of(problem):
     return stepping.explicit_reduced if problem.reduced else stepping.explicit_full
 
 
+def scheme_kernel(case, problem, dt):
+    """The kernel of the case's scheme and its system arguments at step dt."""
+    scheme = case["solver"]["scheme"]
+    if scheme == "explicit":
+        return kernel_of(problem), problem.args
+    omega2, damp, Cr, g0, w, kt0, code, params, P, sig, S, blocks = problem.args
+    coef = exponential_coefficients(omega2, damp, dt)
+    return stepping.exponential_reduced, (coef, damp, omega2, Cr, g0, w, kt0, code, params, P,
+                                          sig, S, blocks, case["solver"]["corrections"],
+                                          problem.state[4])
+
+
 def _initial_acceleration(problem):
     """a(0) and the initial energies from the forces at the initial state (a step of length 0)."""
     state = problem.state.copy()
     out = _outputs(problem, 1)
     kernel_of(problem)(state, problem.acc.copy(), 1, 1, 0.0, *problem.args, *out)
     problem.state[2] = state[2]
+    if problem.reduced:
+        omega2, damp = problem.args[0], problem.args[1]
+        # the forces at t = 0: the first extrapolation then takes them constant
+        problem.state[4] = state[2] + omega2 * state[0] + damp * state[1]
     problem.initial_energy = out[-1][0].copy()
 
 
@@ -294,6 +328,9 @@ def choose_dt(case, problem, stored=None):
     resumed run keeps the one stored in its history."""
     solver = case["solver"]
     dt = solver["dt"] if stored is None else stored
+    if solver["scheme"] == "exponential":
+        # the linear part is exact: the step is set by accuracy on the contact remainder
+        return dt or 1.0 / (20.0 * solver["reduction"]["fmax"])
     if dt == 0.0:
         dt = 0.9 * problem.dt_critical
         if not np.isfinite(dt):
@@ -342,7 +379,10 @@ def run(case, path, resume=False, progress=None):
         first[1][0] = _sensors_now(problem)
         first[4][0] = problem.initial_energy
         history.append(_rows(problem, first, 1))
-    kernel = kernel_of(problem)
+    if problem.reduced:
+        blocks = saved["blocks"] if resume else _fastest_blocks(case, problem, dt)
+        problem.args = problem.args[:-1] + (np.asarray(blocks, np.int64),)
+    kernel, args = scheme_kernel(case, problem, dt)
     out = _outputs(problem, chunk // every)
     e0 = _balance(problem.initial_energy)
     peak = max(abs(e0), 1e-300)
@@ -355,8 +395,7 @@ def run(case, path, resume=False, progress=None):
             while step < n_total:
                 n = min(chunk, n_total - step)
                 t0 = time.perf_counter()
-                code, done = kernel(problem.state, problem.acc, n, every, dt, *problem.args,
-                                    *out)
+                code, done = kernel(problem.state, problem.acc, n, every, dt, *args, *out)
                 t_kernel += time.perf_counter() - t0
                 rows = done // every
                 if rows:
@@ -366,7 +405,9 @@ def run(case, path, resume=False, progress=None):
                     drift = max(drift, np.abs(totals - e0).max() / peak)
                 step += done
                 history.checkpoint({"state": problem.state, "acc": problem.acc,
-                                    "step": np.array([step])})
+                                    "step": np.array([step]),
+                                    "blocks": problem.args[-1] if problem.reduced
+                                    else np.zeros(0)})
                 bar.update(done)
                 if code == stepping.NOT_FINITE:
                     raise RunAborted(f"state not finite at t = {problem.state[3, 0]:.6g} s")
@@ -384,6 +425,33 @@ def run(case, path, resume=False, progress=None):
     return RunResult(str(path), status, step, float(problem.state[3, 0]), dt,
                      problem.dt_critical, problem.stages, _timings(problem, t_kernel, t_start),
                      drift)
+
+
+def _fastest_blocks(case, problem, dt, steps=20):
+    """Row blocks of the contact pass: one per thread or a single one, whichever runs faster
+    here and now (threads stall when the machine's cores are busy). The choice fixes the
+    summation order, so a resumed run reuses it."""
+    m = problem.n_points
+    candidates = [np.array([0, m], np.int64)]
+    threaded = _blocks(m)
+    if len(threaded) > 2:
+        candidates.append(threaded)
+    if len(candidates) == 1:
+        return candidates[0]
+    times = []
+    for blocks in candidates:
+        problem.args = problem.args[:-1] + (blocks,)
+        kernel, args = scheme_kernel(case, problem, dt)
+        best = np.inf
+        for _ in range(2):       # the first call may compile
+            state, acc = problem.state.copy(), problem.acc.copy()
+            out = _outputs(problem, steps)
+            args = args[:-1] + (state[4],) if kernel is stepping.exponential_reduced else args
+            t0 = time.perf_counter()
+            kernel(state, acc, steps, 1, dt, *args, *out)
+            best = min(best, time.perf_counter() - t0)
+        times.append(best)
+    return candidates[int(np.argmin(times))]
 
 
 def _stored_dt(path):

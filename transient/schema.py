@@ -254,11 +254,20 @@ SOLVER = Table("solution settings", {
         "shift": Value("float", "shift of shift-invert Lanczos, below the first frequency; a "
                        "negative value keeps free parts' rigid modes solvable", -1.0, "Hz"),
     }, optional=True),
-    "scheme": Value("choice", "time integration: explicit (central differences)", "explicit",
-                    choices=("explicit",)),
+    "scheme": Value("choice", "time integration: explicit (central differences) or "
+                    "exponential (reduced model: each mode's linear part, with the contact "
+                    "linearized at the preload, integrated exactly; the contact remainder "
+                    "taken linear in time over the step)", "explicit",
+                    choices=("explicit", "exponential")),
+    "corrections": Value("int", "exponential: re-evaluations of the forces at the end of each "
+                         "step after the extrapolated predictor", 1, minimum=0, maximum=5),
     "t_end": Value("float", "simulated time after the preload", 0.0, "s", minimum=0.0),
-    "dt": Value("float", "time step (0: 0.9 times the critical step for explicit, 1/(20 fmax) "
-                "otherwise)", 0.0, "s", minimum=0.0),
+    "mass": Value("choice", "mass matrix of the transient: lumped (HRZ), consistent, or auto "
+                  "(lumped for the full model, which central differences need diagonal; "
+                  "consistent for a reduced one)", "auto",
+                  choices=("auto", "lumped", "consistent")),
+    "dt": Value("float", "time step (0: 0.9 times the critical step for explicit, "
+                "1 / (20 reduction.fmax) for exponential)", 0.0, "s", minimum=0.0),
     "force_dt": Value("bool", "run explicit with dt above the critical step anyway", False),
     "chunk": Value("int", "steps per kernel call (output and checks between calls)", 2000,
                    minimum=1),

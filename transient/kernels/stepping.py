@@ -280,3 +280,84 @@ def _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, 
         out_g[row] = gap
         out_p[row] = press
     out_e[row] = energy
+
+
+@njit_fast
+def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
+                        code, params, patterns, sig, S, blocks, corrections, fprev, out_t, out_s,
+                        out_g, out_p, out_e):
+    """Exponential integrator on the reduced system: each mode's linear part (K_lin, damping)
+    is propagated exactly over a step, the forces F = patterns s(t) + remainder(q) taken linear
+    in time between the step's ends (first-order hold).
+
+    coef (n, 6): per mode, the propagator [E11, E12, E21, E22] and the responses to F0 and to the
+    ramp F1 - F0 packed as [G0x, G0v, G1x, G1v] in columns 6.. (see exponential_coefficients).
+    A predictor extrapolates F linearly from the previous step (fprev (n,): F at the start of
+    the previous step, carried between chunks); `corrections` re-evaluations at the end point
+    follow. state, acc and outputs as in explicit_reduced."""
+    q, v = state[0], state[1]
+    t = state[3, 0]
+    n = q.shape[0]
+    m = C.shape[0]
+    rem = np.empty(n)
+    fext = np.empty(n)
+    f0 = np.empty(n)
+    f1 = np.empty(n)
+    q0 = np.empty(n)
+    v0 = np.empty(n)
+    svals = np.empty(patterns.shape[0])
+    gap = np.empty(m)
+    press = np.empty(m)
+    fbuf = np.empty((blocks.shape[0] - 1, n))
+    energy = np.empty(5)
+    fext0 = np.empty(n)
+    _external(t, patterns, sig, svals, fext0)
+    phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks, fbuf)
+    for k in range(n):
+        f0[k] = fext0[k] + rem[k]
+    row = 0
+    for step in range(1, n_steps + 1):
+        for k in range(n):
+            q0[k] = q[k]
+            v0[k] = v[k]
+            f1[k] = 2.0 * f0[k] - fprev[k]          # linear extrapolation of the forces
+        t += dt
+        _external(t, patterns, sig, svals, fext)
+        for it in range(corrections + 1):
+            for k in range(n):
+                dF = f1[k] - f0[k]
+                q[k] = (coef[k, 0] * q0[k] + coef[k, 1] * v0[k] + coef[k, 4] * f0[k]
+                        + coef[k, 6] * dF)
+                v[k] = (coef[k, 2] * q0[k] + coef[k, 3] * v0[k] + coef[k, 5] * f0[k]
+                        + coef[k, 7] * dF)
+            phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
+                                       fbuf)
+            for k in range(n):
+                f1[k] = fext[k] + rem[k]
+        work = 0.0
+        power = 0.0
+        kin = 0.0
+        strain = -lin
+        for k in range(n):
+            work += 0.5 * (fext0[k] + fext[k]) * (q[k] - q0[k])
+            power += damp[k] * (v0[k] * v0[k] + v[k] * v[k])
+            kin += 0.5 * v[k] * v[k]
+            strain += 0.5 * omega2[k] * q[k] * q[k]
+            fprev[k] = f0[k]
+            f0[k] = f1[k]
+            fext0[k] = fext[k]
+        acc[0] += work
+        acc[1] += 0.5 * dt * power
+        if not (_finite(q) and _finite(v)):
+            state[3, 0] = t
+            return NOT_FINITE, step
+        if step % every == 0:
+            energy[KINETIC] = kin
+            energy[STRAIN] = strain
+            energy[CONTACT] = phi
+            energy[WORK] = acc[0]
+            energy[DISSIPATED] = acc[1]
+            _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
+            row += 1
+    state[3, 0] = t
+    return OK, n_steps

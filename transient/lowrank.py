@@ -1,0 +1,51 @@
+"""Solves with K - sigma M + C^T diag(d) C for any diagonal d, from one sparse factorization.
+
+Contact couples the interface dofs densely (regularized rows span the whole interface), which
+makes factorizing K + C^T D C slow and memory hungry. With m contact points, the Woodbury
+identity needs only A0 = K - sigma M factorized once, Z = A0^-1 C^T (m solves) and G = C Z:
+
+    (A0 + C^T D C)^-1 b = y - Z (I + D G)^-1 D C y,   y = A0^-1 b,
+
+so a new tangent D costs an m x m factorization, and a solve one sparse solve plus O(n m).
+"""
+import numpy as np
+import scipy.linalg as sla
+
+from .linsolve import factorize
+
+MAX_BYTES = 1.5e9     # Z = A0^-1 C^T dense; beyond this, factorize A0 + C^T D C directly
+
+
+class ContactSolver:
+    """Factorization of A0 = K - sigma M on the free dofs, updated by contact tangents."""
+
+    def __init__(self, K, M, C, sigma, backend="auto"):
+        self.A0 = (K - sigma * M).tocsr() if sigma else K.tocsr()
+        self.C = C.tocsr()
+        self.sigma = sigma
+        self.backend = backend
+        n, m = K.shape[0], C.shape[0]
+        self.lowrank = m > 0 and 8.0 * n * m <= MAX_BYTES
+        self.solve0 = factorize(self.A0, backend, definite=sigma <= 0)
+        if self.lowrank:
+            self.Z = self.solve0(np.asfortranarray(self.C.T.toarray()))
+            self.G = np.asarray(self.C @ self.Z)
+
+    def solver(self, d):
+        """solve(b) for (A0 + C^T diag(d) C) x = b; b (n,) or (n, k)."""
+        d = np.asarray(d, float)
+        if self.C.shape[0] == 0 or not np.any(d):
+            return self.solve0
+        if not self.lowrank:
+            import scipy.sparse as sp
+            A = (self.A0 + self.C.T @ sp.diags(d) @ self.C).tocsr()
+            return factorize(A, self.backend, definite=False)
+        lu = sla.lu_factor(np.eye(len(d)) + d[:, None] * self.G)
+        Z, C, solve0 = self.Z, self.C, self.solve0
+
+        def solve(b):
+            y = solve0(b)
+            Cy = C @ y
+            return y - Z @ sla.lu_solve(lu, d[:, None] * Cy if Cy.ndim == 2 else d * Cy)
+        solve.backend = getattr(self.solve0, "backend", "?") + "+woodbury"
+        return solve
