@@ -13,5 +13,5 @@ def test_case_reference_is_up_to_date():
 
 def test_readme_quick_start_commands():
     text = (ROOT / "README.md").read_text()
-    assert "python -m pip install -e . && transient modes cases/pad_disc.toml" in text
+    assert "python -m pip install -e . && transient run cases/pad_disc.toml" in text
     assert 'python -m pip install -e ".[test]" && python -m pytest' in text

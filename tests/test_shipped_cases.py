@@ -64,3 +64,20 @@ def test_pad_disc_mass_and_modes_to_16khz(capsys):
     assert 20_000 <= out["ndof"] <= 100_000
     f = np.array(out["frequencies_hz"])
     assert f[-1] <= 16000 and len(f) > 30
+
+
+def test_pad_disc_transient_preload_balances_the_piston(tmp_path, capsys):
+    out = tmp_path / "pad_disc.h5"
+    assert main(["run", str(CASES / "pad_disc.toml"), "-o", str(out), "--quiet",
+                 "--set", "solver.t_end=2e-4"]) == 0
+    import h5py
+    with h5py.File(out, "r") as f:
+        force = json.loads(f.attrs["preload_contact_force"])["pad_disc"]
+        assert f.attrs["status"] == "complete" and f.attrs["reduced"]
+    case = load(CASES / "pad_disc.toml")
+    piston = -build_model(case).load_patterns["piston"].reshape(-1, 3)[:, 2].sum()
+    # the pad is held in its plane only: the contact carries the whole piston force
+    assert force == pytest.approx(piston, rel=1e-8)
+    p = case["parts"]["pad"]["mesh"]
+    sector = 0.5 * (p["outer_radius"] ** 2 - p["inner_radius"] ** 2) * np.radians(p["angle"])
+    assert force == pytest.approx(1.0e6 * sector, rel=1e-4)     # quadratic arcs

@@ -142,6 +142,8 @@ def prepare(case, quiet=True):
         problem = _full(case, model, contacts, preload, K_lin, patterns, v0, sig, stages)
     problem.meta.update({
         "preload_iterations": preload.iterations, "preload_residual": preload.residual,
+        "preload_contact_force": {name: float((contacts.weights * preload.pressure)[s].sum())
+                                  for name, s in contacts.slices.items()},
         "n_points": contacts.n_points,
         "pairs": {p.name: {"rule": p.spec["rule"], "points": p.rule.n_points,
                            "regularized": p.spec["regularized"], "eps": p.eps,
