@@ -125,9 +125,9 @@ def prepare(case, quiet=True):
     sig = _signals(case)
     damping = solver["damping"]
     reduction = solver["reduction"]
-    if solver["scheme"] == "exponential" and not reduction["enabled"]:
-        raise CaseError(case.path, "solver.scheme", "the exponential scheme integrates the "
-                        "modes of a reduced model: set solver.reduction.enabled = true")
+    if solver["scheme"] != "explicit" and not reduction["enabled"]:
+        raise CaseError(case.path, "solver.scheme", f"the {solver['scheme']} scheme integrates "
+                        "a reduced model so far: set solver.reduction.enabled = true")
     if reduction["enabled"]:
         M = sp.diags(model.lumped_mass).tocsr() if solver["mass"] == "lumped" else model.M
         problem = _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages,
@@ -258,6 +258,10 @@ def scheme_kernel(case, problem, dt):
     if scheme == "explicit":
         return kernel_of(problem), problem.args
     omega2, damp, Cr, g0, w, kt0, code, params, P, sig, S, blocks = problem.args
+    if scheme == "implicit":
+        newton = case["solver"]["newton"]
+        return stepping.newmark_reduced, (damp, omega2, Cr, g0, w, kt0, code, params, P, sig, S,
+                                          blocks, newton["tolerance"], newton["max_iter"])
     coef = exponential_coefficients(omega2, damp, dt)
     return stepping.exponential_reduced, (coef, damp, omega2, Cr, g0, w, kt0, code, params, P,
                                           sig, S, blocks, case["solver"]["corrections"],
@@ -312,6 +316,11 @@ def _balance(e):
     return e[..., 0] + e[..., 1] + e[..., 2] - e[..., 3] + e[..., 4]
 
 
+def _mechanical(e):
+    """Kinetic + strain + contact energy: the scale of the balance's drift."""
+    return np.abs(e[..., 0]) + np.abs(e[..., 1]) + np.abs(e[..., 2])
+
+
 @dataclass(frozen=True)
 class RunResult:
     path: str
@@ -330,8 +339,8 @@ def choose_dt(case, problem, stored=None):
     resumed run keeps the one stored in its history."""
     solver = case["solver"]
     dt = solver["dt"] if stored is None else stored
-    if solver["scheme"] == "exponential":
-        # the linear part is exact: the step is set by accuracy on the contact remainder
+    if solver["scheme"] in ("exponential", "implicit"):
+        # unconditionally stable: the step is set by accuracy, 20 steps per period at fmax
         return dt or 1.0 / (20.0 * solver["reduction"]["fmax"])
     if dt == 0.0:
         dt = 0.9 * problem.dt_critical
@@ -387,7 +396,7 @@ def run(case, path, resume=False, progress=None):
     kernel, args = scheme_kernel(case, problem, dt)
     out = _outputs(problem, chunk // every)
     e0 = _balance(problem.initial_energy)
-    peak = max(abs(e0), 1e-300)
+    peak = max(_mechanical(problem.initial_energy), 1e-300)
     drift = 0.0
     status = "complete"
     t_kernel = 0.0
@@ -403,7 +412,7 @@ def run(case, path, resume=False, progress=None):
                 if rows:
                     history.append(_rows(problem, out, rows))
                     totals = _balance(out[4][:rows])
-                    peak = max(peak, np.abs(totals).max())
+                    peak = max(peak, _mechanical(out[4][:rows]).max())
                     drift = max(drift, np.abs(totals - e0).max() / peak)
                 step += done
                 history.checkpoint({"state": problem.state, "acc": problem.acc,
@@ -413,8 +422,14 @@ def run(case, path, resume=False, progress=None):
                 bar.update(done)
                 if code == stepping.NOT_FINITE:
                     raise RunAborted(f"state not finite at t = {problem.state[3, 0]:.6g} s")
+                if code == stepping.NO_CONVERGENCE:
+                    raise RunAborted(f"Newton iterations did not converge in "
+                                     f"{solver['newton']['max_iter']} at t = "
+                                     f"{problem.state[3, 0]:.6g} s (smaller dt, or a larger "
+                                     "solver.newton.max_iter)")
                 if drift > solver["drift_tolerance"]:
-                    raise RunAborted(f"energy balance drifted by {drift:.2e} of the peak energy "
+                    raise RunAborted(f"energy balance drifted by {drift:.2e} of the peak "
+                                     f"mechanical energy "
                                      f"(tolerance {solver['drift_tolerance']:g}) at "
                                      f"t = {problem.state[3, 0]:.6g} s")
         except RunAborted as exc:
@@ -448,7 +463,8 @@ def _fastest_blocks(case, problem, dt, steps=20):
         for _ in range(2):       # the first call may compile
             state, acc = problem.state.copy(), problem.acc.copy()
             out = _outputs(problem, steps)
-            args = args[:-1] + (state[4],) if kernel is stepping.exponential_reduced else args
+            if kernel is stepping.exponential_reduced:
+                args = args[:-1] + (state[4],)
             t0 = time.perf_counter()
             kernel(state, acc, steps, 1, dt, *args, *out)
             best = min(best, time.perf_counter() - t0)

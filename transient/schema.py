@@ -254,11 +254,13 @@ SOLVER = Table("solution settings", {
         "shift": Value("float", "shift of shift-invert Lanczos, below the first frequency; a "
                        "negative value keeps free parts' rigid modes solvable", -1.0, "Hz"),
     }, optional=True),
-    "scheme": Value("choice", "time integration: explicit (central differences) or "
-                    "exponential (reduced model: each mode's linear part, with the contact "
-                    "linearized at the preload, integrated exactly; the contact remainder "
-                    "taken linear in time over the step)", "explicit",
-                    choices=("explicit", "exponential")),
+    "scheme": Value("choice", "time integration: explicit (central differences), implicit "
+                    "(reduced model: Newmark average acceleration, fixed iteration operator at "
+                    "the preload, Newton corrections of the contact remainder) or exponential "
+                    "(reduced model: each mode's linear part, with the contact linearized at the "
+                    "preload, integrated exactly; the contact remainder taken linear in time "
+                    "over the step)", "explicit",
+                    choices=("explicit", "implicit", "exponential")),
     "corrections": Value("int", "exponential: re-evaluations of the forces at the end of each "
                          "step after the extrapolated predictor", 1, minimum=0, maximum=5),
     "t_end": Value("float", "simulated time after the preload", 0.0, "s", minimum=0.0),
@@ -288,7 +290,7 @@ SOLVER = Table("solution settings", {
         "statics": Value("bool", "add static responses to the contact point loads and the load "
                          "patterns", True),
     }, optional=True),
-    "newton": Table("implicit scheme and preload", {
+    "newton": Table("Newton iterations of the preload and of the implicit scheme", {
         "tolerance": Value("float", "relative residual of the Newton iterations", 1e-10,
                            open_min=0.0),
         "max_iter": Value("int", "iteration cap (non-convergence stops the run)", 50, minimum=1),
