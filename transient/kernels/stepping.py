@@ -83,6 +83,18 @@ def _finite(x):
 
 
 @njit_fast
+def _energies(energy, kin, strain, phi, acc, work, dissipated):
+    """Adds a step's external work and dissipation to acc, and fills the energy terms."""
+    acc[0] += work
+    acc[1] += dissipated
+    energy[KINETIC] = kin
+    energy[STRAIN] = strain
+    energy[CONTACT] = phi
+    energy[WORK] = acc[0]
+    energy[DISSIPATED] = acc[1]
+
+
+@njit_fast
 def _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e):
     out_t[row] = t
     for k in range(S.shape[0]):
@@ -142,17 +154,11 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
             kin += 0.5 * vn * vn
             strain += 0.5 * omega2[k] * q[k] * q[k]
             power += damp[k] * vn * vn
-        acc[0] += work
-        acc[1] += 0.5 * dt * power
+        _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
         if not (_finite(q) and _finite(v)):
             state[3, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
-            energy[KINETIC] = kin
-            energy[STRAIN] = strain
-            energy[CONTACT] = phi
-            energy[WORK] = acc[0]
-            energy[DISSIPATED] = acc[1]
             _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
             row += 1
     state[3, 0] = t
@@ -249,18 +255,12 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
             power += alpha * mass[k] * vn * vn
             if beta != 0.0:
                 power += beta * vn * kv[k]
-        acc[0] += work
-        acc[1] += 0.5 * dt * (power_old + power)
+        _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
         power_old = power
         if not (_finite(q) and _finite(v)):
             state[3, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
-            energy[KINETIC] = kin
-            energy[STRAIN] = strain
-            energy[CONTACT] = phi
-            energy[WORK] = acc[0]
-            energy[DISSIPATED] = acc[1]
             _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
             row += 1
     state[3, 0] = t
@@ -346,17 +346,11 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
             fprev[k] = f0[k]
             f0[k] = f1[k]
             fext0[k] = fext[k]
-        acc[0] += work
-        acc[1] += 0.5 * dt * power
+        _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
         if not (_finite(q) and _finite(v)):
             state[3, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
-            energy[KINETIC] = kin
-            energy[STRAIN] = strain
-            energy[CONTACT] = phi
-            energy[WORK] = acc[0]
-            energy[DISSIPATED] = acc[1]
             _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
             row += 1
     state[3, 0] = t
@@ -434,8 +428,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
             kin += 0.5 * v[k] * v[k]
             strain += 0.5 * omega2[k] * q[k] * q[k]
             fext_old[k] = fext[k]
-        acc[0] += work
-        acc[1] += 0.5 * dt * power
+        _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
         if not (_finite(q) and _finite(v)):
             state[3, 0] = t
             return NOT_FINITE, step
@@ -443,11 +436,6 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
             state[3, 0] = t
             return NO_CONVERGENCE, step
         if step % every == 0:
-            energy[KINETIC] = kin
-            energy[STRAIN] = strain
-            energy[CONTACT] = phi
-            energy[WORK] = acc[0]
-            energy[DISSIPATED] = acc[1]
             _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
             row += 1
     state[3, 0] = t
