@@ -247,3 +247,17 @@ def test_implicit_newmark_converges_to_the_exact_linear_response(tmp_path):
         ref = np.interp(b["time"], a["time"], a["sensors/tip"])
         errors.append(np.sqrt(np.mean((b["sensors/tip"] - ref) ** 2) / np.mean(ref ** 2)))
     assert errors[1] < 1e-3 and errors[1] < errors[0] / 2
+
+
+def test_explicit_step_rechecked_at_the_deepest_penetration(tmp_path, capsys):
+    # open at the start, the exponential law's tangent is nil and dt is set by the bar alone;
+    # at impact lambda p reaches 4e14 Pa/m and the step is no longer stable
+    code = main(["run", str(CASES / "bar_impact.toml"), "-o", str(tmp_path / "exp.h5"),
+                 "--quiet", "--set", 'contact.wall.law.kind="exponential"',
+                 "--set", "contact.wall.law.p0=1e3", "--set", "contact.wall.law.lambda=1e7",
+                 "--set", "solver.chunk=20"])
+    assert code == 3
+    err = capsys.readouterr().err
+    assert "above the critical step" in err and "deepest penetration" in err
+    info = summary(tmp_path / "exp.h5")
+    assert info["status"].startswith("aborted: dt") and info["steps"] > 20

@@ -39,7 +39,8 @@ def solve_preload(K, fixed, load, contacts, solver, tol=1e-10, max_iter=50):
     free = np.flatnonzero(~fixed)
     u = np.zeros(ndof)
     fc, g, p, kt = contacts.force(u)
-    if not np.any(load) and not np.any(fc):
+    if not np.any(load):
+        # no constant load, no preload: the undeformed state, whatever its contact forces
         return Preload(u, g, p, kt, 0, 0.0, time.perf_counter() - t0)
 
     def residual(u):

@@ -22,6 +22,7 @@ from .errors import CaseError, RunAborted
 from .history import CASE_TEXT, History, load_checkpoint
 from .lowrank import ContactSolver
 from .kernels import stepping
+from .kernels.laws import evaluate
 from .model import build_model
 from .preload import PreloadError, solve_preload
 from .reduction import exponential_coefficients, reduced_basis
@@ -47,6 +48,10 @@ class Problem:
     stages: dict = field(default_factory=dict)
     meta: dict = field(default_factory=dict)
     initial_energy: np.ndarray = None
+    gmin: np.ndarray = None           # (m,) smallest gap of each point so far
+    kt_checked: np.ndarray = None     # (m,) contact tangents the critical step accounts for
+    crit_rows: np.ndarray = None      # (m,) |C_i M^-1/2|^2 of each contact row
+    crit_omega2: float = 0.0          # omega_max^2 at the preload, contact included
 
 
 def _timed(stages, name, fn, *args, **kwargs):
@@ -101,8 +106,9 @@ def prepare(case, quiet=True):
                     if case["loads"][name]["signal"]["kind"] == "constant"),
                    np.zeros(model.ndof))
     free = np.flatnonzero(~model.fixed)
-    contact_force0 = contacts.force(np.zeros(model.ndof))[0]
-    needs_preload = bool(np.any(constant) or np.any(contact_force0))
+    # without constant loads there is no preload: the run starts from the undeformed state
+    # (with initial velocities), in equilibrium or not
+    needs_preload = bool(np.any(constant))
     cs = None
     if needs_preload or solver["reduction"]["enabled"]:
         cs = _timed(stages, "factorization", ContactSolver, model.K[free][:, free],
@@ -185,6 +191,7 @@ def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages
     problem = Problem(True, state, np.zeros(2), 0.0, dt_crit, args, contacts.n_points,
                       tuple(model.sensor_names), contacts.slices, case["output"]["contact"],
                       stages)
+    _critical_data(problem, preload, kt_crit, np.einsum("ij,ij->i", Cr, Cr))
     problem.meta.update({"reduced_dofs": len(omega2), "normal_modes": basis.n_modes,
                          "basis_timings": basis.timings,
                          "basis_projection_error": float(
@@ -223,6 +230,8 @@ def _full(case, model, contacts, preload, K_lin, patterns, v0, sig, stages):
     problem = Problem(False, state, np.zeros(2), 0.0, dt_crit, args, contacts.n_points,
                       tuple(model.sensor_names), contacts.slices, case["output"]["contact"],
                       stages)
+    _critical_data(problem, preload, kt_crit,
+                   np.asarray(Cf.multiply(Cf) @ (1.0 / mass)).ravel())
     problem.meta["free_dofs"] = len(free)
     _initial_acceleration(problem)
     return problem
@@ -231,6 +240,32 @@ def _full(case, model, contacts, preload, K_lin, patterns, v0, sig, stages):
 def _patterns(vectors, n):
     """Load patterns as rows (J, n) for the kernels."""
     return np.ascontiguousarray(np.array(vectors, dtype=float).reshape(len(vectors), n))
+
+
+def _critical_data(problem, preload, kt_crit, rows):
+    """What rechecking the critical step needs: the tangents it accounts for, the rows'
+    |C_i M^-1/2|^2, omega_max^2 at the preload, and the smallest gaps so far."""
+    problem.gmin = preload.gap.copy()
+    problem.kt_checked = kt_crit
+    problem.crit_rows = rows
+    problem.crit_omega2 = (2.0 / problem.dt_critical) ** 2 if np.isfinite(
+        problem.dt_critical) else 0.0
+
+
+def recheck_critical_step(problem, dt):
+    """The largest stable step at the deepest penetration reached (central differences):
+    omega_max^2 <= omega_0^2 + sum_i w_i dk_t,i |C_i M^-1/2|^2 (a bound, so on the safe side),
+    with dk_t the tangents' growth beyond those the step was chosen for."""
+    code, params = (problem.args[6], problem.args[7]) if problem.reduced else \
+        (problem.args[8], problem.args[9])
+    w = problem.args[4] if problem.reduced else problem.args[6]
+    p, kt, phi = (np.empty_like(problem.gmin) for _ in range(3))
+    evaluate(code, params, problem.gmin, p, kt, phi)
+    grow = np.maximum(kt - problem.kt_checked, 0.0)
+    if not np.any(grow):
+        return problem.dt_critical
+    bound = problem.crit_omega2 + np.sum(w * grow * problem.crit_rows)
+    return 2.0 / np.sqrt(bound)
 
 
 def _csr(A):
@@ -256,7 +291,7 @@ def scheme_kernel(case, problem, dt):
     """The kernel of the case's scheme and its system arguments at step dt."""
     scheme = case["solver"]["scheme"]
     if scheme == "explicit":
-        return kernel_of(problem), problem.args
+        return kernel_of(problem), problem.args + (problem.gmin,)
     omega2, damp, Cr, g0, w, kt0, code, params, P, sig, S, blocks = problem.args
     if scheme == "implicit":
         newton = case["solver"]["newton"]
@@ -272,7 +307,8 @@ def _initial_acceleration(problem):
     """a(0) and the initial energies from the forces at the initial state (a step of length 0)."""
     state = problem.state.copy()
     out = _outputs(problem, 1)
-    kernel_of(problem)(state, problem.acc.copy(), 1, 1, 0.0, *problem.args, *out)
+    kernel_of(problem)(state, problem.acc.copy(), 1, 1, 0.0, *problem.args,
+                       problem.gmin.copy(), *out)
     problem.state[2] = state[2]
     if problem.reduced:
         omega2, damp = problem.args[0], problem.args[1]
@@ -381,6 +417,7 @@ def run(case, path, resume=False, progress=None):
         history = History.open_for_resume(path)
         problem.state[:] = saved["state"]
         problem.acc[:] = saved["acc"]
+        problem.gmin[:] = saved["gmin"]
         step = int(saved["step"][0])
     else:
         history = History.create(path, meta, _layout(problem), overwrite=True,
@@ -418,7 +455,7 @@ def run(case, path, resume=False, progress=None):
                 history.checkpoint({"state": problem.state, "acc": problem.acc,
                                     "step": np.array([step]),
                                     "blocks": problem.args[-1] if problem.reduced
-                                    else np.zeros(0)})
+                                    else np.zeros(0), "gmin": problem.gmin})
                 bar.update(done)
                 if code == stepping.NOT_FINITE:
                     raise RunAborted(f"state not finite at t = {problem.state[3, 0]:.6g} s")
@@ -427,6 +464,13 @@ def run(case, path, resume=False, progress=None):
                                      f"{solver['newton']['max_iter']} at t = "
                                      f"{problem.state[3, 0]:.6g} s (smaller dt, or a larger "
                                      "solver.newton.max_iter)")
+                if solver["scheme"] == "explicit" and not solver["force_dt"]:
+                    dt_max = recheck_critical_step(problem, dt)
+                    if dt > dt_max:
+                        raise RunAborted(f"dt {dt:.3e} s is above the critical step "
+                                         f"{dt_max:.3e} s at the deepest penetration reached "
+                                         f"({problem.gmin.min():.3e} m) at t = "
+                                         f"{problem.state[3, 0]:.6g} s")
                 if drift > solver["drift_tolerance"]:
                     raise RunAborted(f"energy balance drifted by {drift:.2e} of the peak "
                                      f"mechanical energy "
@@ -459,6 +503,8 @@ def _fastest_blocks(case, problem, dt, steps=20):
     for blocks in candidates:
         problem.args = problem.args[:-1] + (blocks,)
         kernel, args = scheme_kernel(case, problem, dt)
+        if kernel is stepping.explicit_reduced:
+            args = args[:-1] + (problem.gmin.copy(),)
         best = np.inf
         for _ in range(2):       # the first call may compile
             state, acc = problem.state.copy(), problem.acc.copy()

@@ -83,6 +83,13 @@ def _finite(x):
 
 
 @njit_fast
+def _track_min(gap, gmin):
+    for i in range(gap.shape[0]):
+        if gap[i] < gmin[i]:
+            gmin[i] = gap[i]
+
+
+@njit_fast
 def _energies(energy, kin, strain, phi, acc, work, dissipated):
     """Adds a step's external work and dissipation to acc, and fills the energy terms."""
     acc[0] += work
@@ -110,10 +117,11 @@ def _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e):
 
 @njit_fast
 def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0, code,
-                     params, patterns, sig, S, blocks, out_t, out_s, out_g, out_p, out_e):
+                     params, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p, out_e):
     """Central differences (velocity Verlet) on the reduced system, diagonal damping taken
     implicitly in the half step. state (4, n): q, v, a, and state[3, 0] the time.
-    acc (2,): external work and dissipated energy so far. Returns (status, steps done)."""
+    acc (2,): external work and dissipated energy so far; gmin (m,): smallest gap of each
+    point so far (the critical step is rechecked against it). Returns (status, steps done)."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
     n = q.shape[0]
@@ -140,6 +148,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
         t += dt
         _external(t, patterns, sig, svals, fext)
         phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf)
+        _track_min(gap, gmin)
         kin = 0.0
         strain = -lin
         work = 0.0
@@ -198,7 +207,7 @@ def remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press):
 
 @njit_fast
 def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w, kt0, code,
-                  params, patterns, sig, S, out_t, out_s, out_g, out_p, out_e):
+                  params, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_e):
     """Central differences on the free dofs of the full model: K = (indptr, indices, data) of
     K_lin (CSR), lumped mass (n,), Rayleigh damping alpha M (implicit in the half step) and
     beta K (on the half-step velocity); C and S dense-free CSR triplets. Same state and outputs
@@ -234,6 +243,7 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
         t += dt
         _external(t, patterns, sig, svals, fext)
         phi, lin = remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press)
+        _track_min(gap, gmin)
         _csr_matvec(Kp, Ki, Kd, q, ku)
         if beta != 0.0:
             _csr_matvec(Kp, Ki, Kd, v, kv)
