@@ -261,3 +261,19 @@ def test_explicit_step_rechecked_at_the_deepest_penetration(tmp_path, capsys):
     assert "above the critical step" in err and "deepest penetration" in err
     info = summary(tmp_path / "exp.h5")
     assert info["status"].startswith("aborted: dt") and info["steps"] > 20
+
+
+def test_a_diverging_run_never_leaves_a_nan_in_its_file(tmp_path, capsys):
+    # no drift check: the forced, unstable step runs until the state overflows
+    out = tmp_path / "nan.h5"
+    code = main(["run", str(CASES / "bar_impact.toml"), "-o", str(out), "--quiet",
+                 "--set", "solver.dt=4e-7", "--set", "solver.force_dt=true",
+                 "--set", "solver.drift_tolerance=1e300", "--set", "solver.t_end=1e-2",
+                 "--set", "solver.chunk=500"])
+    assert code == 3
+    assert "not finite" in capsys.readouterr().err
+    info = summary(out)
+    assert info["status"].startswith("aborted: state not finite")
+    with h5py.File(out, "r") as f:
+        for name in _names(f):
+            assert np.all(np.isfinite(f[name][...])), name

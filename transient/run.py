@@ -446,19 +446,26 @@ def run(case, path, resume=False, progress=None):
                 code, done = kernel(problem.state, problem.acc, n, every, dt, *args, *out)
                 t_kernel += time.perf_counter() - t0
                 rows = done // every
+                finite = all(np.all(np.isfinite(x[:rows])) for x in out) and \
+                    np.all(np.isfinite(problem.state))
+                if not finite:
+                    # keep only the finite rows of the chunk, then stop
+                    good = np.flatnonzero(~np.all(np.isfinite(out[4][:rows]), axis=1))
+                    rows = int(good[0]) if len(good) else rows
+                    code = stepping.NOT_FINITE
                 if rows:
                     history.append(_rows(problem, out, rows))
                     totals = _balance(out[4][:rows])
                     peak = max(peak, _mechanical(out[4][:rows]).max())
                     drift = max(drift, np.abs(totals - e0).max() / peak)
+                if code == stepping.NOT_FINITE:
+                    raise RunAborted(f"state not finite near t = {problem.state[3, 0]:.6g} s")
                 step += done
                 history.checkpoint({"state": problem.state, "acc": problem.acc,
                                     "step": np.array([step]),
                                     "blocks": problem.args[-1] if problem.reduced
                                     else np.zeros(0), "gmin": problem.gmin})
                 bar.update(done)
-                if code == stepping.NOT_FINITE:
-                    raise RunAborted(f"state not finite at t = {problem.state[3, 0]:.6g} s")
                 if code == stepping.NO_CONVERGENCE:
                     raise RunAborted(f"Newton iterations did not converge in "
                                      f"{solver['newton']['max_iter']} at t = "
