@@ -307,8 +307,9 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     is propagated exactly over a step, the forces F = patterns s(t) + remainder(q) taken linear
     in time between the step's ends (first-order hold).
 
-    coef (n, 6): per mode, the propagator [E11, E12, E21, E22] and the responses to F0 and to the
-    ramp F1 - F0 packed as [G0x, G0v, G1x, G1v] in columns 6.. (see exponential_coefficients).
+    coef (n, 8): per mode, the propagator [E11, E12, E21, E22] in columns 0-3, then the responses
+    to F0 and to the ramp F1 - F0, [G0x, G0v, G1x, G1v], in columns 4-7
+    (reduction.exponential_coefficients).
     A predictor extrapolates F linearly from the previous step (fprev (n,): F at the start of
     the previous step, carried between chunks); `corrections` re-evaluations at the end point
     follow. state, acc and outputs as in explicit_reduced."""
