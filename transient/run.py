@@ -176,7 +176,9 @@ def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages
     omega2 = basis.omega2
     damping = solver["damping"]
     omega = np.sqrt(omega2)
-    damp = 2 * damping["modal"] * omega + damping["alpha"] + damping["beta"] * omega2
+    above = omega > 2 * np.pi * reduction["fmax"]
+    ratio = damping["modal"] + damping["residual"] * above
+    damp = 2 * ratio * omega + damping["alpha"] + damping["beta"] * omega2
     Cr = np.ascontiguousarray(contacts.C @ T)
     kt0 = preload.tangent
     P = _patterns([T.T @ p for p in patterns], T.shape[1])

@@ -278,6 +278,10 @@ SOLVER = Table("solution settings", {
     "damping": Table("damping", {
         "modal": Value("float", "modal damping ratio of every mode (reduced model)", 0.0,
                        minimum=0.0),
+        "residual": Value("float", "damping ratio added to the reduced modes above "
+                          "reduction.fmax only (the quasi-static contact and load statics): "
+                          "numerical, it leaves the band of interest undamped", 0.0,
+                          minimum=0.0),
         "alpha": Value("float", "Rayleigh mass-proportional coefficient", 0.0, "1/s",
                        minimum=0.0),
         "beta": Value("float", "Rayleigh stiffness-proportional coefficient", 0.0, "s",
