@@ -155,7 +155,6 @@ def _write_modes_vtu(case, model, modes, write_vtu):
 def cmd_compat(args):
     import numpy as np
     from .contact import build_pair
-    from .errors import CaseError
     from .model import build_model
     t0 = time.perf_counter()
     case = load(args.case, args.overrides)

@@ -19,6 +19,7 @@ from scipy.optimize import nnls
 from scipy.spatial import cKDTree
 
 from .kernels.greedy import greedy_rows
+from .regularize import range_basis
 
 
 @dataclass(frozen=True)
@@ -36,9 +37,8 @@ class CoarseRule:
 
 def side_bases(comp, eps):
     """Orthonormal bases B1, B2 of the ranges of the kept shapes' traces on each surface."""
-    from .regularize import _range_basis
     U1, U2 = comp.traces(eps)
-    return _range_basis(U1), _range_basis(U2)
+    return range_basis(U1), range_basis(U2)
 
 
 def subspace_rows(rule, B1, B2):

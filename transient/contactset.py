@@ -32,10 +32,6 @@ class ContactSet:
         p, kt, _ = self.laws(g)
         return self.C.T @ (self.weights * p), g, p, kt
 
-    def tangent(self, kt):
-        """C^T diag(w k_t) C on model dofs."""
-        return (self.C.T @ sp.diags(self.weights * kt) @ self.C).tocsr()
-
 
 def stack(pairs, ndof):
     """The contact set of a run's pairs (empty when there are none)."""

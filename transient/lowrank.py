@@ -10,6 +10,7 @@ so a new tangent D costs an m x m factorization, and a solve one sparse solve pl
 """
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 
 from .linsolve import factorize
 
@@ -37,7 +38,6 @@ class ContactSolver:
         if self.C.shape[0] == 0 or not np.any(d):
             return self.solve0
         if not self.lowrank:
-            import scipy.sparse as sp
             A = (self.A0 + self.C.T @ sp.diags(d) @ self.C).tocsr()
             return factorize(A, self.backend, definite=False)
         lu = sla.lu_factor(np.eye(len(d)) + d[:, None] * self.G)

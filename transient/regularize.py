@@ -13,7 +13,7 @@ import scipy.sparse as sp
 RANK_TOL = 1e-10   # relative singular value below which a trace direction is dependent
 
 
-def _range_basis(U, tol=RANK_TOL):
+def range_basis(U, tol=RANK_TOL):
     """Orthonormal basis of the range of U (identity norm)."""
     if U.shape[1] == 0:
         return U
@@ -23,7 +23,7 @@ def _range_basis(U, tol=RANK_TOL):
 
 def projector(U, W=None):
     """Projector (N, N) on range(U): orthogonal in the identity norm, or W-orthogonal."""
-    Q = _range_basis(U)
+    Q = range_basis(U)
     if W is None:
         return Q @ Q.T
     G = Q.T @ W @ Q
@@ -59,7 +59,7 @@ def primal_basis(interface, comp, eps, ndof):
     for side, U in ((interface.side1, U1), (interface.side2, U2)):
         D = side.dof_map(ndof)                    # (N, ndof): rows are unit node normals
         normal_dofs.append(D)
-        blocks.append(D.T @ sp.csr_matrix(_range_basis(U)))
+        blocks.append(D.T @ sp.csr_matrix(range_basis(U)))
     N = sp.vstack(normal_dofs).tocsr()
     # the complement: identity minus the normal directions of the interface nodes, spanned by
     # the model dofs of those nodes projected off the normal, plus all other dofs

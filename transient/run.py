@@ -22,7 +22,7 @@ from .errors import CaseError, RunAborted
 from .history import CASE_TEXT, History, load_checkpoint
 from .lowrank import ContactSolver
 from .kernels import stepping
-from .kernels.laws import evaluate
+from .kernels.laws import EXPONENTIAL
 from .model import build_model
 from .preload import PreloadError, solve_preload
 from .reduction import exponential_coefficients, reduced_basis
@@ -45,6 +45,8 @@ class Problem:
     sensor_names: tuple
     contact_slices: dict
     store_contact: bool
+    contacts: object         # the ContactSet: weights and laws of the points
+    sensors: object          # (n_sensors, n) observation of the state q (dense or CSR)
     stages: dict = field(default_factory=dict)
     meta: dict = field(default_factory=dict)
     initial_energy: np.ndarray = None
@@ -82,7 +84,7 @@ def _critical_kt(contacts, preload):
     """Contact tangent for the critical step: the preload's, and k for penalty laws (they may
     close during the run)."""
     kt = preload.tangent.copy()
-    penalty = contacts.code != 0
+    penalty = contacts.code != EXPONENTIAL
     kt[penalty] = np.maximum(kt[penalty], contacts.params[penalty, 0])
     return kt
 
@@ -192,7 +194,7 @@ def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages
             contacts.params, P, sig, S, blocks)
     problem = Problem(True, state, np.zeros(2), 0.0, dt_crit, args, contacts.n_points,
                       tuple(model.sensor_names), contacts.slices, case["output"]["contact"],
-                      stages)
+                      contacts, S, stages)
     _critical_data(problem, preload, kt_crit, np.einsum("ij,ij->i", Cr, Cr))
     problem.meta.update({"reduced_dofs": len(omega2), "normal_modes": basis.n_modes,
                          "basis_timings": basis.timings,
@@ -231,7 +233,7 @@ def _full(case, model, contacts, preload, K_lin, patterns, v0, sig, stages):
             contacts.weights, kt0, contacts.code, contacts.params, P, sig, _csr(S))
     problem = Problem(False, state, np.zeros(2), 0.0, dt_crit, args, contacts.n_points,
                       tuple(model.sensor_names), contacts.slices, case["output"]["contact"],
-                      stages)
+                      contacts, S, stages)
     _critical_data(problem, preload, kt_crit,
                    np.asarray(Cf.multiply(Cf) @ (1.0 / mass)).ravel())
     problem.meta["free_dofs"] = len(free)
@@ -258,15 +260,11 @@ def recheck_critical_step(problem, dt):
     """The largest stable step at the deepest penetration reached (central differences):
     omega_max^2 <= omega_0^2 + sum_i w_i dk_t,i |C_i M^-1/2|^2 (a bound, so on the safe side),
     with dk_t the tangents' growth beyond those the step was chosen for."""
-    code, params = (problem.args[6], problem.args[7]) if problem.reduced else \
-        (problem.args[8], problem.args[9])
-    w = problem.args[4] if problem.reduced else problem.args[6]
-    p, kt, phi = (np.empty_like(problem.gmin) for _ in range(3))
-    evaluate(code, params, problem.gmin, p, kt, phi)
+    _, kt, _ = problem.contacts.laws(problem.gmin)
     grow = np.maximum(kt - problem.kt_checked, 0.0)
     if not np.any(grow):
         return problem.dt_critical
-    bound = problem.crit_omega2 + np.sum(w * grow * problem.crit_rows)
+    bound = problem.crit_omega2 + np.sum(problem.contacts.weights * grow * problem.crit_rows)
     return 2.0 / np.sqrt(bound)
 
 
@@ -426,7 +424,7 @@ def run(case, path, resume=False, progress=None):
                                  expected_rows=n_total // every + 1)
         first = _outputs(problem, 1)
         first[0][0] = problem.state[3, 0]
-        first[1][0] = _sensors_now(problem)
+        first[1][0] = problem.sensors @ problem.state[0]
         first[4][0] = problem.initial_energy
         history.append(_rows(problem, first, 1))
     if problem.reduced:
@@ -533,15 +531,6 @@ def _stored_dt(path):
             return float(f.attrs["dt"])
     except (OSError, KeyError) as exc:
         raise CaseError(path, "", f"--resume: not a transient history ({exc})") from None
-
-
-def _sensors_now(problem):
-    q = problem.state[0]
-    S = problem.args[-2 if problem.reduced else -1]
-    if problem.reduced:
-        return S @ q
-    indptr, indices, data = S
-    return sp.csr_matrix((data, indices, indptr), shape=(len(indptr) - 1, len(q))) @ q
 
 
 def _timings(problem, t_kernel, t_start):
