@@ -137,3 +137,37 @@ class _Pardiso:
             self._call(-1, np.zeros(1), np.zeros(1))
         except Exception:
             pass
+
+
+def triangular_factors(A, backend="auto"):
+    """Triangular factors of a symmetric positive definite A for solves inside Numba kernels:
+    A x = b is x = w[p_out] with L z = b[p_in], U w = z. L, U as CSR triplets
+    (indptr, indices, data) with the diagonal stored; returns (p_in, L, U, p_out, name).
+
+    CHOLMOD gives L L^T when scikit-sparse is installed; otherwise SuperLU with a symmetric
+    ordering and no pivoting (PARDISO does not hand out its factors).
+    """
+    A = sp.csr_matrix(A)
+    if (backend in ("auto", "cholmod")) and "cholmod" in available():
+        from sksparse.cholmod import CholmodNotPositiveDefiniteError, cholesky
+        try:
+            factor = cholesky(A.tocsc())
+        except CholmodNotPositiveDefiniteError as exc:
+            raise FactorizationError(f"matrix not positive definite: {exc}") from None
+        L = factor.L().tocsr()
+        P = factor.P()
+        return (P.astype(np.int64), _triplet(L), _triplet(L.T), np.argsort(P).astype(np.int64),
+                "cholmod")
+    try:
+        lu = spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                       options=dict(SymmetricMode=True))
+    except RuntimeError as exc:
+        raise FactorizationError(f"SuperLU failed: {exc}") from None
+    return (np.argsort(lu.perm_r).astype(np.int64), _triplet(lu.L), _triplet(lu.U),
+            lu.perm_c.astype(np.int64), "superlu")
+
+
+def _triplet(A):
+    A = sp.csr_matrix(A)
+    A.sort_indices()
+    return A.indptr.astype(np.int64), A.indices.astype(np.int64), A.data.astype(np.float64)

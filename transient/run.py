@@ -19,9 +19,10 @@ from . import __version__
 from .contact import build_contact, contact_stiffness
 from .contactset import stack
 from .errors import CaseError, RunAborted
+from .linsolve import FactorizationError, factorize, triangular_factors
 from .history import CASE_TEXT, History, load_checkpoint
 from .lowrank import ContactSolver
-from .kernels import stepping
+from .kernels import newmark, stepping
 from .kernels.laws import EXPONENTIAL
 from .model import build_model
 from .preload import PreloadError, solve_preload
@@ -29,6 +30,7 @@ from .reduction import exponential_coefficients, reduced_basis
 from .signals import compile_signals
 
 ENERGY_TERMS = ("kinetic", "strain", "contact", "external_work", "dissipated")
+MAX_WOODBURY_BYTES = 2e9   # implicit full model: S^-1 C^T is kept dense
 SHIFT_HZ = 1.0     # -(2 pi SHIFT_HZ)^2 shifts K so that floating parts stay solvable
 
 
@@ -54,6 +56,7 @@ class Problem:
     kt_checked: np.ndarray = None     # (m,) contact tangents the critical step accounts for
     crit_rows: np.ndarray = None      # (m,) |C_i M^-1/2|^2 of each contact row
     crit_omega2: float = 0.0          # omega_max^2 at the preload, contact included
+    mass: object = None               # full model, implicit: the mass matrix on the free dofs
 
 
 def _timed(stages, name, fn, *args, **kwargs):
@@ -133,9 +136,9 @@ def prepare(case, quiet=True):
     sig = _signals(case)
     damping = solver["damping"]
     reduction = solver["reduction"]
-    if solver["scheme"] != "explicit" and not reduction["enabled"]:
-        raise CaseError(case.path, "solver.scheme", f"the {solver['scheme']} scheme integrates "
-                        "a reduced model so far: set solver.reduction.enabled = true")
+    if solver["scheme"] == "exponential" and not reduction["enabled"]:
+        raise CaseError(case.path, "solver.scheme", "the exponential scheme propagates the modes "
+                        "of a reduced model: set solver.reduction.enabled = true")
     if reduction["enabled"]:
         M = sp.diags(model.lumped_mass).tocsr() if solver["mass"] == "lumped" else model.M
         problem = _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages,
@@ -144,7 +147,7 @@ def prepare(case, quiet=True):
         if damping["modal"] > 0:
             raise CaseError(case.path, "solver.damping.modal", "modal damping needs the reduced "
                             "model (solver.reduction.enabled = true); use alpha and beta")
-        if solver["mass"] == "consistent":
+        if solver["mass"] == "consistent" and solver["scheme"] == "explicit":
             raise CaseError(case.path, "solver.mass", "central differences on the full model "
                             "need the lumped mass: use lumped (or auto), or a reduced model")
         problem = _full(case, model, contacts, preload, K_lin, patterns, v0, sig, stages)
@@ -238,6 +241,14 @@ def _full(case, model, contacts, preload, K_lin, patterns, v0, sig, stages):
                    np.asarray(Cf.multiply(Cf) @ (1.0 / mass)).ravel())
     problem.meta["free_dofs"] = len(free)
     _initial_acceleration(problem)
+    if case["solver"]["scheme"] == "implicit":
+        consistent = case["solver"]["mass"] != "lumped"
+        problem.mass = model.M[free][:, free].tocsr() if consistent else sp.diags(mass).tocsr()
+        if consistent:
+            # the lumped initial acceleration, redone with the consistent mass
+            alpha = damping["alpha"]
+            force = mass * (problem.state[2] + alpha * problem.state[1])
+            problem.state[2] = factorize(problem.mass)(force) - alpha * problem.state[1]
     return problem
 
 
@@ -289,18 +300,54 @@ def kernel_of(problem):
 
 def scheme_kernel(case, problem, dt):
     """The kernel of the case's scheme and its system arguments at step dt."""
-    scheme = case["solver"]["scheme"]
+    solver = case["solver"]
+    scheme = solver["scheme"]
     if scheme == "explicit":
         return kernel_of(problem), problem.args + (problem.gmin,)
+    newton = solver["newton"]
+    if scheme == "implicit" and not problem.reduced:
+        return newmark.newmark_full, _newmark_full_args(case, problem, dt) + (
+            newton["tolerance"], newton["max_iter"])
     omega2, damp, Cr, g0, w, kt0, code, params, P, sig, S, blocks = problem.args
     if scheme == "implicit":
-        newton = case["solver"]["newton"]
-        return stepping.newmark_reduced, (damp, omega2, Cr, g0, w, kt0, code, params, P, sig, S,
-                                          blocks, newton["tolerance"], newton["max_iter"])
+        # the iteration operator is diagonal: Z = S^-1 C^T row by row
+        op = 1.0 + 0.5 * dt * damp + 0.25 * dt * dt * omega2
+        Z = np.ascontiguousarray(Cr.T / op[:, None])
+        return newmark.newmark_reduced, (
+            damp, omega2, Cr, g0, w, kt0, code, params, P, sig, S, blocks, Z, Cr @ Z,
+            newton["tolerance"], newton["max_iter"])
     coef = exponential_coefficients(omega2, damp, dt)
     return stepping.exponential_reduced, (coef, damp, omega2, Cr, g0, w, kt0, code, params, P,
-                                          sig, S, blocks, case["solver"]["corrections"],
+                                          sig, S, blocks, solver["corrections"],
                                           problem.state[4])
+
+
+def _newmark_full_args(case, problem, dt):
+    """Newmark's iteration operator on the full model, factorized for the kernel, with
+    Z = S^-1 C^T and G = C Z for the exact contact corrections."""
+    t0 = time.perf_counter()
+    K, _, alpha, beta, C, g0, w, kt0, code, params, P, sig, S = problem.args
+    Kl = sp.csr_matrix((K[2], K[1], K[0]))
+    Cl = sp.csr_matrix((C[2], C[1], C[0]), shape=(len(g0), Kl.shape[0]))
+    n, m = Kl.shape[0], len(g0)
+    if 8.0 * n * m > MAX_WOODBURY_BYTES:
+        raise CaseError(case.path, "solver.scheme", f"the implicit scheme on the full model "
+                        f"keeps S^-1 C^T dense: {n} dofs x {m} contact points is "
+                        f"{8e-9 * n * m:.1f} GB; use a reduced model (solver.reduction)")
+    h = 0.5 * dt
+    op = ((1.0 + h * alpha) * problem.mass + (h * beta + h * h) * Kl).tocsr()
+    try:
+        p_in, L, U, p_out, backend = triangular_factors(op, case["solver"]["linear_solver"])
+    except FactorizationError as exc:
+        raise CaseError(case.path, "solver", f"Newmark's iteration operator: {exc}") from None
+    factor = (p_in, L, U, p_out)
+    Z = newmark.factor_columns(factor, C, n)
+    G = np.ascontiguousarray(Cl @ Z)
+    problem.stages["iteration_operator"] = time.perf_counter() - t0
+    problem.meta["iteration_operator"] = {"backend": backend, "factor_nonzeros":
+                                          int(len(L[2]) + len(U[2]))}
+    return (K, _csr(problem.mass), alpha, beta, C, g0, w, kt0, code, params, P, sig, S, factor,
+            Z, G)
 
 
 def _initial_acceleration(problem):
@@ -377,6 +424,9 @@ def choose_dt(case, problem, stored=None):
     dt = solver["dt"] if stored is None else stored
     if solver["scheme"] in ("exponential", "implicit"):
         # unconditionally stable: the step is set by accuracy, 20 steps per period at fmax
+        if dt == 0.0 and not problem.reduced:
+            raise CaseError(case.path, "solver.dt", "the implicit scheme on the full model has "
+                            "no frequency to resolve: give dt")
         return dt or 1.0 / (20.0 * solver["reduction"]["fmax"])
     if dt == 0.0:
         dt = 0.9 * problem.dt_critical
@@ -403,17 +453,22 @@ def run(case, path, resume=False, progress=None):
     every = output["every"]
     chunk = max(every, solver["chunk"] // every * every)
     n_total = int(round(solver["t_end"] / dt))
-    meta = {CASE_TEXT: case.text, "case_path": str(case.path),
-            "overrides": list(case.overrides), "version": __version__, "dt": dt,
-            "dt_critical": problem.dt_critical, "scheme": solver["scheme"],
-            "reduced": problem.reduced, "steps_planned": n_total, "every": every,
-            "stages": problem.stages, **problem.meta}
     step = 0
     if resume:
         try:
             saved = load_checkpoint(path)
         except (ValueError, KeyError) as exc:
             raise CaseError(path, "", f"--resume: {exc}") from None
+    if problem.reduced:
+        blocks = saved["blocks"] if resume else _fastest_blocks(case, problem, dt)
+        problem.args = problem.args[:-1] + (np.asarray(blocks, np.int64),)
+    kernel, args = scheme_kernel(case, problem, dt)
+    meta = {CASE_TEXT: case.text, "case_path": str(case.path),
+            "overrides": list(case.overrides), "version": __version__, "dt": dt,
+            "dt_critical": problem.dt_critical, "scheme": solver["scheme"],
+            "reduced": problem.reduced, "steps_planned": n_total, "every": every,
+            "stages": problem.stages, **problem.meta}
+    if resume:
         history = History.open_for_resume(path)
         problem.state[:] = saved["state"]
         problem.acc[:] = saved["acc"]
@@ -427,10 +482,6 @@ def run(case, path, resume=False, progress=None):
         first[1][0] = problem.sensors @ problem.state[0]
         first[4][0] = problem.initial_energy
         history.append(_rows(problem, first, 1))
-    if problem.reduced:
-        blocks = saved["blocks"] if resume else _fastest_blocks(case, problem, dt)
-        problem.args = problem.args[:-1] + (np.asarray(blocks, np.int64),)
-    kernel, args = scheme_kernel(case, problem, dt)
     out = _outputs(problem, chunk // every)
     e0 = _balance(problem.initial_energy)
     peak = max(_mechanical(problem.initial_energy), 1e-300)

@@ -255,8 +255,9 @@ SOLVER = Table("solution settings", {
                        "negative value keeps free parts' rigid modes solvable", -1.0, "Hz"),
     }, optional=True),
     "scheme": Value("choice", "time integration: explicit (central differences), implicit "
-                    "(reduced model: Newmark average acceleration, fixed iteration operator at "
-                    "the preload, Newton corrections of the contact remainder) or exponential "
+                    "(reduced or full model: Newmark average acceleration, iteration operator at "
+                    "the preload factorized once, Newton with the exact contact tangent through "
+                    "low-rank updates) or exponential "
                     "(reduced model: each mode's linear part, with the contact linearized at the "
                     "preload, integrated exactly; the contact remainder taken linear in time "
                     "over the step)", "explicit",
@@ -265,8 +266,8 @@ SOLVER = Table("solution settings", {
                          "step after the extrapolated predictor", 1, minimum=0, maximum=5),
     "t_end": Value("float", "simulated time after the preload", 0.0, "s", minimum=0.0),
     "mass": Value("choice", "mass matrix of the transient: lumped (HRZ), consistent, or auto "
-                  "(lumped for the full model, which central differences need diagonal; "
-                  "consistent for a reduced one)", "auto",
+                  "(lumped for central differences on the full model, which need it diagonal; "
+                  "consistent otherwise)", "auto",
                   choices=("auto", "lumped", "consistent")),
     "dt": Value("float", "time step (0: 0.9 times the critical step for explicit, "
                 "1 / (20 reduction.fmax) for exponential)", 0.0, "s", minimum=0.0),

@@ -14,6 +14,7 @@ Contact points carry their own law: code (m,) and params (m, 4) (see laws.py), s
 different laws share one set of rows.
 
 Status codes returned: OK, NOT_FINITE (NaN/Inf in the state), NO_CONVERGENCE (implicit).
+The implicit kernels are in newmark.py.
 """
 import numba
 import numpy as np
@@ -21,6 +22,7 @@ import numpy as np
 from ..jit import njit, njit_fast, njit_parallel
 from .laws import potential, pressure
 from ..signals import signal_values
+from .sparse import csr_matvec
 
 OK, NOT_FINITE, NO_CONVERGENCE = 0, 1, 2
 KINETIC, STRAIN, CONTACT, WORK, DISSIPATED = 0, 1, 2, 3, 4
@@ -182,15 +184,6 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
 
 
 @njit_fast
-def _csr_matvec(indptr, indices, data, x, out):
-    for i in range(out.shape[0]):
-        s = 0.0
-        for k in range(indptr[i], indptr[i + 1]):
-            s += data[k] * x[indices[k]]
-        out[i] = s
-
-
-@njit_fast
 def remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press):
     """Sparse version of remainder_dense (rows of a CSR matrix C)."""
     f[:] = 0.0
@@ -236,7 +229,7 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
     press = np.empty(m)
     energy = np.empty(5)
     _external(t, patterns, sig, svals, fext_old)
-    _csr_matvec(Kp, Ki, Kd, v, kv)
+    csr_matvec(Kp, Ki, Kd, v, kv)
     power_old = 0.0
     for k in range(n):
         power_old += alpha * mass[k] * v[k] * v[k] + beta * v[k] * kv[k]
@@ -251,9 +244,9 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
         _external(t, patterns, sig, svals, fext)
         phi, lin = remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press)
         _track_min(gap, gmin)
-        _csr_matvec(Kp, Ki, Kd, q, ku)
+        csr_matvec(Kp, Ki, Kd, q, ku)
         if beta != 0.0:
-            _csr_matvec(Kp, Ki, Kd, v, kv)
+            csr_matvec(Kp, Ki, Kd, v, kv)
         work = 0.0
         kin = 0.0
         strain = -lin
@@ -368,91 +361,6 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
         if not (_finite(q) and _finite(v)):
             state[3, 0] = t
             return NOT_FINITE, step
-        if step % every == 0:
-            _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
-            row += 1
-    state[3, 0] = t
-    return OK, n_steps
-
-
-@njit_fast
-def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0, code, params,
-                    patterns, sig, S, blocks, tol, max_iter, out_t, out_s, out_g, out_p, out_e):
-    """Newmark average acceleration (beta = 1/4, gamma = 1/2) on the reduced system with the
-    fixed iteration operator 1 + dt/2 c + dt^2/4 omega^2 (diagonal: the linear part at the
-    preload) and Newton corrections of the accelerations for the contact remainder, until the
-    residual falls below tol times the force scale or max_iter is reached (NO_CONVERGENCE).
-    state, acc and outputs as in explicit_reduced."""
-    q, v, a = state[0], state[1], state[2]
-    t = state[3, 0]
-    n = q.shape[0]
-    m = C.shape[0]
-    rem = np.empty(n)
-    fext = np.empty(n)
-    fext_old = np.empty(n)
-    qp = np.empty(n)
-    vp = np.empty(n)
-    q_old = np.empty(n)
-    v_old = np.empty(n)
-    op = np.empty(n)
-    svals = np.empty(patterns.shape[0])
-    gap = np.empty(m)
-    press = np.empty(m)
-    fbuf = np.empty((blocks.shape[0] - 1, n))
-    energy = np.empty(5)
-    h2 = 0.25 * dt * dt
-    for k in range(n):
-        op[k] = 1.0 + 0.5 * dt * damp[k] + h2 * omega2[k]
-    _external(t, patterns, sig, svals, fext_old)
-    row = 0
-    phi = 0.0
-    lin = 0.0
-    for step in range(1, n_steps + 1):
-        for k in range(n):
-            q_old[k] = q[k]
-            v_old[k] = v[k]
-            qp[k] = q[k] + dt * v[k] + h2 * a[k]
-            vp[k] = v[k] + 0.5 * dt * a[k]
-        t += dt
-        _external(t, patterns, sig, svals, fext)
-        converged = False
-        for it in range(max_iter):
-            for k in range(n):
-                q[k] = qp[k] + h2 * a[k]
-                v[k] = vp[k] + 0.5 * dt * a[k]
-            phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
-                                       fbuf)
-            rnorm = 0.0
-            fnorm = 0.0
-            for k in range(n):
-                f = fext[k] + rem[k]
-                r = a[k] + damp[k] * v[k] + omega2[k] * q[k] - f
-                rnorm += r * r
-                fnorm += f * f + (omega2[k] * q[k]) ** 2
-                a[k] -= r / op[k]
-            if rnorm <= tol * tol * max(fnorm, 1e-300):
-                converged = True
-                break
-        for k in range(n):
-            q[k] = qp[k] + h2 * a[k]
-            v[k] = vp[k] + 0.5 * dt * a[k]
-        work = 0.0
-        power = 0.0
-        kin = 0.0
-        strain = -lin
-        for k in range(n):
-            work += 0.5 * (fext_old[k] + fext[k]) * (q[k] - q_old[k])
-            power += damp[k] * (v_old[k] * v_old[k] + v[k] * v[k])
-            kin += 0.5 * v[k] * v[k]
-            strain += 0.5 * omega2[k] * q[k] * q[k]
-            fext_old[k] = fext[k]
-        _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
-        if not (_finite(q) and _finite(v)):
-            state[3, 0] = t
-            return NOT_FINITE, step
-        if not converged:
-            state[3, 0] = t
-            return NO_CONVERGENCE, step
         if step % every == 0:
             _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
             row += 1

@@ -1,0 +1,317 @@
+"""Implicit Newmark kernels (average acceleration: beta = 1/4, gamma = 1/2) with Newton
+iterations on the accelerations; the system and outputs are those of stepping.py.
+
+Each step solves R(a) = M a + c v(a) + K_lin q(a) - F(t) - remainder(q(a)) = 0 with
+q = q_p + h2 a, v = v_p + dt/2 a, h2 = dt^2 / 4. The iteration operator S = M + dt/2 c + h2 K_lin
+(the linear part at the preload) is factorized once, outside. Its Jacobian is
+J = S + C^T diag(e) C, e_i = h2 w_i (k_t,i - k_t*,i): where contact tangents moved far from the
+preload's (an impact closing, a deep penetration), the fixed operator alone would not converge,
+so those rows are added exactly through the Woodbury identity with the precomputed
+Z = S^-1 C^T and G = C Z:
+    J^-1 r = y - Z_A (I + diag(e_A) G_AA)^-1 diag(e_A) C_A y,   y = S^-1 r,
+for the set A of rows that matter (the others, whose sum of |e_i| G_ii stays below WOODBURY_REST,
+are left to the fixed-operator iteration, which they slow by at most that factor).
+"""
+import numpy as np
+
+from ..jit import njit_fast
+from .laws import pressure
+from .sparse import csr_abs_matvec, csr_matvec, factor_solve
+from .stepping import (NO_CONVERGENCE, NOT_FINITE, OK, _energies, _external, _finite, _store,
+                       _store_sparse, remainder_dense, remainder_sparse)
+
+WOODBURY_REST = 0.1
+
+
+@njit_fast
+def _active_rows(code, params, gap, w, kt0, h2, Gd, e, active):
+    """Fills e and the rows to correct exactly (largest |e_i| G_ii first); returns their count."""
+    m = gap.shape[0]
+    size = np.empty(m)
+    total = 0.0
+    for i in range(m):
+        _, kt = pressure(code[i], params[i], gap[i])
+        e[i] = h2 * w[i] * (kt - kt0[i])
+        size[i] = abs(e[i]) * Gd[i]
+        total += size[i]
+    if total <= WOODBURY_REST:
+        return 0
+    order = np.argsort(-size)
+    n_active = 0
+    for i in order:
+        if total <= WOODBURY_REST:
+            break
+        active[n_active] = i
+        n_active += 1
+        total -= size[i]
+    return n_active
+
+
+@njit_fast
+def _woodbury(y, u, active, n_active, e, Z, G):
+    """y -= Z_A (I + diag(e_A) G_AA)^-1 diag(e_A) u, u = C_A y."""
+    H = np.empty((n_active, n_active))
+    rhs = np.empty(n_active)
+    for a in range(n_active):
+        i = active[a]
+        for b in range(n_active):
+            H[a, b] = e[i] * G[i, active[b]]
+        H[a, a] += 1.0
+        rhs[a] = e[i] * u[a]
+    z = np.linalg.solve(H, rhs)
+    for a in range(n_active):
+        i = active[a]
+        for k in range(y.shape[0]):
+            y[k] -= Z[k, i] * z[a]
+
+
+@njit_fast
+def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0, code, params,
+                    patterns, sig, S, blocks, Z, G, tol, max_iter, out_t, out_s, out_g, out_p,
+                    out_e):
+    """Newmark on the reduced system (M = I, diagonal damping and K_lin): S is diagonal.
+    Z (n, m) and G (m, m) as in the module docstring. Converged when the residual is below tol
+    times the force scale (external, contact, elastic, inertial, and the momentum over a half
+    step, which sets the scale in free flight); NO_CONVERGENCE after max_iter iterations. state, acc and outputs as
+    in stepping.explicit_reduced."""
+    q, v, a = state[0], state[1], state[2]
+    t = state[3, 0]
+    n = q.shape[0]
+    m = C.shape[0]
+    rem = np.empty(n)
+    fext = np.empty(n)
+    fext_old = np.empty(n)
+    qp = np.empty(n)
+    vp = np.empty(n)
+    q_old = np.empty(n)
+    v_old = np.empty(n)
+    op = np.empty(n)
+    y = np.empty(n)
+    svals = np.empty(patterns.shape[0])
+    gap = np.empty(m)
+    press = np.empty(m)
+    e = np.empty(m)
+    u = np.empty(m)
+    active = np.empty(m, np.int64)
+    Gd = np.empty(m)
+    for i in range(m):
+        Gd[i] = G[i, i]
+    fbuf = np.empty((blocks.shape[0] - 1, n))
+    energy = np.empty(5)
+    h2 = 0.25 * dt * dt
+    v_scale = 2.0 / dt if dt > 0.0 else 0.0     # momentum over a step: a force scale in flight
+    for k in range(n):
+        op[k] = 1.0 + 0.5 * dt * damp[k] + h2 * omega2[k]
+    _external(t, patterns, sig, svals, fext_old)
+    row = 0
+    phi = 0.0
+    lin = 0.0
+    for step in range(1, n_steps + 1):
+        for k in range(n):
+            q_old[k] = q[k]
+            v_old[k] = v[k]
+            qp[k] = q[k] + dt * v[k] + h2 * a[k]
+            vp[k] = v[k] + 0.5 * dt * a[k]
+        t += dt
+        _external(t, patterns, sig, svals, fext)
+        converged = False
+        for it in range(max_iter):
+            for k in range(n):
+                q[k] = qp[k] + h2 * a[k]
+                v[k] = vp[k] + 0.5 * dt * a[k]
+            phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
+                                       fbuf)
+            rnorm = 0.0
+            fnorm = 0.0
+            for k in range(n):
+                f = fext[k] + rem[k]
+                r = a[k] + damp[k] * v[k] + omega2[k] * q[k] - f
+                rnorm += r * r
+                fnorm += f * f + (omega2[k] * q[k]) ** 2 + a[k] * a[k] + (v_scale * v[k]) ** 2
+                y[k] = r / op[k]
+            if rnorm <= tol * tol * max(fnorm, 1e-300):
+                converged = True
+                break
+            n_active = _active_rows(code, params, gap, w, kt0, h2, Gd, e, active)
+            if n_active:
+                for j in range(n_active):
+                    row_c = C[active[j]]
+                    s = 0.0
+                    for k in range(n):
+                        s += row_c[k] * y[k]
+                    u[j] = s
+                _woodbury(y, u, active, n_active, e, Z, G)
+            for k in range(n):
+                a[k] -= y[k]
+        for k in range(n):
+            q[k] = qp[k] + h2 * a[k]
+            v[k] = vp[k] + 0.5 * dt * a[k]
+        work = 0.0
+        power = 0.0
+        kin = 0.0
+        strain = -lin
+        for k in range(n):
+            work += 0.5 * (fext_old[k] + fext[k]) * (q[k] - q_old[k])
+            power += damp[k] * (v_old[k] * v_old[k] + v[k] * v[k])
+            kin += 0.5 * v[k] * v[k]
+            strain += 0.5 * omega2[k] * q[k] * q[k]
+            fext_old[k] = fext[k]
+        _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
+        if not (_finite(q) and _finite(v)):
+            state[3, 0] = t
+            return NOT_FINITE, step
+        if not converged:
+            state[3, 0] = t
+            return NO_CONVERGENCE, step
+        if step % every == 0:
+            _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
+            row += 1
+    state[3, 0] = t
+    return OK, n_steps
+
+
+@njit_fast
+def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt0, code,
+                 params, patterns, sig, S, factor, Z, G, tol, max_iter, out_t, out_s, out_g,
+                 out_p, out_e):
+    """Newmark on the free dofs of the full model: K (K_lin) and M CSR triplets, Rayleigh
+    damping alpha M + beta K, C and S CSR triplets; factor = (p_in, L, U, p_out) of
+    S = (1 + dt/2 alpha) M + (dt/2 beta + h2) K_lin (linsolve.triangular_factors), Z (n, m),
+    G (m, m). Otherwise as newmark_reduced."""
+    q, v, a = state[0], state[1], state[2]
+    t = state[3, 0]
+    n = q.shape[0]
+    m = g0.shape[0]
+    Kp, Ki, Kd = K
+    Mp, Mi, Md = M
+    Cp, Ci, Cd = C
+    p_in, L, U, p_out = factor
+    rem = np.empty(n)
+    fext = np.empty(n)
+    fext_old = np.empty(n)
+    qp = np.empty(n)
+    vp = np.empty(n)
+    q_old = np.empty(n)
+    ku = np.empty(n)
+    kabs = np.empty(n)
+    kv = np.empty(n)
+    ma = np.empty(n)
+    mv = np.empty(n)
+    r = np.empty(n)
+    y = np.empty(n)
+    work_n = np.empty(n)
+    svals = np.empty(patterns.shape[0])
+    gap = np.empty(m)
+    press = np.empty(m)
+    e = np.empty(m)
+    u = np.empty(m)
+    active = np.empty(m, np.int64)
+    Gd = np.empty(m)
+    for i in range(m):
+        Gd[i] = G[i, i]
+    energy = np.empty(5)
+    h2 = 0.25 * dt * dt
+    v_scale = 2.0 / dt if dt > 0.0 else 0.0     # momentum over a step: a force scale in flight
+    _external(t, patterns, sig, svals, fext_old)
+    csr_matvec(Mp, Mi, Md, v, mv)
+    csr_matvec(Kp, Ki, Kd, v, kv)
+    power_old = 0.0
+    for k in range(n):
+        power_old += alpha * v[k] * mv[k] + beta * v[k] * kv[k]
+    row = 0
+    phi = 0.0
+    lin = 0.0
+    for step in range(1, n_steps + 1):
+        for k in range(n):
+            q_old[k] = q[k]
+            qp[k] = q[k] + dt * v[k] + h2 * a[k]
+            vp[k] = v[k] + 0.5 * dt * a[k]
+        t += dt
+        _external(t, patterns, sig, svals, fext)
+        converged = False
+        for it in range(max_iter):
+            for k in range(n):
+                q[k] = qp[k] + h2 * a[k]
+                v[k] = vp[k] + 0.5 * dt * a[k]
+            phi, lin = remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, rem, gap, press)
+            csr_matvec(Kp, Ki, Kd, q, ku)
+            csr_abs_matvec(Kp, Ki, Kd, q, kabs)
+            csr_matvec(Mp, Mi, Md, a, ma)
+            csr_matvec(Mp, Mi, Md, v, mv)
+            if beta != 0.0:
+                csr_matvec(Kp, Ki, Kd, v, kv)
+            rnorm = 0.0
+            fnorm = 0.0
+            for k in range(n):
+                f = fext[k] + rem[k]
+                r[k] = ma[k] + ku[k] + alpha * mv[k] - f
+                if beta != 0.0:
+                    r[k] += beta * kv[k]
+                rnorm += r[k] * r[k]
+                fnorm += f * f + kabs[k] * kabs[k] + ma[k] * ma[k] + (v_scale * mv[k]) ** 2
+            if rnorm <= tol * tol * max(fnorm, 1e-300):
+                converged = True
+                break
+            factor_solve(p_in, L, U, p_out, r, y, work_n)
+            n_active = _active_rows(code, params, gap, w, kt0, h2, Gd, e, active)
+            if n_active:
+                for j in range(n_active):
+                    i = active[j]
+                    s = 0.0
+                    for k in range(Cp[i], Cp[i + 1]):
+                        s += Cd[k] * y[Ci[k]]
+                    u[j] = s
+                _woodbury(y, u, active, n_active, e, Z, G)
+            for k in range(n):
+                a[k] -= y[k]
+        for k in range(n):
+            q[k] = qp[k] + h2 * a[k]
+            v[k] = vp[k] + 0.5 * dt * a[k]
+        csr_matvec(Kp, Ki, Kd, q, ku)
+        csr_matvec(Mp, Mi, Md, v, mv)
+        if beta != 0.0:
+            csr_matvec(Kp, Ki, Kd, v, kv)
+        work = 0.0
+        kin = 0.0
+        strain = -lin
+        power = 0.0
+        for k in range(n):
+            work += 0.5 * (fext_old[k] + fext[k]) * (q[k] - q_old[k])
+            kin += 0.5 * v[k] * mv[k]
+            strain += 0.5 * q[k] * ku[k]
+            power += alpha * v[k] * mv[k]
+            if beta != 0.0:
+                power += beta * v[k] * kv[k]
+            fext_old[k] = fext[k]
+        _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
+        power_old = power
+        if not (_finite(q) and _finite(v)):
+            state[3, 0] = t
+            return NOT_FINITE, step
+        if not converged:
+            state[3, 0] = t
+            return NO_CONVERGENCE, step
+        if step % every == 0:
+            _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
+            row += 1
+    state[3, 0] = t
+    return OK, n_steps
+
+
+@njit_fast
+def factor_columns(factor, C, n):
+    """Z = S^-1 C^T (n, m) for a CSR C (m, n), column by column through the factors."""
+    p_in, L, U, p_out = factor
+    Cp, Ci, Cd = C
+    m = Cp.shape[0] - 1
+    Z = np.zeros((n, m))
+    b = np.empty(n)
+    x = np.empty(n)
+    work = np.empty(n)
+    for i in range(m):
+        b[:] = 0.0
+        for k in range(Cp[i], Cp[i + 1]):
+            b[Ci[k]] = Cd[k]
+        factor_solve(p_in, L, U, p_out, b, x, work)
+        Z[:, i] = x
+    return Z
