@@ -183,6 +183,28 @@ def test_stages_only_what_the_scene_needs(tmp_path):
         stages = json.loads(f.attrs["stages"])
         assert set(stages) == set(result.stages)
         assert "contact/impact/gap" not in f          # not requested: not stored
+        assert "geometry" not in f and "field" not in f
+
+
+@pytest.mark.parametrize("reduced", [False, True])
+def test_outputs_stored_are_those_asked_for(tmp_path, reduced):
+    overrides = ["output.sensors=false", "output.energy=false", "output.field=true",
+                 "output.every=10"]
+    if reduced:
+        overrides += ["solver.reduction.enabled=true", "solver.reduction.fmax=1e6",
+                      "solver.scheme=exponential", "solver.dt=2e-7"]
+    result, out = run_case(tmp_path, CASES / "bar_impact.toml", overrides)
+    assert result.status == "complete"
+    with h5py.File(out, "r") as f:
+        assert "sensors" not in f and "energy" not in f
+        q = f["field/q"][...]
+        assert q.shape == (f["time"].shape[0], f.attrs["reduced_dofs"] if reduced
+                           else f.attrs["free_dofs"])
+        assert np.all(np.isfinite(q)) and np.abs(q[-1]).max() > 0
+        points = f["geometry/contact/wall/points"][...]
+        assert points.shape == (f["contact/wall/gap"].shape[1], 3)
+        assert np.allclose(points[:, 0], 0.1)          # on the bar's end, facing the wall
+        assert f["geometry/contact/wall/weights"][...].sum() == pytest.approx(1e-4)
 
 
 CANTILEVER = """

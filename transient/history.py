@@ -29,6 +29,7 @@ from .errors import RunAborted
 CHUNK_BYTES = 2 ** 20      # ~1 MB chunks: fast sequential reads of long series
 CASE_TEXT = "case"         # root attribute holding the case file as written
 CHECKPOINT = "checkpoint"
+GEOMETRY = "geometry"      # fixed arrays written once (contact points, weights, normals)
 # the energy balance kinetic + strain + contact - external_work + dissipated is constant
 ENERGY_SIGNS = {"kinetic": 1.0, "strain": 1.0, "contact": 1.0, "external_work": -1.0,
                 "dissipated": 1.0}
@@ -53,7 +54,7 @@ class History:
         self.closed = False
 
     @classmethod
-    def create(cls, path, meta, layout, overwrite=False, expected_rows=None):
+    def create(cls, path, meta, layout, overwrite=False, expected_rows=None, geometry=None):
         """Create a history file with empty series and status 'running'.
 
         Parameters
@@ -67,13 +68,17 @@ class History:
             Replace an existing file (otherwise ValueError).
         expected_rows : int, optional
             Rows the run will store: caps the chunk length so short runs make small files.
+        geometry : dict, optional
+            Name -> array stored once under /geometry (not a series), e.g. the positions of
+            the contact points, which maps of the contact series need.
         """
         path = Path(path)
         if path.exists() and not overwrite:
             raise ValueError(f"{path}: file exists (pass overwrite=True to replace it)")
         shapes = {name: tuple(int(n) for n in shape) for name, shape in layout.items()}
-        if CHECKPOINT in shapes or any(n.startswith(CHECKPOINT + "/") for n in shapes):
-            raise ValueError(f"series name '{CHECKPOINT}' is reserved for the kernel state")
+        for reserved in (CHECKPOINT, GEOMETRY):
+            if reserved in shapes or any(n.startswith(reserved + "/") for n in shapes):
+                raise ValueError(f"series name '{reserved}' is reserved")
         with _open(path, "w") as f:
             for name, shape in shapes.items():
                 rows = _chunk_rows(shape, expected_rows)
@@ -81,6 +86,8 @@ class History:
                 f.create_dataset(name, shape=(0,) + shape,
                                  maxshape=(None,) + tuple(n or None for n in shape),
                                  chunks=(rows,) + tuple(max(n, 1) for n in shape), dtype="f8")
+            for name, value in (geometry or {}).items():
+                f.create_dataset(f"{GEOMETRY}/{name}", data=np.asarray(value))
             _write_attrs(f.attrs, meta)
             f.attrs["status"] = "running"
             f.attrs["rows"] = 0
@@ -213,7 +220,8 @@ def _series_shapes(f):
     shapes = {}
 
     def visit(name, obj):
-        if isinstance(obj, h5py.Dataset) and not name.startswith(CHECKPOINT + "/"):
+        if isinstance(obj, h5py.Dataset) and not name.startswith((CHECKPOINT + "/",
+                                                                   GEOMETRY + "/")):
             shapes[name] = obj.shape[1:]
 
     f.visititems(visit)

@@ -57,6 +57,11 @@ class Problem:
     crit_rows: np.ndarray = None      # (m,) |C_i M^-1/2|^2 of each contact row
     crit_omega2: float = 0.0          # omega_max^2 at the preload, contact included
     mass: object = None               # full model, implicit: the mass matrix on the free dofs
+    n_field: int = 0                  # observed rows after the sensors: the state q itself
+    store_energy: bool = True
+    geometry: dict = field(default_factory=dict)   # fixed arrays of the history (/geometry)
+    T: np.ndarray = None              # reduced model: u = T q (ndof, n)
+    free: np.ndarray = None           # full model: the free dofs q lives on
 
 
 def _timed(stages, name, fn, *args, **kwargs):
@@ -159,6 +164,14 @@ def prepare(case, quiet=True):
         "pairs": {p.name: {"rule": p.spec["rule"], "points": p.rule.n_points,
                            "regularized": p.spec["regularized"], "eps": p.eps,
                            "law": p.spec["law"]["kind"]} for p in pairs}})
+    output = case["output"]
+    problem.n_field = problem.state.shape[1] if output["field"] else 0
+    problem.store_energy = output["energy"]
+    if output["contact"]:
+        for p in pairs:
+            problem.geometry.update({f"contact/{p.name}/points": p.rule.points,
+                                     f"contact/{p.name}/normals": p.rule.normals,
+                                     f"contact/{p.name}/weights": p.rule.weights})
     return problem
 
 
@@ -187,7 +200,9 @@ def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages
     Cr = np.ascontiguousarray(contacts.C @ T)
     kt0 = preload.tangent
     P = _patterns([T.T @ p for p in patterns], T.shape[1])
-    S = np.ascontiguousarray(model.sensors @ T)
+    S = np.ascontiguousarray(_observed(case, model.sensors) @ T)
+    if case["output"]["field"]:
+        S = np.vstack([S, np.eye(T.shape[1])])
     state = np.zeros((5, len(omega2)))
     state[0], state[1] = q0, v
     kt_crit = _critical_kt(contacts, preload)
@@ -196,9 +211,10 @@ def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages
     args = (omega2, damp, Cr, contacts.gap0, contacts.weights, kt0, contacts.code,
             contacts.params, P, sig, S, blocks)
     problem = Problem(True, state, np.zeros(2), 0.0, dt_crit, args, contacts.n_points,
-                      tuple(model.sensor_names), contacts.slices, case["output"]["contact"],
+                      _sensor_names(case, model), contacts.slices, case["output"]["contact"],
                       contacts, S, stages)
     _critical_data(problem, preload, kt_crit, np.einsum("ij,ij->i", Cr, Cr))
+    problem.T = T
     problem.meta.update({"reduced_dofs": len(omega2), "normal_modes": basis.n_modes,
                          "basis_timings": basis.timings,
                          "basis_projection_error": float(
@@ -229,17 +245,20 @@ def _full(case, model, contacts, preload, K_lin, patterns, v0, sig, stages):
     dt_crit = _full_critical_step(Kc, mass)
     stages["time_step"] = time.perf_counter() - t0
     P = _patterns([p[free] for p in patterns], len(free))
-    S = sp.csr_matrix(model.sensors[:, free])
+    S = sp.csr_matrix(_observed(case, model.sensors)[:, free])
+    if case["output"]["field"]:
+        S = sp.vstack([S, sp.eye(len(free))]).tocsr()
     state = np.zeros((5, len(free)))
     state[0], state[1] = preload.u[free], v0[free]
     args = (_csr(Kf), mass, damping["alpha"], damping["beta"], _csr(Cf), contacts.gap0,
             contacts.weights, kt0, contacts.code, contacts.params, P, sig, _csr(S))
     problem = Problem(False, state, np.zeros(2), 0.0, dt_crit, args, contacts.n_points,
-                      tuple(model.sensor_names), contacts.slices, case["output"]["contact"],
+                      _sensor_names(case, model), contacts.slices, case["output"]["contact"],
                       contacts, S, stages)
     _critical_data(problem, preload, kt_crit,
                    np.asarray(Cf.multiply(Cf) @ (1.0 / mass)).ravel())
     problem.meta["free_dofs"] = len(free)
+    problem.free = free
     _initial_acceleration(problem)
     if case["solver"]["scheme"] == "implicit":
         consistent = case["solver"]["mass"] != "lumped"
@@ -250,6 +269,15 @@ def _full(case, model, contacts, preload, K_lin, patterns, v0, sig, stages):
             force = mass * (problem.state[2] + alpha * problem.state[1])
             problem.state[2] = factorize(problem.mass)(force) - alpha * problem.state[1]
     return problem
+
+
+def _observed(case, sensors):
+    """The sensor rows observed: none unless the case stores them."""
+    return sensors if case["output"]["sensors"] else sensors[:0]
+
+
+def _sensor_names(case, model):
+    return tuple(model.sensor_names) if case["output"]["sensors"] else ()
 
 
 def _patterns(vectors, n):
@@ -365,7 +393,7 @@ def _initial_acceleration(problem):
 
 
 def _outputs(problem, rows):
-    ns = len(problem.sensor_names)
+    ns = problem.sensors.shape[0]         # the sensors, then the state if stored
     m = problem.n_points if problem.store_contact else 0
     return (np.zeros(rows), np.zeros((rows, ns)), np.zeros((rows, m)), np.zeros((rows, m)),
             np.zeros((rows, 5)))
@@ -374,12 +402,15 @@ def _outputs(problem, rows):
 def _layout(problem):
     layout = {"time": ()}
     layout.update({f"sensors/{name}": () for name in problem.sensor_names})
+    if problem.n_field:
+        layout["field/q"] = (problem.n_field,)
     if problem.store_contact:
         for name, s in problem.contact_slices.items():
             n = s.stop - s.start
             layout[f"contact/{name}/gap"] = (n,)
             layout[f"contact/{name}/pressure"] = (n,)
-    layout.update({f"energy/{term}": () for term in ENERGY_TERMS})
+    if problem.store_energy:
+        layout.update({f"energy/{term}": () for term in ENERGY_TERMS})
     return layout
 
 
@@ -387,11 +418,14 @@ def _rows(problem, out, n):
     t, s, g, p, e = (x[:n] for x in out)
     rows = {"time": t}
     rows.update({f"sensors/{name}": s[:, k] for k, name in enumerate(problem.sensor_names)})
+    if problem.n_field:
+        rows["field/q"] = s[:, len(problem.sensor_names):]
     if problem.store_contact:
         for name, sl in problem.contact_slices.items():
             rows[f"contact/{name}/gap"] = g[:, sl]
             rows[f"contact/{name}/pressure"] = p[:, sl]
-    rows.update({f"energy/{term}": e[:, k] for k, term in enumerate(ENERGY_TERMS)})
+    if problem.store_energy:
+        rows.update({f"energy/{term}": e[:, k] for k, term in enumerate(ENERGY_TERMS)})
     return rows
 
 
@@ -476,7 +510,7 @@ def run(case, path, resume=False, progress=None):
         step = int(saved["step"][0])
     else:
         history = History.create(path, meta, _layout(problem), overwrite=True,
-                                 expected_rows=n_total // every + 1)
+                                 expected_rows=n_total // every + 1, geometry=problem.geometry)
         first = _outputs(problem, 1)
         first[0][0] = problem.state[3, 0]
         first[1][0] = problem.sensors @ problem.state[0]

@@ -317,7 +317,11 @@ OUTPUT = Table("outputs", {
     "every": Value("int", "store one step in this many", 1, minimum=1),
     "sensors": Value("bool", "store the sensors' histories", True),
     "contact": Value("bool", "store gap and pressure at the contact points", False),
-    "energy": Value("bool", "store the energy balance terms", True),
+    "energy": Value("bool", "store the energy balance terms (always computed: the run "
+                    "checks the balance)", True),
+    "field": Value("bool", "store the state q every `every` steps (reduced coordinates, or "
+                   "the free dofs of the full model) so `transient export` can write the "
+                   "displacement field", False),
 }, optional=True)
 
 INITIAL = Table("initial velocity of a part (impact)", {
