@@ -66,6 +66,13 @@ def load(path, overrides=()):
         raise CaseError(path, "", "file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise CaseError(path, "", f"cannot read: {exc}") from None
+    return parse(text, path, overrides)
+
+
+def parse(text, path, overrides=()):
+    """A case from its TOML text, such as the copy a history keeps; path locates the files it
+    names (meshes) and is the one errors name."""
+    path = Path(path)
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -42,12 +42,26 @@ def _parser():
     p.add_argument("--pair", help="contact pair to report (default: the first)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     _plot_parser(sub)
+    p = sub.add_parser("export", help="a history as time series for ParaView: the contact "
+                       "points of each pair (gap, pressure) and, if output.field was stored, "
+                       "the displacement on the mesh")
+    p.add_argument("file", help="HDF5 file written by transient run")
+    p.add_argument("--out", metavar="DIR", help="directory of the files (default: next to the "
+                   "history, <name>_export)")
+    p.add_argument("--format", choices=("xdmf", "vtu"), default="xdmf", help="xdmf: one "
+                   ".xdmf (+ .h5) per series; vtu: one .vtu per row and a .pvd collection "
+                   "(default xdmf)")
+    p.add_argument("--every", type=int, default=1, metavar="K", help="export one stored row "
+                   "in K, and the last one (default 1)")
+    p.epilog = ("The displacement field rebuilds the model from the case text kept in the "
+                "history (and, for a reduced run, its reduced basis): this takes as long as "
+                "the setup of the run.")
     return parser
 
 
 def _plot_parser(sub):
     """`transient plot KIND ...`: one sub-subcommand per kind of picture."""
-    kinds = sub.add_parser("plot", help="pictures (PNG) of a case").add_subparsers(
+    kinds = sub.add_parser("plot", help="pictures (PNG) of a case or a history").add_subparsers(
         dest="kind", required=True)
     p = kinds.add_parser("compat", help="compatibility of each contact pair: shapes, singular "
                          "values and C(eps), raw and regularized gap observation")
@@ -56,10 +70,130 @@ def _plot_parser(sub):
     p.add_argument("--pair", metavar="NAME", help="only this contact pair")
     p.add_argument("--shapes", metavar="I,J,...", help="shape numbers to draw, from 1 by "
                    "increasing incompatibility (default: the first, the last kept, two beyond)")
+    series = ("scalar series to draw: full names (sensors/tip, energy/kinetic) or groups "
+              "(sensors, energy); default: every sensor")
+    p = kinds.add_parser("history", help="time histories of a history's sensors (or energy "
+                         "terms), time in ms")
+    _history_args(p, "history")
+    p.add_argument("--series", nargs="+", metavar="NAME", help=series)
+    p = kinds.add_parser("spectrum", help="amplitude spectra (Hann window, one-sided, log "
+                         "amplitude) of a history's sensors, frequency in kHz")
+    _history_args(p, "spectrum")
+    p.add_argument("--series", nargs="+", metavar="NAME", help=series)
+    p.add_argument("--fmax", type=float, metavar="HZ", help="highest frequency drawn [Hz] "
+                   "(default: half the sample rate)")
+    p = kinds.add_parser("frf", help="transfer function between two series of a history: "
+                         "H1 = Pxy / Pxx from Welch averages, magnitude, phase and coherence")
+    _history_args(p, "frf")
+    p.add_argument("--input", required=True, metavar="NAME", help="input series, e.g. "
+                   "sensors/tip")
+    p.add_argument("--output", required=True, metavar="NAME", help="output series, e.g. "
+                   "sensors/tail")
+    p.add_argument("--segment", type=int, metavar="SAMPLES", help="samples per Welch segment "
+                   "(default: the largest power of two up to a quarter of the rows)")
+    p.add_argument("--fmax", type=float, metavar="HZ", help="highest frequency drawn [Hz] "
+                   "(default: half the sample rate)")
+    p = kinds.add_parser("pressure", help="contact pressure maps on Gamma, one panel per "
+                         "history side by side with one colour scale (e.g. fine, centre and "
+                         "regularized rules)")
+    p.add_argument("file", nargs="+", help="HDF5 files written by transient run with "
+                   "output.contact = true")
+    p.add_argument("--pair", metavar="NAME", help="contact pair (default: the first stored)")
+    p.add_argument("--time", type=float, metavar="T", help="time [s]: each panel shows its "
+                   "stored row nearest to it (default: the time of the largest total contact "
+                   "force in the first file)")
+    p.add_argument("--labels", nargs="+", metavar="TEXT", help="one title per file (default: "
+                   "the file names)")
+    p.add_argument("-o", "--png", metavar="PNG", help="picture to write (default: next to "
+                   "the first file, <name>_pressure.png)")
+
+
+def _history_args(p, kind):
+    p.add_argument("file", help="HDF5 file written by transient run")
+    p.add_argument("-o", "--png", metavar="PNG", help="picture to write (default: next to "
+                   f"the history, <name>_{kind}.png)")
 
 
 def cmd_plot(args):
-    return {"compat": _plot_compat}[args.kind](args)
+    return {"compat": _plot_compat, "history": _plot_history, "spectrum": _plot_spectrum,
+            "frf": _plot_frf, "pressure": _plot_pressure}[args.kind](args)
+
+
+def _plot_history(args):
+    from .history_plots import history_figure, select_series
+    from .stored import open_history
+    stored = open_history(args.file)
+    names = select_series(stored, args.series)
+    path = _png_path(args, stored.path)
+    _save(lambda: history_figure(stored, names, path), path)
+    return 0
+
+
+def _plot_spectrum(args):
+    from .history_plots import select_series, spectrum_figure
+    from .stored import open_history
+    stored = open_history(args.file)
+    _check_fmax(stored, args.fmax)
+    names = select_series(stored, args.series)
+    path = _png_path(args, stored.path)
+    _save(lambda: spectrum_figure(stored, names, path, args.fmax), path)
+    return 0
+
+
+def _plot_frf(args):
+    from .history_plots import MIN_SEGMENT, frf_figure, one_series
+    from .stored import open_history
+    stored = open_history(args.file)
+    _check_fmax(stored, args.fmax)
+    source = one_series(stored, args.input, "--input")
+    response = one_series(stored, args.output, "--output")
+    if args.segment is not None and args.segment < MIN_SEGMENT:
+        raise CaseError(stored.path, "--segment", f"expected at least {MIN_SEGMENT} samples, "
+                        f"got {args.segment}")
+    path = _png_path(args, stored.path)
+    _save(lambda: frf_figure(stored, source, response, path, args.segment, args.fmax), path)
+    return 0
+
+
+def _check_fmax(stored, fmax):
+    if fmax is not None and not fmax > 0:
+        raise CaseError(stored.path, "--fmax", f"expected a frequency > 0 [Hz], got {fmax}")
+
+
+def _plot_pressure(args):
+    from .history_plots import pressure_figure
+    from .stored import open_history
+    histories = [open_history(f) for f in args.file]
+    if args.labels is not None and len(args.labels) != len(histories):
+        raise CaseError(histories[0].path, "--labels", f"expected one label per file "
+                        f"({len(histories)}), got {len(args.labels)}")
+    path = _png_path(args, histories[0].path)
+    _save(lambda: pressure_figure(histories, args.pair, path, args.time, args.labels), path)
+    return 0
+
+
+def _png_path(args, history):
+    from pathlib import Path
+    return Path(args.png) if args.png else history.with_name(
+        f"{history.stem}_{args.kind}.png")
+
+
+def _save(draw, path):
+    try:
+        draw()
+    except OSError as exc:
+        raise CaseError(path, "-o", f"cannot write the picture: {exc}") from None
+    print(path)
+
+
+def cmd_export(args):
+    from .export import export
+    try:
+        paths = export(args.file, args.out, args.format, args.every)
+    except OSError as exc:
+        raise CaseError(args.out or args.file, "--out", f"cannot write: {exc}") from None
+    print("\n".join(str(p) for p in paths))
+    return 0
 
 
 def _plot_compat(args):
@@ -245,7 +379,8 @@ def cmd_info(args):
     return 0
 
 
-COMMANDS = {"run": cmd_run, "info": cmd_info, "modes": cmd_modes, "compat": cmd_compat, "plot": cmd_plot}
+COMMANDS = {"run": cmd_run, "info": cmd_info, "modes": cmd_modes, "compat": cmd_compat,
+            "plot": cmd_plot, "export": cmd_export}
 
 
 def main(argv=None):

@@ -20,14 +20,19 @@ class Basis:
     n_modes: int             # normal modes below fmax in the basis
     n_static: int            # static vectors added (before removing dependent directions)
     timings: dict
+    n_contact_shapes: int = 0      # contact shapes kept (reduction.statics_tolerance)
+    contact_flexibility: np.ndarray = None   # mu of contact_shapes, descending
 
 
-def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz):
+def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None, tol=0.0):
     """Basis of the modes of (K_lin, M) up to fmax [Hz] and the responses to static loads.
 
     statics (ndof, s): load vectors (contact point loads C_i^T, load patterns, and K_lin u for a
     displacement u to represent, such as the preload). solve applies (K_lin - sigma M)^-1 on the
     free dofs, sigma = -(2 pi shift_hz)^2: the small shift keeps floating parts solvable.
+
+    contact (C, stiffness): when given, the first C.shape[0] statics are the contact point
+    loads C^T, and only the contact shapes that matter are kept (`contact_shapes`, tol).
     """
     t0 = time.perf_counter()
     free = np.flatnonzero(~fixed)
@@ -35,9 +40,18 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz):
     t_modes = time.perf_counter() - t0
     Phi = modes.shapes[free]
     X = Phi
+    mu = np.zeros(0)
+    n_shapes = 0
     if statics.shape[1]:
-        S = solve(np.asfortranarray(statics[free]))
-        X = np.hstack([Phi, np.atleast_2d(S.T).T])
+        S = np.atleast_2d(solve(np.asfortranarray(statics[free])).T).T
+        if contact is not None and contact[0].shape[0]:
+            C, stiffness = contact
+            m = C.shape[0]
+            omega2_modes = (2 * np.pi * modes.frequencies) ** 2
+            shapes, mu = contact_shapes(C[:, free], stiffness, S[:, :m], Phi, omega2_modes, tol)
+            S = np.hstack([shapes, S[:, m:]])
+            n_shapes = shapes.shape[1]
+        X = np.hstack([Phi, S])
     t_static = time.perf_counter() - t0 - t_modes
     Mf = M[free][:, free]
     Kf = K_lin[free][:, free]
@@ -55,7 +69,31 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz):
     T[free] = X @ W
     timings = {"modes": t_modes, "statics": t_static,
                "orthonormalization": time.perf_counter() - t0 - t_modes - t_static}
-    return Basis(T, np.maximum(omega2, 0.0), len(modes.frequencies), statics.shape[1], timings)
+    return Basis(T, np.maximum(omega2, 0.0), len(modes.frequencies), statics.shape[1], timings,
+                 n_shapes, mu)
+
+
+def contact_shapes(C, stiffness, S, Phi, omega2, tol):
+    """The contact static shapes that change the contact stiffness by tol or more.
+
+    S = K^-1 C^T (n, m) are the responses to the m contact point loads; beyond the modes Phi
+    (M-normalized, eigenvalues omega2) their flexibility at the points is
+    F = C S - (C Phi) diag(omega2)^-1 (C Phi)^T. With D = diag(stiffness) the contact law's
+    stiffness at each point (w k_t), the eigenvalues mu_i of D^1/2 F D^1/2 are the structural
+    flexibility of each contact shape relative to the law's: a shape with mu_i < tol changes
+    the stiffness of the two in series by less than tol, so it is dropped (tol = 0 keeps all).
+
+    Returns (shapes (n, r): S D^1/2 u_i for the kept eigenvectors u_i, mu (m,) descending).
+    """
+    d = np.sqrt(np.maximum(stiffness, 0.0))
+    CPhi = np.asarray(C @ Phi)
+    F = np.asarray(C @ S) - (CPhi / np.maximum(omega2, 1e-300)) @ CPhi.T
+    mu, U = np.linalg.eigh(0.5 * (F + F.T) * d[:, None] * d[None, :])
+    mu, U = mu[::-1], U[:, ::-1]
+    if tol <= 0:
+        return S, mu
+    kept = mu >= tol
+    return S @ (d[:, None] * U[:, kept]), mu
 
 
 def exponential_coefficients(omega2, damp, dt):
@@ -73,3 +111,4 @@ def exponential_coefficients(omega2, damp, dt):
         X = sla.expm(aug * dt)
         out[k] = X[0, 0], X[0, 1], X[1, 0], X[1, 1], X[0, 2], X[1, 2], X[0, 3], X[1, 3]
     return out
+

@@ -185,8 +185,11 @@ def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages
         loads += [np.stack(patterns, axis=1)] if patterns else []
     loads.append(K_lin @ preload.u[:, None])          # its response is the preload itself
     statics = np.hstack(loads)
+    kt_crit = _critical_kt(contacts, preload)
+    contact = (contacts.C, contacts.weights * kt_crit) if reduction["statics"] else None
     basis = _timed(stages, "reduction", reduced_basis, K_lin, M, model.fixed,
-                   reduction["fmax"], statics, solve, SHIFT_HZ)
+                   reduction["fmax"], statics, solve, SHIFT_HZ, contact,
+                   reduction["statics_tolerance"])
     T = basis.T
     MT = M @ T
     q0 = MT.T @ preload.u
@@ -205,7 +208,6 @@ def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages
         S = np.vstack([S, np.eye(T.shape[1])])
     state = np.zeros((5, len(omega2)))
     state[0], state[1] = q0, v
-    kt_crit = _critical_kt(contacts, preload)
     dt_crit = _reduced_critical_step(omega2, Cr, contacts.weights * (kt_crit - kt0))
     blocks = _blocks(contacts.n_points)
     args = (omega2, damp, Cr, contacts.gap0, contacts.weights, kt0, contacts.code,
@@ -216,6 +218,7 @@ def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages
     _critical_data(problem, preload, kt_crit, np.einsum("ij,ij->i", Cr, Cr))
     problem.T = T
     problem.meta.update({"reduced_dofs": len(omega2), "normal_modes": basis.n_modes,
+                         "contact_shapes": basis.n_contact_shapes,
                          "basis_timings": basis.timings,
                          "basis_projection_error": float(
                              np.linalg.norm(T @ q0 - preload.u)

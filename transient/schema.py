@@ -294,6 +294,10 @@ SOLVER = Table("solution settings", {
                       16000.0, "Hz", open_min=0.0),
         "statics": Value("bool", "add static responses to the contact point loads and the load "
                          "patterns", True),
+        "statics_tolerance": Value("float", "keep the contact static shapes whose structural "
+                                   "flexibility beyond the modes is at least this fraction of "
+                                   "the contact law's at the preload (0: keep one per point)",
+                                   1e-3, minimum=0.0),
     }, optional=True),
     "newton": Table("Newton iterations of the preload and of the implicit scheme", {
         "tolerance": Value("float", "relative residual of the Newton iterations", 1e-10,

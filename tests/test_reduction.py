@@ -1,0 +1,47 @@
+"""Reduced basis: the contact shapes kept reproduce the contact flexibility to the tolerance."""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from transient.linsolve import factorize
+from transient.reduction import reduced_basis
+
+
+def chain(n=300):
+    """A clamped string of springs and masses, with contact points on its last 40 dofs."""
+    k = np.full(n, 1e6)
+    K = sp.diags([2 * k, -k[:-1], -k[:-1]], [0, 1, -1]).tolil()
+    K[n - 1, n - 1] = k[0]
+    M = sp.diags(np.full(n, 1e-3)).tocsr()
+    rng = np.random.default_rng(0)
+    m = 12
+    rows = np.repeat(np.arange(m), 2)
+    cols = (n - 40 + rng.integers(0, 40, 2 * m))
+    C = sp.csr_matrix((rng.uniform(0.2, 1.0, 2 * m), (rows, cols)), shape=(m, n))
+    return K.tocsr(), M, C
+
+
+@pytest.mark.parametrize("tol", [0.0, 1e-3, 1e-1])
+def test_contact_flexibility_kept_to_the_tolerance(tol):
+    K, M, C = chain()
+    stiffness = np.geomspace(1e4, 1e7, C.shape[0])       # w k_t of each point
+    fixed = np.zeros(K.shape[0], bool)
+    solve = factorize(K)
+    basis = reduced_basis(K, M, fixed, 50.0, np.asarray(C.T.todense()), solve, 0.0,
+                          (C, stiffness), tol)
+    d = np.sqrt(stiffness)
+    F = np.asarray(C @ solve(np.asarray(C.T.todense())))
+    Cr = np.asarray(C @ basis.T)
+    F_red = (Cr / basis.omega2) @ Cr.T
+    # the flexibility dropped, relative to the law's: at most tol, and positive (a Galerkin
+    # basis is stiffer than the structure)
+    drop = np.linalg.eigvalsh((F - F_red) * d[:, None] * d[None, :])
+    assert drop.min() > -1e-9
+    assert drop.max() <= max(tol, 1e-9)
+    mu = basis.contact_flexibility
+    if tol == 0.0:
+        assert basis.n_contact_shapes == C.shape[0]
+    else:
+        assert basis.n_contact_shapes == np.sum(mu >= tol)
+    if tol == 1e-1:
+        assert basis.n_contact_shapes < C.shape[0]
