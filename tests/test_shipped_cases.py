@@ -27,8 +27,10 @@ def total_mass(model):
 
 def test_every_case_is_tested():
     # bar_impact.toml: tests/test_transient.py::test_bar_on_a_rigid_wall (contact duration 2 L / c)
-    assert sorted(p.name for p in CASES.glob("*.toml")) == ["bar_impact.toml", "drilled_cube.toml",
-                                                            "pad_disc.toml"]
+    # pad_disc_long.toml: test_pad_disc_schemes_agree_below_5khz (its scheme settings) and
+    # tools/bench_long.py (the whole second)
+    assert sorted(p.name for p in CASES.glob("*.toml")) == [
+        "bar_impact.toml", "drilled_cube.toml", "pad_disc.toml", "pad_disc_long.toml"]
 
 
 def test_drilled_cube_mass_and_modes(capsys):
@@ -86,3 +88,40 @@ def test_pad_disc_transient_preload_and_energy_over_1e5_steps(tmp_path, capsys):
     p = case["parts"]["pad"]["mesh"]
     sector = 0.5 * (p["outer_radius"] ** 2 - p["inner_radius"] ** 2) * np.radians(p["angle"])
     assert force == pytest.approx(1.0e6 * sector, rel=1e-4)     # quadratic arcs
+
+
+def test_pad_disc_schemes_agree_below_5khz():
+    # a 0.4 ms half-sine tap: a response mostly below 5 kHz. One setup, four integrations over
+    # 5 ms: central differences at 0.9 times the critical step, Newmark at the same step, and
+    # the exponential scheme at 8 times that step, with the corrector of pad_disc and with the
+    # one-pass corrector of pad_disc_long
+    from scipy.signal import butter, sosfiltfilt
+    from transient.run import choose_dt, prepare, simulate
+    long = load(CASES / "pad_disc_long.toml")
+    base = ["loads.tap.signal.duration=4e-4", "output.contact=false"]
+    cases = {scheme: load(CASES / "pad_disc.toml", base + [f"solver.scheme={scheme}"])
+             for scheme in ("explicit", "implicit", "exponential")}
+    cases["one pass"] = load(CASES / "pad_disc.toml", base + [
+        f"solver.{key}={long['solver'][key]!r}".replace("'", '"')
+        for key in ("scheme", "corrections", "corrector")])
+    problem = prepare(cases["explicit"])
+    # pad_disc_long: 1 s at 20 steps per period of 16 kHz
+    assert long["solver"]["t_end"] == 1.0
+    assert choose_dt(long, problem) == pytest.approx(1.0 / (20 * 16000))
+    dt = 0.9 * problem.dt_critical
+    n = int(5e-3 / dt) // 8 * 8
+    runs = {}
+    for name, case in cases.items():
+        k = 8 if case["solver"]["scheme"] == "exponential" else 1
+        series, status, _ = simulate(case, problem, k * dt, n // k)
+        assert status == "complete"
+        runs[name] = series
+    sos = butter(4, 5000, fs=1 / dt, output="sos")
+    for sensor in ("sensors/disc_rim", "sensors/pad_back"):
+        ref = runs["explicit"][sensor]
+        low = sosfiltfilt(sos, ref - ref[0])
+        other = sosfiltfilt(sos, runs["implicit"][sensor] - ref[0])
+        assert np.sqrt(np.mean((other - low) ** 2) / np.mean(low ** 2)) < 0.01
+        for name in ("exponential", "one pass"):
+            x, y = ref[::8], runs[name][sensor]
+            assert np.sqrt(np.mean((x - y) ** 2) / np.mean((x - x[0]) ** 2)) < 0.01

@@ -161,14 +161,15 @@ def _check_fmax(stored, fmax):
 
 
 def _plot_pressure(args):
-    from .history_plots import pressure_figure
+    from .history_plots import pressure_figure, pressure_panels
     from .stored import open_history
     histories = [open_history(f) for f in args.file]
     if args.labels is not None and len(args.labels) != len(histories):
         raise CaseError(histories[0].path, "--labels", f"expected one label per file "
                         f"({len(histories)}), got {len(args.labels)}")
     path = _png_path(args, histories[0].path)
-    _save(lambda: pressure_figure(histories, args.pair, path, args.time, args.labels), path)
+    panels = pressure_panels(histories, args.pair, args.time, args.labels)
+    _save(lambda: pressure_figure(panels, path), path)
     return 0
 
 

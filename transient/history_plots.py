@@ -2,14 +2,15 @@
 two sensors (the paper's figure 11) and contact pressure maps on Gamma (figure 10).
 
 The numbers drawn come from functions that draw nothing (`amplitude_spectrum`,
-`transfer_function`, `contact_force`, `plane_frame`), so tests check them directly. Figures are
-matplotlib `Figure`s saved through the Agg canvas, with no pyplot state.
+`transfer_function`, `contact_force`, `plane_frame`, `pressure_panels`), so tests check them
+directly. Figures are matplotlib `Figure`s saved through the Agg canvas, with no pyplot state.
 """
 import numpy as np
 
 UNITS = {"sensors": "m", "energy": "J"}      # unit of the series of each group
 UNIFORM = 1e-6          # relative spread of the time differences still taken as one step
 MIN_SEGMENT = 16        # fewest samples of a Welch segment for a transfer function
+MIN_DB_SPAN = 20.0      # smallest range of the magnitude axis of a transfer function [dB]
 CONTOUR_POINTS = 100    # from this many contact points a map is filled contours, not markers
 LONG_EDGE = 4.0         # triangles with an edge this many times the median edge are not drawn
 FORCE_CHUNK = 4096      # rows of pressure read at a time for the total force
@@ -219,7 +220,7 @@ def history_figure(stored, names, path):
     t = stored.time()
     groups = _groups(names)
     fig = _figure(10, 1.2 + 2.6 * len(groups))
-    axes = np.atleast_1d(fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0])
+    axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
     for ax, (group, members) in zip(axes, groups.items()):
         for name in members:
             ax.plot(t * 1e3, stored.read(name), lw=1, label=name.split("/", 1)[1])
@@ -236,19 +237,21 @@ def spectrum_figure(stored, names, path, fmax=None):
     kHz, one panel per group."""
     t = stored.time()
     dt = sample_step(stored, t)
+    top = min(fmax or np.inf, 0.5 / dt)        # at most the Nyquist frequency [Hz]
     groups = _groups(names)
     fig = _figure(10, 1.2 + 2.8 * len(groups))
-    axes = np.atleast_1d(fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0])
+    axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
     for ax, (group, members) in zip(axes, groups.items()):
         for name in members:
             f, a = amplitude_spectrum(stored.read(name), dt)
+            shown = f <= top       # so that the amplitude axis fits what is drawn
             # exact zeros (a series that never moves) cannot be drawn on a log scale
-            ax.semilogy(f / 1e3, np.maximum(a, 1e-300), lw=1, label=name.split("/", 1)[1])
+            ax.semilogy(f[shown] / 1e3, np.maximum(a[shown], 1e-300), lw=1,
+                        label=name.split("/", 1)[1])
         ax.set_ylabel(f"amplitude of {_label(group)}")
         ax.grid(alpha=0.3, which="both")
         ax.legend(loc="best", fontsize=8)
-    nyquist = 0.5 / dt
-    axes[-1].set_xlim(0, min(fmax or nyquist, nyquist) / 1e3)
+    axes[-1].set_xlim(0, top / 1e3)
     axes[-1].set_xlabel("frequency [kHz]")
     fig.suptitle(f"{_title(stored)}: amplitude spectra ({len(t)} samples of "
                  f"{dt * 1e6:.4g} us, Hann window, resolution {1e-3 / (len(t) * dt):.3g} kHz)")
@@ -274,18 +277,25 @@ def frf_figure(stored, source, response, path, segment=None, fmax=None):
                            f"{segment} samples (use --segment <= {n}, or run longer)")
     f, H, coherence = transfer_function(stored.read(source), stored.read(response), dt, segment)
     averages = 1 + (n - segment) // (segment - segment // 2)
-    f = f / 1e3
+    top = min(fmax or np.inf, 0.5 / dt)        # at most the Nyquist frequency [Hz]
+    shown = f <= top                           # so that each axis fits what is drawn
+    f, H, coherence = f[shown] / 1e3, H[shown], coherence[shown]
     fig = _figure(10, 8)
     ax, bx, cx = fig.subplots(3, 1, sharex=True, height_ratios=(2, 1, 1))
     with np.errstate(divide="ignore"):
-        ax.plot(f, 20 * np.log10(np.abs(H)), lw=1, color="tab:blue")
+        db = 20 * np.log10(np.abs(H))
+    ax.plot(f, db, lw=1, color="tab:blue")
+    finite = db[np.isfinite(db)]
+    if len(finite) and np.ptp(finite) < MIN_DB_SPAN:
+        # a flat |H| (a sensor against itself) would show round-off across the whole axis
+        middle = 0.5 * (finite.min() + finite.max())
+        ax.set_ylim(middle - MIN_DB_SPAN / 2, middle + MIN_DB_SPAN / 2)
     ax.set_ylabel(f"|H| [dB re 1{_unit_ratio(source, response)}]")
     bx.plot(f, np.degrees(np.angle(H)), lw=1, color="tab:blue")
     bx.set(ylabel="phase [deg]", ylim=(-185, 185), yticks=(-180, -90, 0, 90, 180))
     cx.plot(f, coherence, lw=1, color="tab:green")
     cx.set(ylabel="coherence", ylim=(-0.02, 1.05), xlabel="frequency [kHz]")
-    nyquist = 0.5 / dt / 1e3
-    cx.set_xlim(0, min(fmax / 1e3 if fmax else nyquist, nyquist))
+    cx.set_xlim(0, top / 1e3)
     for a in (ax, bx, cx):
         a.grid(alpha=0.3)
     fig.suptitle(f"{_title(stored)}: H1 from {source} to {response} ({averages} Hann segments "
@@ -325,26 +335,27 @@ def rule_text(description):
     return text
 
 
-def pressure_figure(histories, pair, path, time=None, labels=None):
-    """Contact pressure on Gamma at one time, one panel per history side by side with one
-    colour scale (the paper's figure 10: fine, centre and regularized rules).
+def pressure_panels(histories, pair=None, time=None, labels=None):
+    """The data of the pressure maps: one panel per history, at one time.
 
     Parameters
     ----------
     histories : list of stored.Stored
-    pair : str or None
+    pair : str, optional
         Contact pair (default the first of the first history).
-    path : Path
-        PNG to write.
     time : float, optional
         Time [s]: each panel shows its stored row nearest to it. Default: the time of the
         largest total contact force of the first history.
     labels : list of str, optional
         Panel names (default the file names).
+
+    Returns
+    -------
+    list of dict
+        Each with points (m, 3) [m], normals (m, 3), weights (m,) [m^2], pressure (m,) [Pa],
+        time [s] and force [N] (the total) of the row shown, pair (its name), rule (a text
+        from the history's `pairs`) and label.
     """
-    from matplotlib.cm import ScalarMappable
-    from matplotlib.colors import Normalize
-    from matplotlib.tri import Triangulation
     pair = contact_pair(histories[0], pair)
     panels = []
     for k, stored in enumerate(histories):
@@ -356,37 +367,43 @@ def pressure_figure(histories, pair, path, time=None, labels=None):
         row = int(np.argmin(np.abs(t - time)))
         with stored.open() as f:
             pressure = f[f"contact/{pair}/pressure"][row]
-        panels.append({"points": stored.geometry(f"contact/{pair}/points"),
-                       "normals": stored.geometry(f"contact/{pair}/normals"),
-                       "weights": stored.geometry(f"contact/{pair}/weights"),
-                       "pressure": pressure / 1e6, "time": float(t[row]),
-                       "force": float(force[row]),
+        geometry = {key: stored.geometry(f"contact/{pair}/{key}")
+                    for key in ("points", "normals", "weights")}
+        panels.append({**geometry, "pressure": pressure, "time": float(t[row]),
+                       "force": float(force[row]), "pair": pair,
                        "rule": rule_text(stored.pairs().get(pair, {})),
                        "label": labels[k] if labels else stored.path.stem})
+    return panels
+
+
+def pressure_figure(panels, path):
+    """Contact pressure maps side by side with one colour scale (the paper's figure 10: fine,
+    centre and regularized rules), from `pressure_panels`; Gamma seen from surface 1, in the
+    best-fit plane of the points of all panels."""
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+    from matplotlib.tri import Triangulation
     centre, axes = plane_frame(np.vstack([p["points"] for p in panels]),
                                np.vstack([p["normals"] for p in panels]))
-    for p in panels:
-        p["xy"] = (p["points"] - centre) @ axes.T * 1e3
-    low = min(0.0, min(p["pressure"].min() for p in panels))
-    high = max(max(p["pressure"].max() for p in panels), low + 1e-12)
-    norm = Normalize(low, high)
-    levels = np.linspace(low, high, 21)
-    xy = np.vstack([p["xy"] for p in panels])
+    xy = [(p["points"] - centre) @ axes.T * 1e3 for p in panels]
+    mpa = [p["pressure"] / 1e6 for p in panels]
+    low = min(0.0, min(p.min() for p in mpa))
+    norm = Normalize(low, max(max(p.max() for p in mpa), low + 1e-12))
+    levels = np.linspace(norm.vmin, norm.vmax, 21)
+    every = np.vstack(xy)
     # room for the marker of the heaviest point past the outermost ones
-    pad = 0.5 * np.sqrt(max(p["weights"].max() for p in panels)) * 1e3 + 0.02 * np.ptp(xy)
-    fig = _figure(0.8 + 4.4 * len(panels), 5.0)
-    ax_list = np.atleast_1d(fig.subplots(1, len(panels), sharex=True, sharey=True,
-                                         squeeze=False)[0])
+    pad = 0.5 * np.sqrt(max(p["weights"].max() for p in panels)) * 1e3 + 0.02 * np.ptp(every)
+    fig = _figure(max(6.0, 0.8 + 4.4 * len(panels)), 5.2)
+    ax_list = fig.subplots(1, len(panels), sharex=True, sharey=True, squeeze=False)[0]
     markers = []
-    for ax, p in zip(ax_list, panels):
-        x, y = p["xy"].T
+    for ax, p, (x, y), pressure in zip(ax_list, panels, (c.T for c in xy), mpa):
         if len(x) >= CONTOUR_POINTS:
             tri = Triangulation(x, y)
             tri.set_mask(_long_triangles(tri))
-            ax.tricontourf(tri, p["pressure"], levels=levels, cmap=CMAP, norm=norm)
+            ax.tricontourf(tri, pressure, levels=levels, cmap=CMAP, norm=norm)
             ax.plot(x, y, ",", color="black", alpha=0.4)
         else:
-            markers.append((ax, ax.scatter(x, y, c=p["pressure"], cmap=CMAP, norm=norm,
+            markers.append((ax, ax.scatter(x, y, c=pressure, cmap=CMAP, norm=norm,
                                            edgecolors="black", linewidths=0.3),
                             p["weights"]))
         ax.set_title(f"{p['label']}\n{p['rule']}, {len(x)} points\n"
@@ -395,12 +412,12 @@ def pressure_figure(histories, pair, path, time=None, labels=None):
         ax.set_aspect("equal")
         ax.set_xlabel(f"along ({_direction(axes[0])}) [mm]")
     ax_list[0].set_ylabel(f"along ({_direction(axes[1])}) [mm]")
-    ax_list[0].set_xlim(xy[:, 0].min() - pad, xy[:, 0].max() + pad)
-    ax_list[0].set_ylim(xy[:, 1].min() - pad, xy[:, 1].max() + pad)
+    ax_list[0].set_xlim(every[:, 0].min() - pad, every[:, 0].max() + pad)
+    ax_list[0].set_ylim(every[:, 1].min() - pad, every[:, 1].max() + pad)
     fig.colorbar(ScalarMappable(norm, CMAP), ax=list(ax_list), label="contact pressure [MPa]",
                  shrink=0.9)
-    fig.suptitle(f"contact pressure on pair '{pair}', seen from surface 1"
-                 + (f" (marker area {MARKER_AREA:g} x the point's weight)" if markers else ""))
+    fig.suptitle(f"contact pressure on pair '{panels[0]['pair']}', seen from surface 1"
+                 + (f"\nmarker area: {MARKER_AREA:g} x the point's weight" if markers else ""))
     if markers:
         fig.draw_without_rendering()
         for ax, scatter, w in markers:

@@ -5,9 +5,10 @@ linearization, reduction, time step, integration. The kernels integrate chunks o
 chunks Python appends the outputs to the history, writes a checkpoint, checks the energy balance
 and the critical step, and moves the progress bar.
 """
-import json
+import copy
 import sys
 import time
+from pathlib import Path
 from dataclasses import dataclass, field
 
 import h5py
@@ -52,6 +53,7 @@ class Problem:
     stages: dict = field(default_factory=dict)
     meta: dict = field(default_factory=dict)
     initial_energy: np.ndarray = None
+    initial_row: tuple = None         # the outputs at the initial state (the history's row 0)
     gmin: np.ndarray = None           # (m,) smallest gap of each point so far
     kt_checked: np.ndarray = None     # (m,) contact tangents the critical step accounts for
     crit_rows: np.ndarray = None      # (m,) |C_i M^-1/2|^2 of each contact row
@@ -325,6 +327,34 @@ def _full_critical_step(K, mass):
     return 2.0 / np.sqrt(1.01 * lam)
 
 
+def simulate(case, problem, dt, n_steps, every=1):
+    """Integrate a prepared problem in memory with the case's scheme (no history file, no
+    checks between chunks): for tests and benchmarks that compare schemes on one setup.
+
+    Returns (series, status, kernel seconds): series maps "time", "sensors/<name>" and
+    "energy/<term>" to arrays with one row per `every` steps, the initial state first.
+    """
+    problem = copy.copy(problem)
+    problem.state, problem.acc = problem.state.copy(), problem.acc.copy()
+    problem.gmin = problem.gmin.copy()
+    if problem.reduced:
+        problem.args = problem.args[:-1] + (np.array([0, problem.n_points], np.int64),)
+    kernel, args = scheme_kernel(case, problem, dt)
+    out = _outputs(problem, n_steps // every)
+    t0 = time.perf_counter()
+    code, done = kernel(problem.state, problem.acc, n_steps, every, dt, *args, *out)
+    seconds = time.perf_counter() - t0
+    rows = [np.concatenate([first[:1], x[:done // every]])
+            for first, x in zip(problem.initial_row, out)]
+    series = {"time": rows[0]}
+    series.update({f"sensors/{name}": rows[1][:, k]
+                   for k, name in enumerate(problem.sensor_names)})
+    series.update({f"energy/{term}": rows[4][:, k] for k, term in enumerate(ENERGY_TERMS)})
+    status = {stepping.OK: "complete", stepping.NOT_FINITE: "not finite",
+              stepping.NO_CONVERGENCE: "no convergence"}[code]
+    return series, status, seconds
+
+
 def kernel_of(problem):
     return stepping.explicit_reduced if problem.reduced else stepping.explicit_full
 
@@ -350,7 +380,7 @@ def scheme_kernel(case, problem, dt):
     coef = exponential_coefficients(omega2, damp, dt)
     return stepping.exponential_reduced, (coef, damp, omega2, Cr, g0, w, kt0, code, params, P,
                                           sig, S, blocks, solver["corrections"],
-                                          problem.state[4])
+                                          solver["corrector"] == "propagated", problem.state[4])
 
 
 def _newmark_full_args(case, problem, dt):
@@ -393,6 +423,7 @@ def _initial_acceleration(problem):
         # the forces at t = 0: the first extrapolation then takes them constant
         problem.state[4] = state[2] + omega2 * state[0] + damp * state[1]
     problem.initial_energy = out[-1][0].copy()
+    problem.initial_row = out
 
 
 def _outputs(problem, rows):
@@ -500,7 +531,7 @@ def run(case, path, resume=False, progress=None):
         blocks = saved["blocks"] if resume else _fastest_blocks(case, problem, dt)
         problem.args = problem.args[:-1] + (np.asarray(blocks, np.int64),)
     kernel, args = scheme_kernel(case, problem, dt)
-    meta = {CASE_TEXT: case.text, "case_path": str(case.path),
+    meta = {CASE_TEXT: case.text, "case_path": str(Path(case.path).resolve()),
             "overrides": list(case.overrides), "version": __version__, "dt": dt,
             "dt_critical": problem.dt_critical, "scheme": solver["scheme"],
             "reduced": problem.reduced, "steps_planned": n_total, "every": every,
@@ -514,11 +545,7 @@ def run(case, path, resume=False, progress=None):
     else:
         history = History.create(path, meta, _layout(problem), overwrite=True,
                                  expected_rows=n_total // every + 1, geometry=problem.geometry)
-        first = _outputs(problem, 1)
-        first[0][0] = problem.state[3, 0]
-        first[1][0] = problem.sensors @ problem.state[0]
-        first[4][0] = problem.initial_energy
-        history.append(_rows(problem, first, 1))
+        history.append(_rows(problem, problem.initial_row, 1))
     out = _outputs(problem, chunk // every)
     e0 = _balance(problem.initial_energy)
     peak = max(_mechanical(problem.initial_energy), 1e-300)

@@ -262,8 +262,14 @@ SOLVER = Table("solution settings", {
                     "preload, integrated exactly; the contact remainder taken linear in time "
                     "over the step)", "explicit",
                     choices=("explicit", "implicit", "exponential")),
-    "corrections": Value("int", "exponential: re-evaluations of the forces at the end of each "
-                         "step after the extrapolated predictor", 1, minimum=0, maximum=5),
+    "corrections": Value("int", "exponential: evaluations of the contact forces at the end of "
+                         "each step after the one at the predicted state", 1, minimum=0,
+                         maximum=5),
+    "corrector": Value("choice", "exponential: a step ends at the state its forces were last "
+                       "evaluated at (evaluated: robust on stiff penalties closing), or "
+                       "propagates once more from them (propagated: with corrections = 0 one "
+                       "contact pass per step, as accurate on smooth contact)", "evaluated",
+                       choices=("evaluated", "propagated")),
     "t_end": Value("float", "simulated time after the preload", 0.0, "s", minimum=0.0),
     "mass": Value("choice", "mass matrix of the transient: lumped (HRZ), consistent, or auto "
                   "(lumped for central differences on the full model, which need it diagonal; "

@@ -294,8 +294,8 @@ def _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, 
 
 @njit_fast
 def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
-                        code, params, patterns, sig, S, blocks, corrections, fprev, out_t, out_s,
-                        out_g, out_p, out_e):
+                        code, params, patterns, sig, S, blocks, corrections, propagate, fprev,
+                        out_t, out_s, out_g, out_p, out_e):
     """Exponential integrator on the reduced system: each mode's linear part (K_lin, damping)
     is propagated exactly over a step, the forces F = patterns s(t) + remainder(q) taken linear
     in time between the step's ends (first-order hold).
@@ -304,8 +304,15 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     to F0 and to the ramp F1 - F0, [G0x, G0v, G1x, G1v], in columns 4-7
     (reduction.exponential_coefficients).
     A predictor extrapolates F linearly from the previous step (fprev (n,): F at the start of
-    the previous step, carried between chunks); `corrections` re-evaluations at the end point
-    follow. state, acc and outputs as in explicit_reduced."""
+    the previous step, carried between chunks); F at the end point is evaluated at the
+    predicted state, then `corrections` times more at the state propagated with it (one
+    contact pass per evaluation). The step ends at the last state evaluated, or, if
+    `propagate`, at a last propagation from the forces evaluated there (PEC for corrections = 0:
+    on smooth contact as accurate as PECE at half the cost; on a stiff penalty closing the
+    explicit force update is not: 11% energy drift on the bar impact, against 0.2% for PECE).
+    With propagate, the gaps, pressures and contact energy stored are those of the last
+    evaluation, a local error away from the final state. state, acc and outputs as in
+    explicit_reduced."""
     q, v = state[0], state[1]
     t = state[3, 0]
     n = q.shape[0]
@@ -345,6 +352,13 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
                                        fbuf)
             for k in range(n):
                 f1[k] = fext[k] + rem[k]
+        if propagate:
+            for k in range(n):
+                dF = f1[k] - f0[k]
+                q[k] = (coef[k, 0] * q0[k] + coef[k, 1] * v0[k] + coef[k, 4] * f0[k]
+                        + coef[k, 6] * dF)
+                v[k] = (coef[k, 2] * q0[k] + coef[k, 3] * v0[k] + coef[k, 5] * f0[k]
+                        + coef[k, 7] * dF)
         work = 0.0
         power = 0.0
         kin = 0.0

@@ -1,0 +1,157 @@
+"""`transient plot history|spectrum|frf|pressure`: pictures of a history and the numbers in them."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+from matplotlib.image import imread
+
+from transient.case import load
+from transient.cli import main
+from transient.history import History
+from transient.history_plots import (amplitude_spectrum, contact_force, plane_frame,
+                                     pressure_panels, sample_step, transfer_function)
+from transient.run import run
+from transient.stored import open_history
+
+CASE = Path(__file__).resolve().parent.parent / "cases" / "bar_impact.toml"
+SHORT = ["solver.t_end=3e-5"]      # contact from 10 us: 190 rows, a third of them in contact
+
+
+@pytest.fixture(scope="module")
+def history(tmp_path_factory):
+    path = tmp_path_factory.mktemp("plots") / "bar.h5"
+    run(load(CASE, SHORT), path)
+    return path
+
+
+def _synthetic(path, time, values):
+    """A history holding one sensor 's' (values [m] at times [s])."""
+    with History.create(path, {}, {"time": (), "sensors/s": ()}) as h:
+        h.append({"time": time, "sensors/s": values})
+    return path
+
+
+def _check_picture(path, min_width=500):
+    rgb = imread(path)[..., :3]
+    height, width = rgb.shape[:2]
+    assert width >= min_width and height >= 300, path.name
+    # something was drawn: neither blank nor one colour, and some colour shows
+    assert (rgb.min(axis=2) < 0.9).mean() > 0.01, f"{path.name} is nearly blank"
+    assert rgb.reshape(-1, 3).std(axis=0).max() > 0.05, f"{path.name} is uniform"
+    return width, height
+
+
+def _one_line_error(capsys, *names):
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and err.count("\n") == 1 and "Traceback" not in err, err
+    for name in names:
+        assert name in err, err
+    return err
+
+
+@pytest.mark.parametrize("args, suffix", [
+    (["history"], "history"),
+    (["history", "--series", "energy", "sensors/tip"], "history"),
+    (["spectrum", "--fmax", "1e6"], "spectrum"),
+    (["frf", "--input", "sensors/tip", "--output", "sensors/tail", "--segment", "64"], "frf"),
+])
+def test_pictures_of_a_history(history, capsys, args, suffix):
+    assert main(["plot", args[0], str(history)] + args[1:]) == 0
+    path = history.with_name(f"bar_{suffix}.png")
+    assert capsys.readouterr().out.split() == [str(path)]
+    _check_picture(path)
+
+
+def test_spectrum_of_a_sine_peaks_at_its_frequency(tmp_path, capsys):
+    dt, n, f0, a = 1e-6, 1000, 12e3, 2e-6       # 1 kHz bins: f0 on the 12th
+    t = dt * np.arange(n)
+    path = _synthetic(tmp_path / "sine.h5", t, 0.5e-6 + a * np.sin(2 * np.pi * f0 * t))
+    stored = open_history(path)
+    f, amplitude = amplitude_spectrum(stored.read("sensors/s"), sample_step(stored, t))
+    assert f[np.argmax(amplitude)] == pytest.approx(f0)
+    assert amplitude.max() == pytest.approx(a, rel=1e-9)
+    assert amplitude[0] < 1e-9 * a                  # the offset is removed
+    png = tmp_path / "sine.png"
+    assert main(["plot", "spectrum", str(path), "-o", str(png)]) == 0
+    assert capsys.readouterr().out.strip() == str(png)
+    _check_picture(png)
+
+
+def test_spectrum_needs_evenly_spaced_rows(tmp_path, capsys):
+    t = np.cumsum(np.r_[0.0, np.full(50, 1e-6), np.full(50, 2e-6)])
+    path = _synthetic(tmp_path / "uneven.h5", t, np.sin(1e5 * t))
+    assert main(["plot", "spectrum", str(path)]) == 2
+    _one_line_error(capsys, str(path), "not evenly spaced")
+
+
+def test_transfer_function_of_a_sensor_with_itself_is_one(history, capsys):
+    stored = open_history(history)
+    x = stored.read("sensors/tip")
+    dt = sample_step(stored, stored.time())
+    f, H, coherence = transfer_function(x, x, dt, 64)
+    assert len(f) == 33 and np.all(np.isfinite(H))
+    assert np.allclose(H, 1.0, rtol=0, atol=1e-12) and np.allclose(coherence, 1.0, atol=1e-12)
+    # a gain of -3 reads as 9.5 dB and half a turn of phase
+    _, H, coherence = transfer_function(x, -3.0 * x, dt, 64)
+    assert np.allclose(H, -3.0, atol=1e-12) and np.allclose(coherence, 1.0, atol=1e-12)
+    png = history.with_name("self_frf.png")
+    assert main(["plot", "frf", str(history), "--input", "sensors/tip", "--output",
+                 "sensors/tip", "-o", str(png)]) == 0
+    _check_picture(png)
+
+
+def test_frf_refuses_a_segment_longer_than_the_history(history, capsys):
+    assert main(["plot", "frf", str(history), "--input", "sensors/tip", "--output",
+                 "sensors/tail", "--segment", "4096"]) == 2
+    _one_line_error(capsys, str(history), "--segment", "191 rows, fewer than the segment")
+
+
+def test_pressure_maps_side_by_side(history, tmp_path, capsys):
+    finer = tmp_path / "finer.h5"
+    run(load(CASE, SHORT + ["parts.bar.mesh.divisions=[100,3,3]"]), finer)   # 108 points
+    png = tmp_path / "pressure.png"
+    assert main(["plot", "pressure", str(history), str(finer), "--labels", "1 x 1 faces",
+                 "3 x 3 faces", "-o", str(png)]) == 0
+    assert capsys.readouterr().out.strip() == str(png)
+    width, height = _check_picture(png, min_width=900)
+    assert width > 1.5 * height                      # two panels side by side
+    # the default time is that of the largest force; the bar pushes the wall while in contact
+    stored = open_history(history)
+    force = contact_force(stored, "wall")
+    t = stored.time()
+    assert force.max() > 0 and np.all(force[t < 9.9e-6] == 0)
+    panels = pressure_panels([stored, open_history(finer)])
+    assert [len(p["points"]) for p in panels] == [12, 108]
+    assert panels[0]["force"] == force.max() and panels[0]["time"] == t[np.argmax(force)] > 1e-5
+    assert abs(panels[1]["time"] - panels[0]["time"]) < 1e-6
+    assert panels[0]["rule"] == "fine rule" and panels[0]["label"] == "bar"
+    # Gamma is the end face x = 0.1: its plane's axes lie in y, z
+    centre, axes = plane_frame(stored.geometry("contact/wall/points"),
+                               stored.geometry("contact/wall/normals"))
+    assert centre[0] == pytest.approx(0.1) and np.allclose(axes[:, 0], 0.0)
+    assert np.allclose(axes @ axes.T, np.eye(2))
+
+
+def test_pressure_needs_the_contact_output(tmp_path, capsys):
+    path = tmp_path / "nocontact.h5"
+    run(load(CASE, ["solver.t_end=2e-6", "output.contact=false"]), path)
+    assert main(["plot", "pressure", str(path)]) == 2
+    _one_line_error(capsys, str(path), "output.contact = true")
+
+
+@pytest.mark.parametrize("args, expected", [
+    (["history", "{missing}"], "file not found"),
+    (["spectrum", "{text}"], "not a transient history"),
+    (["history", "{h5}", "--series", "sensors/nowhere"], "no scalar series 'sensors/nowhere'"),
+    (["frf", "{h5}", "--input", "sensors", "--output", "sensors/tail"], "--input"),
+    (["spectrum", "{h5}", "--fmax", "-5"], "--fmax"),
+    (["pressure", "{h5}", "--pair", "floor"], "no contact pair 'floor'"),
+    (["pressure", "{h5}", "{h5}", "--labels", "one"], "one label per file"),
+])
+def test_bad_input_is_one_line_error(history, tmp_path, capsys, args, expected):
+    text = tmp_path / "notes.h5"
+    text.write_text("not HDF5")
+    names = {"missing": str(tmp_path / "missing.h5"), "text": str(text), "h5": str(history)}
+    args = [a.format(**names) for a in args]
+    assert main(["plot"] + args) == 2
+    _one_line_error(capsys, args[1], expected)

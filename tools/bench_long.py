@@ -1,0 +1,73 @@
+"""Wall time and peak memory of a whole `transient run`: by default cases/pad_disc_long.toml,
+one second of the pad on the disc at 20 steps per period of 16 kHz (320,000 steps).
+
+The run is a child process (`transient run --quiet`), so its wall time includes start-up and
+imports as a user sees them, and ru_maxrss is its own peak. The history's stages and timings
+say where the time went. A first run that compiles the Numba kernels is not representative:
+--warm runs the case once for a few steps before.
+
+    python tools/bench_long.py [CASE] [--warm] [--set key=value ...] [--json]
+"""
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def run(case, overrides, out):
+    """(wall seconds, peak RSS bytes) of `transient run` in a child process."""
+    args = [sys.executable, "-m", "transient", "run", str(case), "-o", str(out), "--quiet"]
+    for o in overrides:
+        args += ["--set", o]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    t0 = time.perf_counter()
+    done = subprocess.run(args, cwd=ROOT, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if done.returncode != 0:
+        sys.exit(f"transient run failed ({done.returncode}): {done.stderr.strip()}")
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    # ru_maxrss of children is the largest child so far: meaningful when this run is the largest
+    return wall, max(peak, before) * 1024
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("case", nargs="?", default=str(ROOT / "cases" / "pad_disc_long.toml"))
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--warm", action="store_true", help="compile the kernels first")
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args(argv)
+    from transient.history import summary
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "run.h5"
+        if args.warm:
+            run(args.case, args.set + ["solver.t_end=1e-4"], out)
+        wall, peak = run(args.case, args.set, out)
+        info = summary(out)
+    meta = info["meta"]
+    row = {"case": Path(args.case).name, "status": info["status"], "wall_s": wall,
+           "peak_rss_gb": peak / 1e9, "steps": meta["steps_planned"], "dt": meta["dt"],
+           "t_end": info["t_end"], "reduced_dofs": meta.get("reduced_dofs"),
+           "contact_points": meta.get("n_points"), "timings": info["timings"],
+           "stages": meta["stages"], "energy_drift": info["energy_drift"],
+           "kernel_us_per_step": 1e6 * info["timings"]["kernel"] / meta["steps_planned"]}
+    if args.json:
+        print(json.dumps(row))
+        return
+    print(f"{row['case']}: {row['status']}, {row['steps']} steps of {row['dt']:.4g} s to "
+          f"t = {row['t_end']:.4g} s, {row['reduced_dofs']} reduced dofs, "
+          f"{row['contact_points']} contact points")
+    print(f"wall {wall:.1f} s, peak RSS {peak / 1e9:.2f} GB; setup "
+          f"{info['timings']['setup']:.1f} s, kernel {info['timings']['kernel']:.1f} s "
+          f"({row['kernel_us_per_step']:.1f} us/step), energy drift {info['energy_drift']:.2e}")
+    print("stages: " + ", ".join(f"{k} {v:.2f} s" for k, v in row["stages"].items()))
+
+
+if __name__ == "__main__":
+    main()
