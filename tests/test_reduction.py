@@ -27,7 +27,7 @@ def test_contact_flexibility_kept_to_the_tolerance(tol):
     stiffness = np.geomspace(1e4, 1e7, C.shape[0])       # w k_t of each point
     fixed = np.zeros(K.shape[0], bool)
     solve = factorize(K)
-    basis = reduced_basis(K, M, fixed, 50.0, np.asarray(C.T.todense()), solve, 0.0,
+    basis = reduced_basis(K, M, fixed, 50.0, np.zeros((K.shape[0], 0)), solve, 0.0,
                           (C, stiffness), tol)
     d = np.sqrt(stiffness)
     F = np.asarray(C @ solve(np.asarray(C.T.todense())))

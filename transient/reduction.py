@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 
 from .modes import normal_modes
 
@@ -27,31 +28,31 @@ class Basis:
 def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None, tol=0.0):
     """Basis of the modes of (K_lin, M) up to fmax [Hz] and the responses to static loads.
 
-    statics (ndof, s): load vectors (contact point loads C_i^T, load patterns, and K_lin u for a
-    displacement u to represent, such as the preload). solve applies (K_lin - sigma M)^-1 on the
-    free dofs, sigma = -(2 pi shift_hz)^2: the small shift keeps floating parts solvable.
+    statics (ndof, s): load vectors (load patterns, and K_lin u for a displacement u to
+    represent, such as the preload). solve applies (K_lin - sigma M)^-1 on the free dofs,
+    sigma = -(2 pi shift_hz)^2: the small shift keeps floating parts solvable.
 
-    contact (C, stiffness): when given, the first C.shape[0] statics are the contact point
-    loads C^T, and only the contact shapes that matter are kept (`contact_shapes`, tol).
+    contact (C (m, ndof), stiffness (m,)): adds the responses to the contact point loads C^T,
+    only the shapes of them that matter (`contact_shapes`, tol).
     """
     t0 = time.perf_counter()
     free = np.flatnonzero(~fixed)
     modes = normal_modes(K_lin, M, fixed, count=40, fmax=fmax, shift=-shift_hz, solve=solve)
     t_modes = time.perf_counter() - t0
     Phi = modes.shapes[free]
-    X = Phi
+    columns = [Phi]
     mu = np.zeros(0)
     n_shapes = 0
+    if contact is not None and contact[0].shape[0]:
+        C, stiffness = contact
+        omega2_modes = (2 * np.pi * modes.frequencies) ** 2
+        shapes, mu = contact_shapes(sp.csr_matrix(C)[:, free], stiffness, solve, Phi,
+                                    omega2_modes, tol)
+        columns.append(shapes)
+        n_shapes = shapes.shape[1]
     if statics.shape[1]:
-        S = np.atleast_2d(solve(np.asfortranarray(statics[free])).T).T
-        if contact is not None and contact[0].shape[0]:
-            C, stiffness = contact
-            m = C.shape[0]
-            omega2_modes = (2 * np.pi * modes.frequencies) ** 2
-            shapes, mu = contact_shapes(C[:, free], stiffness, S[:, :m], Phi, omega2_modes, tol)
-            S = np.hstack([shapes, S[:, m:]])
-            n_shapes = shapes.shape[1]
-        X = np.hstack([Phi, S])
+        columns.append(np.atleast_2d(solve(np.asfortranarray(statics[free])).T).T)
+    X = np.hstack(columns)
     t_static = time.perf_counter() - t0 - t_modes
     Mf = M[free][:, free]
     Kf = K_lin[free][:, free]
@@ -73,8 +74,8 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
                  n_shapes, mu)
 
 
-def contact_shapes(C, stiffness, S, Phi, omega2, tol):
-    """The contact static shapes that change the contact stiffness by tol or more.
+def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):
+    """The responses to the contact point loads that change the contact stiffness by tol or more.
 
     S = K^-1 C^T (n, m) are the responses to the m contact point loads; beyond the modes Phi
     (M-normalized, eigenvalues omega2) their flexibility at the points is
@@ -83,17 +84,30 @@ def contact_shapes(C, stiffness, S, Phi, omega2, tol):
     flexibility of each contact shape relative to the law's: a shape with mu_i < tol changes
     the stiffness of the two in series by less than tol, so it is dropped (tol = 0 keeps all).
 
-    Returns (shapes (n, r): S D^1/2 u_i for the kept eigenvectors u_i, mu (m,) descending).
+    F is accumulated from solves of `block` loads at a time and the shapes kept, K^-1 C^T D^1/2
+    u_i, solved for at the end: memory n x block and m x m, not n x m (a fine rule has
+    thousands of points).
+
+    Returns (shapes (n, r), mu (m,) descending).
     """
+    m = C.shape[0]
+    CT = C.T.tocsc()
+    if tol <= 0:
+        return np.atleast_2d(solve(np.asfortranarray(CT.toarray())).T).T, np.zeros(0)
+    F = np.empty((m, m))
+    for start in range(0, m, block):
+        cols = slice(start, min(start + block, m))
+        F[:, cols] = C @ solve(np.asfortranarray(CT[:, cols].toarray()))
     d = np.sqrt(np.maximum(stiffness, 0.0))
     CPhi = np.asarray(C @ Phi)
-    F = np.asarray(C @ S) - (CPhi / np.maximum(omega2, 1e-300)) @ CPhi.T
-    mu, U = np.linalg.eigh(0.5 * (F + F.T) * d[:, None] * d[None, :])
+    F -= (CPhi / np.maximum(omega2, 1e-300)) @ CPhi.T
+    F = 0.5 * (F + F.T) * d[:, None] * d[None, :]
+    mu, U = sla.eigh(F, overwrite_a=True)
     mu, U = mu[::-1], U[:, ::-1]
-    if tol <= 0:
-        return S, mu
     kept = mu >= tol
-    return S @ (d[:, None] * U[:, kept]), mu
+    if not np.any(kept):
+        return np.zeros((C.shape[1], 0)), mu
+    return np.atleast_2d(solve(np.asfortranarray(CT @ (d[:, None] * U[:, kept]))).T).T, mu
 
 
 def exponential_coefficients(omega2, damp, dt):

@@ -181,14 +181,12 @@ def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages
     solver = case["solver"]
     reduction = solver["reduction"]
     free = np.flatnonzero(~model.fixed)
-    loads = [np.asarray(contacts.C.T.todense()) if reduction["statics"] and contacts.n_points
-             else np.zeros((model.ndof, 0))]
-    if reduction["statics"]:
-        loads += [np.stack(patterns, axis=1)] if patterns else []
+    loads = [np.stack(patterns, axis=1)] if patterns and reduction["statics"] else []
     loads.append(K_lin @ preload.u[:, None])          # its response is the preload itself
     statics = np.hstack(loads)
     kt_crit = _critical_kt(contacts, preload)
-    contact = (contacts.C, contacts.weights * kt_crit) if reduction["statics"] else None
+    contact = ((contacts.C, contacts.weights * kt_crit)
+               if reduction["statics"] and contacts.n_points else None)
     basis = _timed(stages, "reduction", reduced_basis, K_lin, M, model.fixed,
                    reduction["fmax"], statics, solve, SHIFT_HZ, contact,
                    reduction["statics_tolerance"])
