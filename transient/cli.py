@@ -3,6 +3,7 @@ import argparse
 import json
 import sys
 import time
+from pathlib import Path
 
 from . import __version__
 from .case import load
@@ -41,6 +42,19 @@ def _parser():
     _case_args(p)
     p.add_argument("--pair", help="contact pair to report (default: the first)")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p = sub.add_parser("bench", help="error against run time for a sweep of contact rules: "
+                       "fine (reference), fine regularized at each eps, centre, centre "
+                       "regularized, greedy at several m")
+    _case_args(p)
+    p.add_argument("--pair", help="contact pair to sweep (default: the first)")
+    p.add_argument("--eps", default="1e-6,1e-4,1e-3,1e-2", help="eps of the regularized fine "
+                   "rule, comma separated (default 1e-6,1e-4,1e-3,1e-2)")
+    p.add_argument("--points", help="greedy m, comma separated, 0 the rank of the kept shapes "
+                   "(default: the rank r, r/2, r/4)")
+    p.add_argument("--t-end", type=float, help="simulated time [s] (default: the case's)")
+    p.add_argument("--out", metavar="DIR", help="directory of bench.csv, bench.json and "
+                   "bench.png (default: <case name>_bench next to the case)")
+    p.add_argument("--json", action="store_true", help="print the rows as JSON")
     _plot_parser(sub)
     p = sub.add_parser("export", help="a history as time series for ParaView: the contact "
                        "points of each pair (gap, pressure) and, if output.field was stored, "
@@ -380,8 +394,43 @@ def cmd_info(args):
     return 0
 
 
+def _numbers(text, key, kind):
+    try:
+        return [kind(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise CaseError("command line", key, f"expected comma separated numbers, got "
+                        f"'{text}'") from None
+
+
+def cmd_bench(args):
+    from .bench import HEADER, bench, format_row, target, write
+    eps = _numbers(args.eps, "--eps", float)
+    points = _numbers(args.points, "--points", int) if args.points else None
+    if not args.json:
+        print(HEADER)
+
+    def show(row):
+        if not args.json:
+            print(format_row(row), flush=True)
+    rows = bench(args.case, args.overrides, args.pair, eps, points, args.t_end, show)
+    out = args.out or Path(args.case).with_name(Path(args.case).stem + "_bench")
+    files = write(rows, out)
+    best = target(rows)
+    if args.json:
+        print(json.dumps({"rows": rows, "target": best}))
+        return 0
+    if best:
+        print(f"target met: {best['label']} within {best['error_rms']:.2%} of the fine rule at "
+              f"{best['kernel_s'] / rows[0]['kernel_s']:.2f} of its kernel time")
+    else:
+        print("target not met: no regularized coarse rule within 1% of the fine rule at a "
+              "third or less of its kernel time")
+    print("wrote " + ", ".join(str(f) for f in files))
+    return 0
+
+
 COMMANDS = {"run": cmd_run, "info": cmd_info, "modes": cmd_modes, "compat": cmd_compat,
-            "plot": cmd_plot, "export": cmd_export}
+            "bench": cmd_bench, "plot": cmd_plot, "export": cmd_export}
 
 
 def main(argv=None):

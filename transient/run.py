@@ -165,6 +165,7 @@ def prepare(case, quiet=True):
         "n_points": contacts.n_points,
         "pairs": {p.name: {"rule": p.spec["rule"], "points": p.rule.n_points,
                            "regularized": p.spec["regularized"], "eps": p.eps,
+                           "kept": p.compat.kept(p.eps) if p.compat else None,
                            "law": p.spec["law"]["kind"]} for p in pairs}})
     output = case["output"]
     problem.n_field = problem.state.shape[1] if output["field"] else 0
@@ -329,8 +330,9 @@ def simulate(case, problem, dt, n_steps, every=1):
     """Integrate a prepared problem in memory with the case's scheme (no history file, no
     checks between chunks): for tests and benchmarks that compare schemes on one setup.
 
-    Returns (series, status, kernel seconds): series maps "time", "sensors/<name>" and
-    "energy/<term>" to arrays with one row per `every` steps, the initial state first.
+    Returns (series, status, kernel seconds): series maps "time", "sensors/<name>",
+    "energy/<term>" and, if the case stores contact, "contact/gap" and "contact/pressure" (all
+    points) to arrays with one row per `every` steps, the initial state first.
     """
     problem = copy.copy(problem)
     problem.state, problem.acc = problem.state.copy(), problem.acc.copy()
@@ -348,6 +350,8 @@ def simulate(case, problem, dt, n_steps, every=1):
     series.update({f"sensors/{name}": rows[1][:, k]
                    for k, name in enumerate(problem.sensor_names)})
     series.update({f"energy/{term}": rows[4][:, k] for k, term in enumerate(ENERGY_TERMS)})
+    if problem.store_contact:
+        series["contact/gap"], series["contact/pressure"] = rows[2], rows[3]
     status = {stepping.OK: "complete", stepping.NOT_FINITE: "not finite",
               stepping.NO_CONVERGENCE: "no convergence"}[code]
     return series, status, seconds

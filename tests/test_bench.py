@@ -1,0 +1,68 @@
+"""`transient bench` on a coarse pad on a disc: the sweep's rows, errors that can fail, files."""
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from transient.bench import bench, compare, target
+from transient.cli import main
+
+CASES = Path(__file__).resolve().parent.parent / "cases"
+SMALL = ["parts.disc.mesh.divisions=[2,36,1]", 'parts.disc.mesh.element="hex8"',
+         "parts.pad.mesh.divisions=[3,8,1,1]", 'parts.pad.mesh.element="hex8"',
+         "solver.reduction.fmax=6000.0", "solver.modes.fmax=6000.0",
+         "loads.tap.signal.duration=2e-4"]
+
+
+def test_compare_measures_what_it_says():
+    t = np.linspace(0.0, 1.0, 101)
+    ref = {"time": t, "sensors/a": 1.0 + np.sin(7 * t), "contact/pressure": np.full((101, 3), 2.0)}
+    run = {"time": t, "sensors/a": 1.0 + 1.01 * np.sin(7 * t),
+           "contact/pressure": np.full((101, 5), 2.2)}
+    out = compare(ref, run, np.array([100.0, 200.0]), np.array([101.0, 200.0, 300.0]))
+    assert out["error_rms"] == pytest.approx(0.01, rel=0.02)
+    assert out["pressure_max_error"] == pytest.approx(0.1)
+    assert out["frequency_error"] == pytest.approx(0.01)
+
+
+def test_bench_sweeps_the_rules_of_a_small_pad_on_a_disc():
+    rows = bench(CASES / "pad_disc.toml", SMALL, eps_list=[1e-6, 1.0], points_list=[0, 20],
+                 t_end=1e-3)
+    labels = [r["label"] for r in rows]
+    assert labels == ["fine", "fine reg eps=1e-06", "fine reg eps=1", "centre", "centre reg",
+                      "greedy m=rank", "greedy m=20"]
+    ref = rows[0]
+    assert ref["rule"] == "fine" and ref["error_rms"] == 0.0
+    assert all(r["status"] == "complete" for r in rows)
+    assert rows[3]["points"] < ref["points"] and rows[6]["points"] == 20
+    # eps = 1 keeps every shape: the regularized observation is the fine one
+    assert rows[2]["kept"] > rows[1]["kept"]
+    assert rows[2]["error_rms"] < 1e-3 and rows[2]["frequency_error"] < 1e-3
+    assert rows[1]["error_rms"] > 10 * rows[2]["error_rms"]
+    for r in rows:
+        assert r["setup_s"] > 0 and r["kernel_s"] > 0 and r["total_s"] >= r["kernel_s"]
+    best = target(rows)
+    assert best is None or (best["error_rms"] <= 0.01 and best["rule"] != "fine")
+
+
+def test_bench_command_writes_csv_json_png(tmp_path, capsys):
+    args = ["bench", str(CASES / "pad_disc.toml"), "--eps", "1e-3", "--points", "15",
+            "--t-end", "5e-4", "--out", str(tmp_path), "--json"]
+    for o in SMALL:
+        args += ["--set", o]
+    assert main(args) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["rows"][0]["rule"] == "fine"
+    assert {"rule", "points", "setup_s", "kernel_s", "total_s", "error_rms"} <= set(out["rows"][0])
+    saved = json.loads((tmp_path / "bench.json").read_text())
+    assert len(saved["rows"]) == len(out["rows"]) == 5
+    assert (tmp_path / "bench.csv").read_text().count("\n") == 6
+    assert (tmp_path / "bench.png").stat().st_size > 10_000
+
+
+def test_bench_refuses_bad_options(tmp_path, capsys):
+    case = tmp_path / "c.toml"
+    case.write_text((CASES / "pad_disc.toml").read_text())
+    assert main(["bench", str(case), "--eps", "x"]) == 2
+    assert "--eps" in capsys.readouterr().err
