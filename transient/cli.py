@@ -443,6 +443,10 @@ def main(argv=None):
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader of the output went away (`transient info F | head`): nothing to report
+        sys.stderr.close()
+        return 0
 
 
 if __name__ == "__main__":

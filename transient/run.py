@@ -562,13 +562,13 @@ def run(case, path, resume=False, progress=None):
                 t0 = time.perf_counter()
                 code, done = kernel(problem.state, problem.acc, n, every, dt, *args, *out)
                 t_kernel += time.perf_counter() - t0
-                rows = done // every
+                # a kernel stopping on a non-finite state has not stored that step
+                rows = (done - (code == stepping.NOT_FINITE)) // every
                 finite = all(np.all(np.isfinite(x[:rows])) for x in out) and \
                     np.all(np.isfinite(problem.state))
-                if not finite:
-                    # keep only the finite rows of the chunk, then stop
-                    good = np.flatnonzero(~np.all(np.isfinite(out[4][:rows]), axis=1))
-                    rows = int(good[0]) if len(good) else rows
+                if not finite or code == stepping.NOT_FINITE:
+                    # keep only the rows before the first with anything not finite, then stop
+                    rows = _finite_rows(out, rows)
                     code = stepping.NOT_FINITE
                 if rows:
                     history.append(_rows(problem, out, rows))
@@ -576,7 +576,11 @@ def run(case, path, resume=False, progress=None):
                     peak = max(peak, _mechanical(out[4][:rows]).max())
                     drift = max(drift, np.abs(totals - e0).max() / peak)
                 if code == stepping.NOT_FINITE:
-                    raise RunAborted(f"state not finite near t = {problem.state[3, 0]:.6g} s")
+                    step += rows * every
+                    last = out[0][rows - 1] if rows else problem.state[3, 0] - done * dt
+                    problem.state[3, 0] = last
+                    raise RunAborted(f"state not finite after t = {last:.6g} s (the last "
+                                     "finite row kept)")
                 step += done
                 history.checkpoint({"state": problem.state, "acc": problem.acc,
                                     "step": np.array([step]),
@@ -610,6 +614,14 @@ def run(case, path, resume=False, progress=None):
     return RunResult(str(path), status, step, float(problem.state[3, 0]), dt,
                      problem.dt_critical, problem.stages, _timings(problem, t_kernel, t_start),
                      drift)
+
+
+def _finite_rows(out, rows):
+    """How many leading output rows are finite in every output."""
+    bad = np.zeros(rows, bool)
+    for x in out:
+        bad |= ~np.isfinite(x[:rows].reshape(rows, -1)).all(axis=1)
+    return int(np.argmax(bad)) if bad.any() else rows
 
 
 def _fastest_blocks(case, problem, dt, steps=20):

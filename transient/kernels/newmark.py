@@ -157,7 +157,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
             strain += 0.5 * omega2[k] * q[k] * q[k]
             fext_old[k] = fext[k]
         _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
-        if not (_finite(q) and _finite(v)):
+        if not (_finite(q) and _finite(v) and _finite(energy)):
             state[3, 0] = t
             return NOT_FINITE, step
         if not converged:
@@ -285,7 +285,7 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
             fext_old[k] = fext[k]
         _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
         power_old = power
-        if not (_finite(q) and _finite(v)):
+        if not (_finite(q) and _finite(v) and _finite(energy)):
             state[3, 0] = t
             return NOT_FINITE, step
         if not converged:

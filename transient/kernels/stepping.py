@@ -173,7 +173,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
             strain += 0.5 * omega2[k] * q[k] * q[k]
             power += damp[k] * vn * vn
         _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
-        if not (_finite(q) and _finite(v)):
+        if not (_finite(q) and _finite(v) and _finite(energy)):
             state[3, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
@@ -267,7 +267,7 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
                 power += beta * vn * kv[k]
         _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
         power_old = power
-        if not (_finite(q) and _finite(v)):
+        if not (_finite(q) and _finite(v) and _finite(energy)):
             state[3, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
@@ -372,7 +372,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
             f0[k] = f1[k]
             fext0[k] = fext[k]
         _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
-        if not (_finite(q) and _finite(v)):
+        if not (_finite(q) and _finite(v) and _finite(energy)):
             state[3, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
