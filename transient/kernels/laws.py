@@ -65,6 +65,26 @@ def law_params(spec, k):
 
 
 @njit
+def pressure_potential(code, params, g):
+    """(p, k_t, Phi) at gap g with a single exponential (the kernels' inner loop)."""
+    if code == EXPONENTIAL:
+        p0, lam, g_lin = params[0], params[1], params[2]
+        if g >= g_lin:
+            p = p0 * np.exp(-lam * g)
+            return p, lam * p, p / lam
+        p_lin = p0 * np.exp(-lam * g_lin)
+        d = g_lin - g
+        return (p_lin + lam * p_lin * d, lam * p_lin,
+                p_lin / lam + p_lin * d + 0.5 * lam * p_lin * d * d)
+    k = params[0]
+    if code == LINEAR:
+        if g < 0.0:
+            return -k * g, k, 0.5 * k * g * g
+        return 0.0, 0.0, 0.0
+    return -k * g, k, 0.5 * k * g * g
+
+
+@njit
 def evaluate(code, params, g, p, kt, phi):
     """Vector version: p, k_t and Phi at gaps g (m,) with per-point code (m,), params (m, 4)."""
     for i in range(g.shape[0]):

@@ -20,7 +20,7 @@ import numba
 import numpy as np
 
 from ..jit import njit, njit_fast, njit_parallel
-from .laws import potential, pressure
+from .laws import pressure_potential
 from ..signals import signal_values
 from .sparse import csr_matvec
 
@@ -28,34 +28,51 @@ OK, NOT_FINITE, NO_CONVERGENCE = 0, 1, 2
 KINETIC, STRAIN, CONTACT, WORK, DISSIPATED = 0, 1, 2, 3, 4
 
 
+@njit_fast
+def _remainder_rows(C, g0, w, kt0, code, params, q, fb, gap, press, start, stop):
+    """Rows start..stop of the one-pass contact force, added into fb; returns (contact
+    potential, 1/2 sum w k_t* (g - g0)^2) of those rows."""
+    n = C.shape[1]
+    phi = 0.0
+    lin = 0.0
+    for i in range(start, stop):
+        row = C[i]
+        s = 0.0
+        for j in range(n):
+            s += row[j] * q[j]
+        g = g0[i] + s
+        p, _, potential_i = pressure_potential(code[i], params[i], g)
+        r = w[i] * (p + kt0[i] * s)
+        for j in range(n):
+            fb[j] += r * row[j]
+        gap[i] = g
+        press[i] = p
+        phi += w[i] * potential_i
+        lin += 0.5 * w[i] * kt0[i] * s * s
+    return phi, lin
+
+
 @njit_parallel
 def remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf):
     """f = C^T [w (p(g) + k_t* (g - g0))] in one pass over the rows of C (m, n).
 
-    Rows are split in blocks, one per thread, each adding into its own row of fbuf; also fills
-    gap and press (m,). Returns (contact potential, 1/2 sum w k_t* (g - g0)^2).
+    Rows are split in blocks, one per thread, each adding into its own row of fbuf; a single
+    block runs serially, off the thread pool (whose wake-up costs more than small passes, and
+    stalls when the cores are busy). Also fills gap and press (m,). Returns (contact
+    potential, 1/2 sum w k_t* (g - g0)^2).
     """
     m, n = C.shape
     nb = blocks.shape[0] - 1
+    if nb == 1:
+        f[:] = 0.0
+        return _remainder_rows(C, g0, w, kt0, code, params, q, f, gap, press, 0, m)
     phi = np.zeros(nb)
     lin = np.zeros(nb)
     for b in numba.prange(nb):
         fb = fbuf[b]
         fb[:] = 0.0
-        for i in range(blocks[b], blocks[b + 1]):
-            row = C[i]
-            s = 0.0
-            for j in range(n):
-                s += row[j] * q[j]
-            g = g0[i] + s
-            p, _ = pressure(code[i], params[i], g)
-            r = w[i] * (p + kt0[i] * s)
-            for j in range(n):
-                fb[j] += r * row[j]
-            gap[i] = g
-            press[i] = p
-            phi[b] += w[i] * potential(code[i], params[i], g)
-            lin[b] += 0.5 * w[i] * kt0[i] * s * s
+        phi[b], lin[b] = _remainder_rows(C, g0, w, kt0, code, params, q, fb, gap, press,
+                                         blocks[b], blocks[b + 1])
     for j in range(n):
         acc = 0.0
         for b in range(nb):
@@ -194,13 +211,13 @@ def remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press):
         for k in range(Cp[i], Cp[i + 1]):
             s += Cd[k] * q[Ci[k]]
         g = g0[i] + s
-        p, _ = pressure(code[i], params[i], g)
+        p, _, potential_i = pressure_potential(code[i], params[i], g)
         r = w[i] * (p + kt0[i] * s)
         for k in range(Cp[i], Cp[i + 1]):
             f[Ci[k]] += r * Cd[k]
         gap[i] = g
         press[i] = p
-        phi += w[i] * potential(code[i], params[i], g)
+        phi += w[i] * potential_i
         lin += 0.5 * w[i] * kt0[i] * s * s
     return phi, lin
 
