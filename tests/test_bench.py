@@ -18,10 +18,12 @@ SMALL = ["parts.disc.mesh.divisions=[2,36,1]", 'parts.disc.mesh.element="hex8"',
 def test_compare_measures_what_it_says():
     t = np.linspace(0.0, 1.0, 101)
     ref = {"time": t, "sensors/a": 1.0 + np.sin(7 * t), "contact/pressure": np.full((101, 3), 2.0)}
-    run = {"time": t, "sensors/a": 1.0 + 1.01 * np.sin(7 * t),
+    # a preload 5% off: apart from the vibration's error
+    run = {"time": t, "sensors/a": 1.05 + 1.01 * np.sin(7 * t),
            "contact/pressure": np.full((101, 5), 2.2)}
     out = compare(ref, run, np.array([100.0, 200.0]), np.array([101.0, 200.0, 300.0]))
     assert out["error_rms"] == pytest.approx(0.01, rel=0.02)
+    assert out["preload_error"] == pytest.approx(0.05)
     assert out["pressure_max_error"] == pytest.approx(0.1)
     assert out["frequency_error"] == pytest.approx(0.01)
 
