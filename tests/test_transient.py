@@ -201,6 +201,8 @@ def test_outputs_stored_are_those_asked_for(tmp_path, reduced):
         assert q.shape == (f["time"].shape[0], f.attrs["reduced_dofs"] if reduced
                            else f.attrs["free_dofs"])
         assert np.all(np.isfinite(q)) and np.abs(q[-1]).max() > 0
+        if reduced:        # the basis u = T q, for exports
+            assert f["geometry/field/basis"].shape[1] == q.shape[1]
         points = f["geometry/contact/wall/points"][...]
         assert points.shape == (f["contact/wall/gap"].shape[1], 3)
         assert np.allclose(points[:, 0], 0.1)          # on the bar's end, facing the wall

@@ -67,9 +67,8 @@ def _parser():
                    "(default xdmf)")
     p.add_argument("--every", type=int, default=1, metavar="K", help="export one stored row "
                    "in K, and the last one (default 1)")
-    p.epilog = ("The displacement field rebuilds the model from the case text kept in the "
-                "history (and, for a reduced run, its reduced basis): this takes as long as "
-                "the setup of the run.")
+    p.epilog = ("The displacement field rebuilds the model's mesh from the case text kept in "
+                "the history; a reduced run stores its basis with the state (output.field).")
     return parser
 
 

@@ -5,9 +5,9 @@ One time series per kind of stored data:
 - `contact_<pair>`: the pair's contact points as a point cloud with point data gap [m] and
   pressure [Pa] at each row, weight [m^2] and normal (fixed);
 - `field`: the displacement [m] on the mesh of the model, from the stored state q: u[free] = q
-  on a full model, u = T q on a reduced one. The model, and the reduced basis T, are rebuilt from
-  the case text the history keeps, which takes as long as the setup of the run; the rebuilt
-  model must give back the stored sensors, so a case or code changed since the run is caught.
+  on a full model, u = T q on a reduced one, with the basis T the run stored next to q. The
+  model is rebuilt from the case text the history keeps (quick: no factorization); it must give
+  back the stored sensors, so a case or code changed since the run is caught.
 """
 from dataclasses import dataclass
 from pathlib import Path
@@ -118,8 +118,12 @@ def _field_series(stored):
     model = build_model(case)
     width = stored.series["field/q"][0]
     if meta.get("reduced"):
-        from .run import prepare
-        T = prepare(case).T
+        T = stored.geometry("field/basis")
+        if T is None:
+            # a history from before the basis was stored: rebuild it (as long as the setup)
+            from .run import prepare
+            T = prepare(case).T
+        T = np.asarray(T, dtype=float)
         columns = T.shape[1]
 
         def displacement(q):

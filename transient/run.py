@@ -170,6 +170,10 @@ def prepare(case, quiet=True):
     output = case["output"]
     problem.n_field = problem.state.shape[1] if output["field"] else 0
     problem.store_energy = output["energy"]
+    if output["field"] and problem.reduced:
+        # u = T q: kept so that an export needs no rebuild of the basis (a rebuild repeats
+        # the setup, and its rank decisions may differ with the BLAS threads)
+        problem.geometry["field/basis"] = problem.T
     if output["contact"]:
         for p in pairs:
             problem.geometry.update({f"contact/{p.name}/points": p.rule.points,
