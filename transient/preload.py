@@ -69,4 +69,6 @@ def solve_preload(K, fixed, load, contacts, solver, tol=1e-10, max_iter=50):
         if norm <= tol * scale:
             return Preload(u, g, p, kt, it, norm / scale, time.perf_counter() - t0)
     raise PreloadError(f"preload Newton did not converge in {max_iter} iterations "
-                       f"(residual {norm / scale:.2e})")
+                       f"(residual {norm / scale:.2e}): a part that only contact holds must "
+                       "touch under the constant loads, and a part free to move under them "
+                       "has no static equilibrium (check constraints and the contact pairs)")
