@@ -18,7 +18,13 @@ MAX_BYTES = 1.5e9     # Z = A0^-1 C^T dense; beyond this, factorize A0 + C^T D C
 
 
 class ContactSolver:
-    """Factorization of A0 = K - sigma M on the free dofs, updated by contact tangents."""
+    """Factorization of A0 = K - sigma M on the free dofs, updated by contact tangents.
+
+    The update C^T D C has rank at most min(m, k), k the dofs the contact rows touch: with more
+    points than interface dofs (a fine rule: 7734 points on 1194 dofs for pad_disc) it is
+    written E (Cc^T D Cc) E^T, E the selection of those dofs and Cc = C E, and Woodbury runs on
+    the k columns of E instead of the m rows of C.
+    """
 
     def __init__(self, K, M, C, sigma, backend="auto"):
         self.A0 = (K - sigma * M).tocsr() if sigma else K.tocsr()
@@ -26,11 +32,22 @@ class ContactSolver:
         self.sigma = sigma
         self.backend = backend
         n, m = K.shape[0], C.shape[0]
-        self.lowrank = m > 0 and 8.0 * n * m <= MAX_BYTES
+        self.cols = np.unique(self.C.indices)
+        k = len(self.cols)
+        self.by_columns = k < m
+        rank = min(m, k)
+        self.lowrank = m > 0 and 8.0 * n * rank <= MAX_BYTES
         self.solve0 = factorize(self.A0, backend, definite=sigma <= 0)
         if self.lowrank:
-            self.Z = self.solve0(np.asfortranarray(self.C.T.toarray()))
-            self.G = np.asarray(self.C @ self.Z)
+            if self.by_columns:
+                E = np.zeros((n, k), order="F")
+                E[self.cols, np.arange(k)] = 1.0
+                self.Z = self.solve0(E)
+                self.G = self.Z[self.cols]
+                self.Cc = self.C[:, self.cols].toarray()
+            else:
+                self.Z = self.solve0(np.asfortranarray(self.C.T.toarray()))
+                self.G = np.asarray(self.C @ self.Z)
 
     def solver(self, d):
         """solve(b) for (A0 + C^T diag(d) C) x = b; b (n,) or (n, k)."""
@@ -40,12 +57,22 @@ class ContactSolver:
         if not self.lowrank:
             A = (self.A0 + self.C.T @ sp.diags(d) @ self.C).tocsr()
             return factorize(A, self.backend, definite=False)
-        lu = sla.lu_factor(np.eye(len(d)) + d[:, None] * self.G)
-        Z, C, solve0 = self.Z, self.C, self.solve0
+        Z, solve0 = self.Z, self.solve0
+        if self.by_columns:
+            core = self.Cc.T @ (d[:, None] * self.Cc)
+            lu = sla.lu_factor(np.eye(len(self.cols)) + core @ self.G)
+            cols = self.cols
 
-        def solve(b):
-            y = solve0(b)
-            Cy = C @ y
-            return y - Z @ sla.lu_solve(lu, d[:, None] * Cy if Cy.ndim == 2 else d * Cy)
+            def solve(b):
+                y = solve0(b)
+                return y - Z @ sla.lu_solve(lu, core @ y[cols])
+        else:
+            lu = sla.lu_factor(np.eye(len(d)) + d[:, None] * self.G)
+            C = self.C
+
+            def solve(b):
+                y = solve0(b)
+                Cy = C @ y
+                return y - Z @ sla.lu_solve(lu, d[:, None] * Cy if Cy.ndim == 2 else d * Cy)
         solve.backend = getattr(self.solve0, "backend", "?") + "+woodbury"
         return solve

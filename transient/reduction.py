@@ -14,6 +14,9 @@ import scipy.sparse as sp
 from .modes import normal_modes
 
 
+BY_COLUMNS_BYTES = 1.5e9   # K^-1 E dense (n x k) when the contact points outnumber their dofs
+
+
 @dataclass(frozen=True)
 class Basis:
     T: np.ndarray            # (ndof, n), zero on fixed dofs
@@ -94,6 +97,9 @@ def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):
     CT = C.T.tocsc()
     if tol <= 0:
         return np.atleast_2d(solve(np.asfortranarray(CT.toarray())).T).T, np.zeros(0)
+    cols = np.unique(sp.csr_matrix(C).indices)
+    if len(cols) < m and 8.0 * C.shape[1] * len(cols) <= BY_COLUMNS_BYTES:
+        return _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols)
     F = np.empty((m, m))
     for start in range(0, m, block):
         cols = slice(start, min(start + block, m))
@@ -108,6 +114,26 @@ def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):
     if not np.any(kept):
         return np.zeros((C.shape[1], 0)), mu
     return np.atleast_2d(solve(np.asfortranarray(CT @ (d[:, None] * U[:, kept]))).T).T, mu
+
+
+def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
+    """contact_shapes when the m points touch only k < m dofs (a fine rule): with E the
+    selection of those dofs, C = Cc E^T and F = Cc H Cc^T, H = E^T K^-1 E minus the modes'
+    part (k x k, from k solves). With X = D^1/2 Cc and H = H^1/2 H^1/2, D^1/2 F D^1/2 = Y Y^T,
+    Y = X H^1/2 (m x k): its SVD gives mu and the u_i, and the shapes are (K^-1 E) X^T u_i."""
+    n, k = C.shape[1], len(cols)
+    E = np.zeros((n, k), order="F")
+    E[cols, np.arange(k)] = 1.0
+    KE = np.atleast_2d(solve(E).T).T
+    PhiE = Phi[cols]
+    H = KE[cols] - (PhiE / np.maximum(omega2, 1e-300)) @ PhiE.T
+    lam, W = np.linalg.eigh(0.5 * (H + H.T))
+    root = (W * np.sqrt(np.maximum(lam, 0.0))) @ W.T
+    X = np.sqrt(np.maximum(stiffness, 0.0))[:, None] * sp.csr_matrix(C)[:, cols].toarray()
+    U, sv, _ = np.linalg.svd(X @ root, full_matrices=False)
+    mu = sv ** 2
+    kept = mu >= tol
+    return KE @ (X.T @ U[:, kept]), mu
 
 
 def exponential_coefficients(omega2, damp, dt):

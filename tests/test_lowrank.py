@@ -1,0 +1,29 @@
+"""ContactSolver: Woodbury updates of one factorization against direct solves, with fewer
+contact rows than touched dofs and with more (a fine rule)."""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from transient.lowrank import ContactSolver
+
+
+@pytest.mark.parametrize("m", [5, 60])
+def test_updates_solve_the_updated_system(m):
+    rng = np.random.default_rng(m)
+    n = 80
+    A = sp.random(n, n, density=0.05, random_state=1)
+    K = (A + A.T + n * sp.eye(n)).tocsr()
+    M = sp.eye(n).tocsr()
+    cols = rng.choice(n, 12, replace=False)               # the dofs contact touches
+    rows = np.repeat(np.arange(m), 3)
+    C = sp.csr_matrix((rng.standard_normal(3 * m), (rows, rng.choice(cols, 3 * m))),
+                      shape=(m, n))
+    cs = ContactSolver(K, M, C, -4.0)
+    assert cs.by_columns == (m > 12)
+    b = rng.standard_normal((n, 2))
+    for d in (rng.uniform(0, 1e3, m), np.zeros(m)):
+        x = cs.solver(d)(b)
+        A = (K + 4.0 * M + C.T @ sp.diags(d) @ C).tocsc()
+        assert np.allclose(x, spla.spsolve(A, b), rtol=1e-9, atol=1e-12)
+        assert np.allclose(cs.solver(d)(b[:, 0]), x[:, 0])
