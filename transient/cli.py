@@ -50,7 +50,8 @@ def _parser():
     p.add_argument("--eps", default="1e-6,1e-4,1e-3,1e-2", help="eps of the regularized fine "
                    "rule, comma separated (default 1e-6,1e-4,1e-3,1e-2)")
     p.add_argument("--points", help="greedy m, comma separated, 0 the rank of the kept shapes "
-                   "(default: the rank r, r/2, r/4)")
+                   "(default: the greedy rule's own count r, then r/2, r/4, 4r, 10r below "
+                   "the fine rule's count)")
     p.add_argument("--t-end", type=float, help="simulated time [s] (default: the case's)")
     p.add_argument("--out", metavar="DIR", help="directory of bench.csv, bench.json and "
                    "bench.png (default: <case name>_bench next to the case)")
