@@ -17,40 +17,6 @@ EXPONENTIAL, LINEAR, BILATERAL = 0, 1, 2
 NAMES = {"exponential": EXPONENTIAL, "linear": LINEAR, "bilateral": BILATERAL}
 
 
-@njit
-def pressure(code, params, g):
-    """(p, k_t) at gap g."""
-    if code == EXPONENTIAL:
-        p0, lam, g_lin = params[0], params[1], params[2]
-        if g >= g_lin:
-            p = p0 * np.exp(-lam * g)
-            return p, lam * p
-        p_lin = p0 * np.exp(-lam * g_lin)
-        return p_lin + lam * p_lin * (g_lin - g), lam * p_lin
-    k = params[0]
-    if code == LINEAR:
-        if g < 0.0:
-            return -k * g, k
-        return 0.0, 0.0
-    return -k * g, k
-
-
-@njit
-def potential(code, params, g):
-    """Phi(g) with p = -dPhi/dg, Phi >= 0 [J/m^2]."""
-    if code == EXPONENTIAL:
-        p0, lam, g_lin = params[0], params[1], params[2]
-        if g >= g_lin:
-            return p0 / lam * np.exp(-lam * g)
-        p_lin = p0 * np.exp(-lam * g_lin)
-        d = g_lin - g
-        return p_lin / lam + p_lin * d + 0.5 * lam * p_lin * d * d
-    k = params[0]
-    if code == LINEAR:
-        return 0.5 * k * g * g if g < 0.0 else 0.0
-    return 0.5 * k * g * g
-
-
 def law_params(spec, k):
     """(code, params) of a validated [contact.NAME.law] table; k: the pair's stiffness density."""
     code = NAMES[spec["kind"]]
@@ -66,7 +32,7 @@ def law_params(spec, k):
 
 @njit
 def pressure_potential(code, params, g):
-    """(p, k_t, Phi) at gap g with a single exponential (the kernels' inner loop)."""
+    """(p, k_t, Phi) at gap g, with a single exponential."""
     if code == EXPONENTIAL:
         p0, lam, g_lin = params[0], params[1], params[2]
         if g >= g_lin:
@@ -85,8 +51,20 @@ def pressure_potential(code, params, g):
 
 
 @njit
+def pressure(code, params, g):
+    """(p, k_t) at gap g."""
+    p, kt, _ = pressure_potential(code, params, g)
+    return p, kt
+
+
+@njit
+def potential(code, params, g):
+    """Phi(g) with p = -dPhi/dg, Phi >= 0 [J/m^2]."""
+    return pressure_potential(code, params, g)[2]
+
+
+@njit
 def evaluate(code, params, g, p, kt, phi):
     """Vector version: p, k_t and Phi at gaps g (m,) with per-point code (m,), params (m, 4)."""
     for i in range(g.shape[0]):
-        p[i], kt[i] = pressure(code[i], params[i], g[i])
-        phi[i] = potential(code[i], params[i], g[i])
+        p[i], kt[i], phi[i] = pressure_potential(code[i], params[i], g[i])

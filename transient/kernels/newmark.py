@@ -24,6 +24,14 @@ WOODBURY_REST = 0.1
 
 
 @njit_fast
+def _corrected(qp, vp, a, dt, q, v):
+    """Newmark's displacement and velocity from their predictors and the accelerations."""
+    for k in range(q.shape[0]):
+        q[k] = qp[k] + 0.25 * dt * dt * a[k]
+        v[k] = vp[k] + 0.5 * dt * a[k]
+
+
+@njit_fast
 def _active_rows(code, params, gap, w, kt0, h2, Gd, e, active):
     """Fills e and the rows to correct exactly (largest |e_i| G_ii first); returns their count."""
     m = gap.shape[0]
@@ -116,9 +124,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
         _external(t, patterns, sig, svals, fext)
         converged = False
         for it in range(max_iter):
-            for k in range(n):
-                q[k] = qp[k] + h2 * a[k]
-                v[k] = vp[k] + 0.5 * dt * a[k]
+            _corrected(qp, vp, a, dt, q, v)
             phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
                                        fbuf)
             rnorm = 0.0
@@ -143,9 +149,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
                 _woodbury(y, u, active, n_active, e, Z, G)
             for k in range(n):
                 a[k] -= y[k]
-        for k in range(n):
-            q[k] = qp[k] + h2 * a[k]
-            v[k] = vp[k] + 0.5 * dt * a[k]
+        _corrected(qp, vp, a, dt, q, v)
         work = 0.0
         power = 0.0
         kin = 0.0
@@ -230,9 +234,7 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
         _external(t, patterns, sig, svals, fext)
         converged = False
         for it in range(max_iter):
-            for k in range(n):
-                q[k] = qp[k] + h2 * a[k]
-                v[k] = vp[k] + 0.5 * dt * a[k]
+            _corrected(qp, vp, a, dt, q, v)
             phi, lin = remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, rem, gap, press)
             csr_matvec(Kp, Ki, Kd, q, ku)
             csr_abs_matvec(Kp, Ki, Kd, q, kabs)
@@ -264,9 +266,7 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
                 _woodbury(y, u, active, n_active, e, Z, G)
             for k in range(n):
                 a[k] -= y[k]
-        for k in range(n):
-            q[k] = qp[k] + h2 * a[k]
-            v[k] = vp[k] + 0.5 * dt * a[k]
+        _corrected(qp, vp, a, dt, q, v)
         csr_matvec(Kp, Ki, Kd, q, ku)
         csr_matvec(Mp, Mi, Md, v, mv)
         if beta != 0.0:

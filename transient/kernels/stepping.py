@@ -310,6 +310,15 @@ def _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, 
 
 
 @njit_fast
+def _propagate(coef, q0, v0, f0, f1, q, v):
+    """(q, v) at the end of a step from (q0, v0) and forces f0, f1 at its ends, mode by mode."""
+    for k in range(q.shape[0]):
+        dF = f1[k] - f0[k]
+        q[k] = coef[k, 0] * q0[k] + coef[k, 1] * v0[k] + coef[k, 4] * f0[k] + coef[k, 6] * dF
+        v[k] = coef[k, 2] * q0[k] + coef[k, 3] * v0[k] + coef[k, 5] * f0[k] + coef[k, 7] * dF
+
+
+@njit_fast
 def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
                         code, params, patterns, sig, S, blocks, corrections, propagate, fprev,
                         out_t, out_s, out_g, out_p, out_e):
@@ -359,23 +368,13 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
         t += dt
         _external(t, patterns, sig, svals, fext)
         for it in range(corrections + 1):
-            for k in range(n):
-                dF = f1[k] - f0[k]
-                q[k] = (coef[k, 0] * q0[k] + coef[k, 1] * v0[k] + coef[k, 4] * f0[k]
-                        + coef[k, 6] * dF)
-                v[k] = (coef[k, 2] * q0[k] + coef[k, 3] * v0[k] + coef[k, 5] * f0[k]
-                        + coef[k, 7] * dF)
+            _propagate(coef, q0, v0, f0, f1, q, v)
             phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
                                        fbuf)
             for k in range(n):
                 f1[k] = fext[k] + rem[k]
         if propagate:
-            for k in range(n):
-                dF = f1[k] - f0[k]
-                q[k] = (coef[k, 0] * q0[k] + coef[k, 1] * v0[k] + coef[k, 4] * f0[k]
-                        + coef[k, 6] * dF)
-                v[k] = (coef[k, 2] * q0[k] + coef[k, 3] * v0[k] + coef[k, 5] * f0[k]
-                        + coef[k, 7] * dF)
+            _propagate(coef, q0, v0, f0, f1, q, v)
         work = 0.0
         power = 0.0
         kin = 0.0
