@@ -381,15 +381,9 @@ def cmd_run(args):
 
 
 def cmd_info(args):
-    from pathlib import Path
-    from .history import format_summary, summary
-    path = Path(args.file)
-    if not path.exists():
-        raise CaseError(path, "", "file not found")
-    try:
-        d = summary(path)
-    except (OSError, KeyError, ValueError) as exc:
-        raise CaseError(path, "", f"not a transient history: {exc}") from None
+    from .history import format_summary
+    from .stored import read_summary
+    d = read_summary(args.file)
     print(json.dumps(d) if args.json else format_summary(d))
     return 0
 

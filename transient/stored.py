@@ -59,15 +59,21 @@ class Stored:
         return CaseError(self.path, key, message)
 
 
-def open_history(path):
-    """The history at path, checked to be one with a /time series."""
+def read_summary(path):
+    """`history.summary` of the file at path; a missing or foreign file is a CaseError."""
     path = Path(path)
     if not path.exists():
         raise CaseError(path, "", "file not found")
     try:
-        d = summary(path)
+        return summary(path)
     except (OSError, KeyError, ValueError) as exc:
         raise CaseError(path, "", f"not a transient history: {exc}") from None
+
+
+def open_history(path):
+    """The history at path, checked to be one with a /time series."""
+    path = Path(path)
+    d = read_summary(path)
     if "time" not in d["series"]:
         raise CaseError(path, "", "not a transient history: no /time series")
     meta = dict(d["meta"], status=d["status"])
