@@ -29,8 +29,10 @@ def test_every_case_is_tested():
     # bar_impact.toml: tests/test_transient.py::test_bar_on_a_rigid_wall (contact duration 2 L / c)
     # pad_disc_long.toml: test_pad_disc_schemes_agree_below_5khz (its scheme settings) and
     # tools/bench_long.py (the whole second)
+    # two_bars.toml: tests/test_transient.py::test_two_identical_bars_exchange_velocities
     assert sorted(p.name for p in CASES.glob("*.toml")) == [
-        "bar_impact.toml", "drilled_cube.toml", "pad_disc.toml", "pad_disc_long.toml"]
+        "bar_impact.toml", "drilled_cube.toml", "pad_disc.toml", "pad_disc_long.toml",
+        "two_bars.toml"]
 
 
 def test_drilled_cube_mass_and_modes(capsys):

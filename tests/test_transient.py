@@ -67,50 +67,7 @@ def test_bar_on_a_rigid_wall(tmp_path, overrides):
     assert np.median(p[on]) == pytest.approx(7800.0 * C_WAVE * V0, rel=0.1)
 
 
-TWO_BARS = """
-[materials.steel]
-E = 2.1e11
-nu = 0.0
-rho = 7800.0
-
-[parts.left]
-material = "steel"
-[parts.left.mesh]
-kind = "box"
-size = [0.1, 0.01, 0.01]
-divisions = [60, 1, 1]
-
-[parts.right]
-material = "steel"
-[parts.right.mesh]
-kind = "box"
-size = [0.1, 0.01, 0.01]
-origin = [0.10001, 0.0, 0.0]
-divisions = [60, 1, 1]
-
-[initial.hit]
-part = "left"
-velocity = [1.0, 0.0, 0.0]
-
-# two deformable tips on one penalty spring: half the wall's k keeps each event resolved
-[contact.impact]
-surface1 = "left.xmax"
-surface2 = "right.xmin"
-k = 1.0e14
-
-[sensors.left_tail]
-part = "left"
-point = [0.0, 0.005, 0.005]
-direction = [1.0, 0.0, 0.0]
-
-[sensors.right_tail]
-part = "right"
-point = [0.20001, 0.005, 0.005]
-direction = [1.0, 0.0, 0.0]
-
-[solver]
-t_end = 1.0e-4
-"""
+TWO_BARS = (CASES / "two_bars.toml").read_text()
 
 
 def test_two_identical_bars_exchange_velocities(tmp_path):

@@ -60,55 +60,6 @@ BAR_LENGTH = 0.1                   # cases/bar_impact.toml: the bar's end at x =
 LAMBDA_BAR = 1e6                   # the bar's exponential wall law when lambda is not swept
 EXP = 'contact.wall.law.kind="exponential"'
 
-# the two-bars scene of tests/test_transient.py: two deformable tips on one penalty pair
-TWO_BARS = """
-[materials.steel]
-E = 2.1e11
-nu = 0.0
-rho = 7800.0
-
-[parts.left]
-material = "steel"
-[parts.left.mesh]
-kind = "box"
-size = [0.1, 0.01, 0.01]
-divisions = [60, 1, 1]
-
-[parts.right]
-material = "steel"
-[parts.right.mesh]
-kind = "box"
-size = [0.1, 0.01, 0.01]
-origin = [0.10001, 0.0, 0.0]
-divisions = [60, 1, 1]
-
-[initial.hit]
-part = "left"
-velocity = [1.0, 0.0, 0.0]
-
-[contact.impact]
-surface1 = "left.xmax"
-surface2 = "right.xmin"
-k = 1.0e14
-
-[sensors.left_tail]
-part = "left"
-point = [0.0, 0.005, 0.005]
-direction = [1.0, 0.0, 0.0]
-
-[sensors.right_tail]
-part = "right"
-point = [0.20001, 0.005, 0.005]
-direction = [1.0, 0.0, 0.0]
-
-[solver]
-scheme = "explicit"
-t_end = 1.0e-4
-
-[output]
-contact = true
-"""
-
 
 def without_tables(text, prefix):
     """TOML text without the tables [prefix] and [prefix.*] (a scene without contact)."""
@@ -129,7 +80,8 @@ def bases(directory):
     pad = (CASES / "pad_disc.toml").read_text()
     written = {"bar_free.toml": without_tables(bar, "contact"),
                "pad_free.toml": without_tables(pad, "contact"),
-               "two_bars.toml": TWO_BARS}
+               "two_bars.toml": (CASES / "two_bars.toml").read_text()
+               + "\n[output]\ncontact = true\n"}
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     for name, text in written.items():
