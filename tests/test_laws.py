@@ -1,5 +1,5 @@
-"""Contact laws: the kernels' one-exponential evaluation against the separate ones, and
-p = -dPhi/dg, k_t = -dp/dg, continuous through the linear continuation."""
+"""Contact laws: the one-call evaluation agrees with the pressure and potential read apart,
+and p = -dPhi/dg, k_t = -dp/dg, continuous through the linear continuation."""
 import numpy as np
 import pytest
 
