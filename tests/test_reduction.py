@@ -46,3 +46,20 @@ def test_contact_flexibility_kept_to_the_tolerance(tol, m):
         assert basis.n_contact_shapes == np.sum(mu >= tol)
     if tol == 1e-1:
         assert basis.n_contact_shapes < C.shape[0]
+
+
+def test_contact_shapes_from_the_woodbury_solver_match_a_direct_factorization():
+    """With more points than touched dofs, the shapes come from the ContactSolver's K^-1 E
+    (no solves of their own): the same basis as from a factorization of K_lin itself."""
+    from transient.lowrank import ContactSolver
+    K, M, C = chain(m=90)
+    tangent = np.geomspace(1e3, 1e6, C.shape[0])
+    K_lin = (K + C.T @ sp.diags(tangent) @ C).tocsr()
+    fixed = np.zeros(K.shape[0], bool)
+    solve = ContactSolver(K, M, C, 0.0).solver(tangent)
+    assert hasattr(solve, "on_columns")
+    bases = [reduced_basis(K_lin, M, fixed, 50.0, np.zeros((K.shape[0], 0)), s, 0.0,
+                           (C, tangent), 1e-3) for s in (solve, factorize(K_lin))]
+    assert bases[0].n_contact_shapes == bases[1].n_contact_shapes > 0
+    assert np.allclose(bases[0].contact_flexibility, bases[1].contact_flexibility, rtol=1e-8)
+    assert np.allclose(bases[0].omega2, bases[1].omega2, rtol=1e-8)

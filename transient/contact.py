@@ -1,5 +1,8 @@
 """Contact pairs of a case through the stages interface -> compatibility -> regularize -> rule.
 
+The sampled rule leaves this stage as the (regularized) fine rule: its points are chosen after
+the reduction, on the reduced dynamics (sampling.py).
+
 A stage runs only when the pair needs it: the fine rule without regularization does no
 eigendecomposition; `need_compatibility` forces it (for `transient compat`).
 """
@@ -18,6 +21,8 @@ from .regularize import dual_projectors, primal_basis, regularized_rule
 from .rules import centre_rule
 from .selections import set_faces
 
+DENSE_FILL = 0.1   # fill of the rows above which C^T diag(k w) C is formed dense
+
 
 @dataclass(frozen=True)
 class ContactPair:
@@ -31,6 +36,7 @@ class ContactPair:
     primal: object            # T_eps for the primal formulation, else None
     coarse: object            # CoarseRule of the greedy rule, else None
     timings: dict             # stage -> seconds, in the order run
+    candidates: int = 0       # sampled rule: the fine points it was sampled from
 
     @property
     def k(self):
@@ -61,9 +67,10 @@ def build_pair(case, model, name, need_compatibility=False):
             if len(spec["wall_point"]) != 3 or spec["surface2"]:
                 raise CaseError(case.path, f"{key}.wall_point", "a wall takes a point [x, y, z] "
                                 "and no surface2")
-            if spec["regularized"] or spec["rule"] != "fine":
+            if spec["regularized"] or spec["rule"] not in ("fine", "sampled"):
                 raise CaseError(case.path, f"{key}.rule", "a rigid wall is observed by the fine "
-                                "rule only (no second mesh to be compatible with)")
+                                "rule, or points sampled from it, unregularized (no second "
+                                "mesh to be compatible with)")
             interface = build_wall_interface(name, p1.mesh.points, faces1, p1.offset,
                                              spec["wall_point"], spec["wall_normal"],
                                              spec["order"])
@@ -144,7 +151,12 @@ def contact_stiffness(pairs, ndof, active=None, kw=None):
         if active is not None:
             kw_i = kw_i * active[i]
         B = sp.hstack([sp.csr_matrix(rule.C1), -sp.csr_matrix(rule.C2)]).tocsr()
-        A = (B.T @ sp.diags(kw_i) @ B).tocsr()
+        if B.nnz > DENSE_FILL * B.shape[0] * B.shape[1]:
+            # regularized rows are dense: BLAS, not a sparse product of dense-filled matrices
+            Bd = B.toarray()
+            A = sp.csr_matrix((Bd.T * kw_i) @ Bd)
+        else:
+            A = (B.T @ sp.diags(kw_i) @ B).tocsr()
         D = sp.vstack([pair.interface.side1.dof_map(ndof),
                        pair.interface.side2.dof_map(ndof)]).tocsr()
         K = K + (D.T @ A @ D).tocsr()

@@ -15,6 +15,7 @@ import scipy.sparse as sp
 from .linsolve import factorize
 
 MAX_BYTES = 1.5e9     # Z = A0^-1 C^T dense; beyond this, factorize A0 + C^T D C directly
+BLOCK = 256           # right-hand sides per solve when forming Z (bounds the solver's copies)
 
 
 class ContactSolver:
@@ -39,14 +40,20 @@ class ContactSolver:
         self.lowrank = m > 0 and 8.0 * n * rank <= MAX_BYTES
         self.solve0 = factorize(self.A0, backend, definite=sigma <= 0)
         if self.lowrank:
+            CT = self.C.T.tocsc()
+            self.Z = np.empty((n, rank), order="F")
+            for start in range(0, rank, BLOCK):
+                stop = min(start + BLOCK, rank)
+                if self.by_columns:
+                    b = np.zeros((n, stop - start), order="F")
+                    b[self.cols[start:stop], np.arange(stop - start)] = 1.0
+                else:
+                    b = np.asfortranarray(CT[:, start:stop].toarray())
+                self.Z[:, start:stop] = np.atleast_2d(self.solve0(b).T).T
             if self.by_columns:
-                E = np.zeros((n, k), order="F")
-                E[self.cols, np.arange(k)] = 1.0
-                self.Z = self.solve0(E)
                 self.G = self.Z[self.cols]
                 self.Cc = self.C[:, self.cols].toarray()
             else:
-                self.Z = self.solve0(np.asfortranarray(self.C.T.toarray()))
                 self.G = np.asarray(self.C @ self.Z)
 
     def solver(self, d):
@@ -66,6 +73,10 @@ class ContactSolver:
             def solve(b):
                 y = solve0(b)
                 return y - Z @ sla.lu_solve(lu, core @ y[cols])
+            # the responses to unit loads on the touched dofs E without solving again:
+            # (A0 + E core E^T)^-1 E = Z R, R = I - (I + core G)^-1 core G
+            solve.on_columns = (cols, Z, lambda: np.eye(len(cols))
+                                - sla.lu_solve(lu, core @ self.G))
         else:
             lu = sla.lu_factor(np.eye(len(d)) + d[:, None] * self.G)
             C = self.C

@@ -122,18 +122,31 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
     part (k x k, from k solves). With X = D^1/2 Cc and H = H^1/2 H^1/2, D^1/2 F D^1/2 = Y Y^T,
     Y = X H^1/2 (m x k): its SVD gives mu and the u_i, and the shapes are (K^-1 E) X^T u_i."""
     n, k = C.shape[1], len(cols)
-    E = np.zeros((n, k), order="F")
-    E[cols, np.arange(k)] = 1.0
-    KE = np.atleast_2d(solve(E).T).T
+    known = getattr(solve, "on_columns", None)
+    if known is not None and np.array_equal(known[0], cols):
+        # the solver has K^-1 E = Z R already (lowrank.ContactSolver): no k solves, no n x k
+        Z, R = known[1], known[2]()
+        H = Z[cols] @ R
+
+        def response(Y):
+            return Z @ (R @ Y)
+    else:
+        E = np.zeros((n, k), order="F")
+        E[cols, np.arange(k)] = 1.0
+        KE = np.atleast_2d(solve(E).T).T
+        H = KE[cols]
+
+        def response(Y):
+            return KE @ Y
     PhiE = Phi[cols]
-    H = KE[cols] - (PhiE / np.maximum(omega2, 1e-300)) @ PhiE.T
+    H = H - (PhiE / np.maximum(omega2, 1e-300)) @ PhiE.T
     lam, W = np.linalg.eigh(0.5 * (H + H.T))
     root = (W * np.sqrt(np.maximum(lam, 0.0))) @ W.T
     X = np.sqrt(np.maximum(stiffness, 0.0))[:, None] * sp.csr_matrix(C)[:, cols].toarray()
     U, sv, _ = np.linalg.svd(X @ root, full_matrices=False)
     mu = sv ** 2
     kept = mu >= tol
-    return KE @ (X.T @ U[:, kept]), mu
+    return response(X.T @ U[:, kept]), mu
 
 
 def exponential_coefficients(omega2, damp, dt):
