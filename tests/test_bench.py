@@ -30,10 +30,10 @@ def test_compare_measures_what_it_says():
 
 def test_bench_sweeps_the_rules_of_a_small_pad_on_a_disc():
     rows = bench(CASES / "pad_disc.toml", SMALL, eps_list=[1e-6, 1.0], points_list=[0, 20],
-                 t_end=1e-3)
+                 t_end=1e-3, tolerances=[1e-2])
     labels = [r["label"] for r in rows]
     assert labels == ["fine", "fine reg eps=1e-06", "fine reg eps=1", "centre", "centre reg",
-                      "greedy m=rank", "greedy m=20"]
+                      "greedy m=rank", "greedy m=20", "sampled tol=0.01"]
     ref = rows[0]
     assert ref["rule"] == "fine" and ref["error_rms"] == 0.0
     assert all(r["status"] == "complete" for r in rows)
@@ -42,6 +42,8 @@ def test_bench_sweeps_the_rules_of_a_small_pad_on_a_disc():
     assert rows[2]["kept"] > rows[1]["kept"]
     assert rows[2]["error_rms"] < 1e-3 and rows[2]["frequency_error"] < 1e-3
     assert rows[1]["error_rms"] > 10 * rows[2]["error_rms"]
+    # the sampled rule: fewer points than the fine rule, the regularized fine rule's basis
+    assert rows[7]["points"] < ref["points"] and rows[7]["regularized"]
     for r in rows:
         assert r["setup_s"] > 0 and r["kernel_s"] > 0 and r["total_s"] >= r["kernel_s"]
     best = target(rows)
@@ -50,6 +52,7 @@ def test_bench_sweeps_the_rules_of_a_small_pad_on_a_disc():
 
 def test_bench_command_writes_csv_json_png(tmp_path, capsys):
     args = ["bench", str(CASES / "pad_disc.toml"), "--eps", "1e-3", "--points", "15",
+            "--tolerances", "1e-2",
             "--t-end", "5e-4", "--out", str(tmp_path), "--json"]
     for o in SMALL:
         args += ["--set", o]
@@ -58,8 +61,8 @@ def test_bench_command_writes_csv_json_png(tmp_path, capsys):
     assert out["rows"][0]["rule"] == "fine"
     assert {"rule", "points", "setup_s", "kernel_s", "total_s", "error_rms"} <= set(out["rows"][0])
     saved = json.loads((tmp_path / "bench.json").read_text())
-    assert len(saved["rows"]) == len(out["rows"]) == 5
-    assert (tmp_path / "bench.csv").read_text().count("\n") == 6
+    assert len(saved["rows"]) == len(out["rows"]) == 6
+    assert (tmp_path / "bench.csv").read_text().count("\n") == 7
     assert (tmp_path / "bench.png").stat().st_size > 10_000
 
 

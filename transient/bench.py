@@ -1,7 +1,8 @@
 """`transient bench`: error against run time for a sweep of contact rules on one case.
 
 Each variant of the case's contact pair (the fine rule: the reference; the fine rule regularized
-at each eps; the centre rule, plain and regularized; the greedy coarse rule at several m) is
+at each eps; the centre rule, plain and regularized; the greedy coarse rule at several m; the
+sampled rule at several tolerances, regularized at the case's eps) is
 set up (`run.prepare`, timed) and integrated in memory (`run.simulate`, timed) over the same
 time, then compared with the reference:
 - error_rms: RMS over the sensor histories of the difference of the motion about the preloaded
@@ -40,7 +41,7 @@ class Variant:
     settings: dict     # contact.<pair>.<key> -> value
 
 
-def variants(eps_list, points_list):
+def variants(eps_list, points_list, tolerances=()):
     """The sweep: reference first. points 0 means the rank of the kept shapes."""
     rows = [Variant("fine", "fine", {"rule": "fine", "regularized": False})]
     rows += [Variant("fine", f"fine reg eps={e:g}",
@@ -49,6 +50,9 @@ def variants(eps_list, points_list):
              Variant("centre", "centre reg", {"rule": "centre", "regularized": True})]
     rows += [Variant("greedy", f"greedy m={m or 'rank'}",
                      {"rule": "greedy", "regularized": True, "points": m}) for m in points_list]
+    rows += [Variant("sampled", f"sampled tol={t:g}",
+                     {"rule": "sampled", "regularized": True, "sampling_tolerance": t})
+             for t in tolerances]
     return rows
 
 
@@ -131,14 +135,15 @@ def compare(ref, series, ref_freq, freq):
 
 
 def bench(path, overrides=(), pair=None, eps_list=(1e-6, 1e-4, 1e-3, 1e-2),
-          points_list=None, t_end=None, progress=None):
+          points_list=None, t_end=None, progress=None, tolerances=(3e-2, 1e-2, 3e-3)):
     """Rows of the sweep, reference first (rule 'fine'). points_list None: the greedy rule's
-    own count r (m = 0), then r / 2, r / 4, 4 r and 10 r (those below the fine rule's)."""
+    own count r (m = 0), then r / 2, r / 4, 4 r and 10 r (those below the fine rule's);
+    tolerances: the sampled rule's."""
     case = load(path, list(overrides))
     pair = _pair_name(case, pair)
     rows = []
     ref = ref_freq = None
-    todo = variants(eps_list, points_list if points_list is not None else [0])
+    todo = variants(eps_list, points_list if points_list is not None else [0], tolerances)
     k = 0
     while k < len(todo):
         variant = todo[k]
@@ -189,7 +194,7 @@ def _plot(rows, path):
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
     floor = 1e-6     # the reference's own error is 0: drawn at the floor
-    markers = {"fine": "o", "centre": "s", "greedy": "^"}
+    markers = {"fine": "o", "centre": "s", "greedy": "^", "sampled": "D"}
     for ax, key, name in zip(axes, ("kernel_s", "total_s"), ("kernel", "setup + kernel")):
         for row in rows:
             err = max(row["error_rms"], floor)

@@ -44,7 +44,7 @@ def _parser():
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p = sub.add_parser("bench", help="error against run time for a sweep of contact rules: "
                        "fine (reference), fine regularized at each eps, centre, centre "
-                       "regularized, greedy at several m")
+                       "regularized, greedy at several m, sampled at several tolerances")
     _case_args(p)
     p.add_argument("--pair", help="contact pair to sweep (default: the first)")
     p.add_argument("--eps", default="1e-6,1e-4,1e-3,1e-2", help="eps of the regularized fine "
@@ -52,6 +52,9 @@ def _parser():
     p.add_argument("--points", help="greedy m, comma separated, 0 the rank of the kept shapes "
                    "(default: the greedy rule's own count r, then r/2, r/4, 4r, 10r below "
                    "the fine rule's count)")
+    p.add_argument("--tolerances", default="3e-2,1e-2,3e-3", help="sampling tolerances of "
+                   "the sampled rule, regularized at the case's eps, comma separated (default "
+                   "3e-2,1e-2,3e-3; empty for none)")
     p.add_argument("--t-end", type=float, help="simulated time [s] (default: the case's)")
     p.add_argument("--out", metavar="DIR", help="directory of bench.csv, bench.json and "
                    "bench.png (default: <case name>_bench next to the case)")
@@ -400,13 +403,15 @@ def cmd_bench(args):
     from .bench import HEADER, bench, format_row, target, write
     eps = _numbers(args.eps, "--eps", float)
     points = _numbers(args.points, "--points", int) if args.points else None
+    tolerances = _numbers(args.tolerances, "--tolerances", float)
     if not args.json:
         print(HEADER)
 
     def show(row):
         if not args.json:
             print(format_row(row), flush=True)
-    rows = bench(args.case, args.overrides, args.pair, eps, points, args.t_end, show)
+    rows = bench(args.case, args.overrides, args.pair, eps, points, args.t_end, show,
+                 tolerances)
     out = args.out or Path(args.case).with_name(Path(args.case).stem + "_bench")
     files = write(rows, out)
     best = target(rows)

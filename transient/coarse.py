@@ -143,13 +143,13 @@ def select(candidates, fine, B1, B2, m=0, tol=1e-8, weighting="nearest"):
     errors = {name: energy_error(R_sel, w, E_fine) for name, w in options.items()}
     best = min(errors, key=errors.get)
     w = options[best]
-    rule = _subset(candidates, chosen, w)
+    rule = subset_rule(candidates, chosen, w)
     timings = {"selection": t_select, "weights": time.perf_counter() - t0 - t_select}
     return CoarseRule(rule, chosen, residual, k, best, errors[best],
                       float(w.sum() / fine.area - 1), errors, timings)
 
 
-def _subset(rule, idx, weights):
+def subset_rule(rule, idx, weights):
     return replace(rule, points=rule.points[idx], weights=weights, normals=rule.normals[idx],
                    gap0=rule.gap0[idx], face1=rule.face1[idx], face2=rule.face2[idx],
                    C1=rule.C1[idx], C2=rule.C2[idx])

@@ -26,6 +26,13 @@ class ContactSet:
         evaluate(self.code, self.params, np.ascontiguousarray(g), p, kt, phi)
         return p, kt, phi
 
+    def subset(self, keep, weights):
+        """The points keep (sorted indices) with new weights; pairs stay contiguous."""
+        bounds = {name: np.searchsorted(keep, [s.start, s.stop]) for name, s in self.slices.items()}
+        return ContactSet(self.C[keep], self.gap0[keep], weights, self.code[keep],
+                          self.params[keep], {name: slice(int(a), int(b))
+                                              for name, (a, b) in bounds.items()})
+
     def force(self, u):
         """Contact force C^T (w p) [N] at displacement u, with gaps, pressures and tangents."""
         g = self.C @ u + self.gap0

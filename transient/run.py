@@ -9,7 +9,7 @@ import copy
 import sys
 import time
 from pathlib import Path
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import h5py
 import numpy as np
@@ -17,6 +17,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from . import __version__
+from .coarse import subset_rule
 from .contact import build_contact, contact_stiffness
 from .contactset import stack
 from .errors import CaseError, RunAborted
@@ -26,8 +27,9 @@ from .lowrank import ContactSolver
 from .kernels import newmark, stepping
 from .kernels.laws import EXPONENTIAL
 from .model import build_model
-from .preload import PreloadError, solve_preload
+from .preload import Preload, PreloadError, solve_preload
 from .reduction import exponential_coefficients, reduced_basis
+from .sampling import ReducedPreloadError, sample_contact
 from .signals import compile_signals
 
 ENERGY_TERMS = ("kinetic", "strain", "contact", "external_work", "dissipated")
@@ -146,10 +148,20 @@ def prepare(case, quiet=True):
     if solver["scheme"] == "exponential" and not reduction["enabled"]:
         raise CaseError(case.path, "solver.scheme", "the exponential scheme propagates the modes "
                         "of a reduced model: set solver.reduction.enabled = true")
+    candidate = _candidates(case, pairs, contacts)
     if reduction["enabled"]:
         M = sp.diags(model.lumped_mass).tocsr() if solver["mass"] == "lumped" else model.M
-        problem = _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages,
-                           cs.solver(contacts.weights * preload.tangent))
+        problem, sampled, reduced_preload = _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig,
+                                    stages, cs.solver(contacts.weights * preload.tangent),
+                                    candidate)
+        if sampled is not None:
+            pairs = _sampled_pairs(pairs, contacts, sampled.keep, sampled.contacts)
+            contacts, preload = sampled.contacts, reduced_preload
+            problem.meta["sampling"] = {"candidates": int(candidate.sum()),
+                                        "points": int(len(sampled.sample.chosen)),
+                                        "residual": sampled.sample.residual,
+                                        "band_modes": sampled.sample.band,
+                                        "preload_iterations": sampled.iterations}
     else:
         if damping["modal"] > 0:
             raise CaseError(case.path, "solver.damping.modal", "modal damping needs the reduced "
@@ -166,6 +178,7 @@ def prepare(case, quiet=True):
         "pairs": {p.name: {"rule": p.spec["rule"], "points": p.rule.n_points,
                            "regularized": p.spec["regularized"], "eps": p.eps,
                            "kept": p.compat.kept(p.eps) if p.compat else None,
+                           "candidates": p.candidates or None,
                            "law": p.spec["law"]["kind"]} for p in pairs}})
     output = case["output"]
     problem.n_field = problem.state.shape[1] if output["field"] else 0
@@ -182,7 +195,51 @@ def prepare(case, quiet=True):
     return problem
 
 
-def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages, solve):
+def _candidates(case, pairs, contacts):
+    """Mask of the points a sampled rule picks from (None when no pair is sampled)."""
+    sampled = [p for p in pairs if p.spec["rule"] == "sampled"]
+    if not sampled:
+        return None
+    if not case["solver"]["reduction"]["enabled"]:
+        raise CaseError(case.path, f"contact.{sampled[0].name}.rule", "the sampled rule picks "
+                        "its points on the reduced model: set solver.reduction.enabled = true")
+    mask = np.zeros(contacts.n_points, bool)
+    for p in sampled:
+        mask[contacts.slices[p.name]] = True
+    return mask
+
+
+def _sampled_pairs(pairs, rich, keep, contacts):
+    """The pairs with the rules of the points kept (sampled pairs: chosen points and weights)."""
+    out = []
+    for p in pairs:
+        s, new = rich.slices[p.name], contacts.slices[p.name]
+        local = keep[new] - s.start
+        if len(local) == s.stop - s.start:
+            out.append(p)
+            continue
+        out.append(replace(p, rule=subset_rule(p.rule, local, contacts.weights[new]),
+                           candidates=s.stop - s.start))
+    return out
+
+
+def _sample(case, contacts, candidate, omega2, Cr, q0, preload):
+    """The sampled rule's points (sampling.py), with the reduced preload they hold."""
+    solver = case["solver"]
+    name = next(n for n, s in contacts.slices.items() if candidate[s].any())
+    spec = case["contact"][name]
+    band = int(np.sum(omega2 <= (2 * np.pi * solver["reduction"]["fmax"]) ** 2))
+    try:
+        return sample_contact(contacts, candidate, omega2, Cr, q0, preload.gap,
+                              preload.pressure, preload.tangent, band,
+                              spec["sampling_tolerance"], spec["points"],
+                              solver["newton"]["tolerance"], solver["newton"]["max_iter"])
+    except ReducedPreloadError as exc:
+        raise CaseError(case.path, f"contact.{name}.sampling_tolerance", str(exc)) from None
+
+
+def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages, solve,
+             candidate=None):
     solver = case["solver"]
     reduction = solver["reduction"]
     free = np.flatnonzero(~model.fixed)
@@ -200,6 +257,18 @@ def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages
     q0 = MT.T @ preload.u
     v = MT.T @ v0
     omega2 = basis.omega2
+    projection = float(np.linalg.norm(T @ q0 - preload.u) / max(np.linalg.norm(preload.u), 1e-300))
+    sampled = None
+    if candidate is not None:
+        sampled = _timed(stages, "sampling", _sample, case, contacts, candidate, omega2,
+                         np.asarray(contacts.C @ T), q0, preload)
+        T = T @ sampled.W
+        omega2, q0, v = sampled.omega2, sampled.q, sampled.W.T @ v
+        contacts = sampled.contacts
+        preload = Preload(T @ q0, sampled.gap, sampled.pressure, sampled.tangent,
+                          preload.iterations + sampled.iterations, sampled.residual,
+                          preload.seconds)
+        kt_crit = _critical_kt(contacts, preload)
     damping = solver["damping"]
     omega = np.sqrt(omega2)
     above = omega > 2 * np.pi * reduction["fmax"]
@@ -225,12 +294,9 @@ def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages
     problem.meta.update({"reduced_dofs": len(omega2), "normal_modes": basis.n_modes,
                          "contact_shapes": basis.n_contact_shapes,
                          "basis_timings": basis.timings,
-                         "basis_projection_error": float(
-                             np.linalg.norm(T @ q0 - preload.u)
-                             / max(np.linalg.norm(preload.u), 1e-300)),
-                         "free_dofs": len(free)})
+                         "basis_projection_error": projection, "free_dofs": len(free)})
     _initial_acceleration(problem)
-    return problem
+    return problem, sampled, preload
 
 
 def _reduced_critical_step(omega2, Cr, dkw):

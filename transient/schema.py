@@ -209,12 +209,20 @@ CONTACT = Table("a contact pair: two face sets of two parts, gap observed on the
     "k": Value("float", "stiffness density of the gap energy and of linear penalty contact",
                5e11, "Pa/m", open_min=0.0),
     "rule": Value("choice", "contact points: fine (the exact rule on Gamma), centre (one "
-                  "point per face of the master surface) or greedy (a coarse rule selected on "
-                  "the regularized observation)", "fine", choices=("fine", "centre", "greedy")),
+                  "point per face of the master surface), greedy (a coarse rule selected on "
+                  "the regularized observation) or sampled (the fewest fine points whose "
+                  "weights reproduce the contact stiffness that the reduced model's modes below "
+                  "fmax see, and the preload: ECSW on the contact-linearized dynamics; needs "
+                  "solver.reduction)", "fine", choices=("fine", "centre", "greedy", "sampled")),
     "candidates": Value("choice", "greedy: candidate points, the fine points or the face "
                         "centres of a surface", "fine", choices=("fine", "surface1", "surface2")),
     "points": Value("int", "greedy: number of points m (0: the rank of the kept shapes; more "
-                    "restarts the selection)", 0, minimum=0),
+                    "restarts the selection); sampled: at most this many (0: no cap)", 0,
+                    minimum=0),
+    "sampling_tolerance": Value("float", "sampled: relative residual of the contact stiffness "
+                                "and preload force reproduced; it sets the number of points "
+                                "(pad_disc: 1e-2 gives 421 of 7734 points, histories within "
+                                "0.4%)", 1e-2, open_min=0.0, maximum=1.0),
     "tolerance": Value("float", "greedy: stop when the largest remaining row norm falls below "
                        "this fraction of the largest", 1e-8, open_min=0.0, maximum=1.0),
     "weights": Value("choice", "greedy: nearest (each fine weight to its nearest point: exact "

@@ -1,0 +1,111 @@
+"""The sampled rule: NNLS in Gram form against scipy's, the Gram matrix against explicit
+features, and a small pad on a disc whose sampled points reproduce the fine rule's dynamics."""
+import numpy as np
+import pytest
+from scipy.optimize import nnls
+
+from transient.bench import Variant, compare, run_variant
+from transient.cli import main
+from transient.sampling import features, gram_column, gram_target, nnls_gram, sample
+
+from test_bench import CASES, SMALL
+
+
+def _explicit(c, cb, kt, ps):
+    """The feature columns z_i written out: k_t,i c_i c_iJ^T and p_i c_i / s."""
+    return np.stack([np.r_[kt[i] * np.outer(c[i], cb[i]).ravel(), ps[i] * c[i]]
+                     for i in range(len(c))], axis=1)
+
+
+def _random_system(rng, m=40, n=7, band=3):
+    omega2 = np.sort(rng.uniform(1.0, 50.0, n))
+    Cr = rng.normal(size=(m, n))
+    p = rng.uniform(0.0, 2.0, m)
+    return omega2, Cr, p, 3.0 * p, rng.normal(size=n), band
+
+
+def test_gram_matrix_is_the_features_gram():
+    rng = np.random.default_rng(0)
+    omega2, Cr, p, kt, q0, band = _random_system(rng)
+    feats = features(omega2, Cr, p, kt, q0, band)
+    Z = _explicit(*feats)
+    G = Z.T @ Z
+    for j in (0, 5, 39):
+        assert np.allclose(gram_column(feats, j), G[:, j], rtol=1e-12, atol=1e-12 * abs(G).max())
+    w = rng.uniform(0.5, 1.5, len(p))
+    assert np.allclose(gram_target(feats, w), G @ w, rtol=1e-11)
+
+
+def test_nnls_in_gram_form_matches_scipy():
+    rng = np.random.default_rng(1)
+    Z = rng.normal(size=(60, 40))
+    b = Z @ np.where(rng.uniform(size=40) < 0.3, rng.uniform(size=40), 0.0) \
+        + 0.3 * rng.normal(size=60)
+    G, h, bb = Z.T @ Z, Z.T @ b, b @ b
+    x_ref, r_ref = nnls(Z, b)
+    idx, x, res = nnls_gram(lambda j: G[:, j], h, bb, 0.0, 40)
+    assert np.all(x > 0) and 0 < len(idx) < 40
+    assert res == pytest.approx(r_ref / np.sqrt(bb), rel=1e-8)
+    full = np.zeros(40)
+    full[idx] = x
+    assert np.allclose(full, x_ref, atol=1e-8)
+    # a looser tolerance stops early, with fewer points, at a residual within it
+    idx2, x2, res2 = nnls_gram(lambda j: G[:, j], h, bb, 0.9, 40)
+    assert res2 <= 0.9 and len(idx2) < len(idx)
+    # the residual in Gram form loses half the digits: a reachable b stops near sqrt(eps)
+    _, _, res3 = nnls_gram(lambda j: G[:, j], G @ np.abs(x_ref), np.abs(x_ref) @ G
+                           @ np.abs(x_ref), 0.0, 40)
+    assert res3 < 1e-6
+
+
+def test_a_rule_that_is_its_own_sample_is_reproduced_exactly():
+    rng = np.random.default_rng(2)
+    omega2, Cr, p, kt, q0, band = _random_system(rng, m=12, n=4, band=2)
+    w = rng.uniform(0.5, 1.5, 12)
+    s = sample(omega2, Cr, w, p, kt, q0, band, 1e-12, 12)
+    assert s.residual < 1e-9
+    feats = features(omega2, Cr, p, kt, q0, band)
+    Z = _explicit(*feats)
+    assert np.allclose(Z[:, s.chosen] @ s.weights, Z @ w, atol=1e-9 * abs(Z @ w).max())
+
+
+@pytest.fixture(scope="module")
+def small_pad():
+    """The fine rule of a small pad on a disc (the reference) and its sampled rules."""
+    path, pair = CASES / "pad_disc.toml", "pad_disc"
+    ref = run_variant(path, SMALL, pair, Variant("fine", "fine", {"rule": "fine"}), 2e-3)
+    out = {}
+    for tol in (1e-1, 1e-2, 1e-3):
+        out[tol] = run_variant(path, SMALL, pair, Variant(
+            "sampled", "sampled", {"rule": "sampled", "sampling_tolerance": tol}), 2e-3)
+    return ref, out
+
+
+def test_sampled_points_reproduce_the_fine_rule_and_converge(small_pad):
+    (ref, ref_series, ref_freq), runs = small_pad
+    errors = {}
+    for tol, (row, series, freq) in runs.items():
+        assert row["status"] == "complete"
+        assert row["points"] < ref["points"]
+        assert row["reduced_dofs"] == ref["reduced_dofs"]
+        errors[tol] = compare(ref_series, series, ref_freq, freq)
+    points = [runs[t][0]["points"] for t in (1e-1, 1e-2, 1e-3)]
+    assert points[0] <= points[1] <= points[2] < ref["points"] / 10
+    assert errors[1e-2]["error_rms"] < 0.01
+    assert errors[1e-3]["error_rms"] < errors[1e-1]["error_rms"] / 3
+    # the band (below fmax, 6 kHz here) is what the points are fitted to
+    band = ref_freq < 6000.0
+    for tol, bound in ((1e-2, 1e-4), (1e-3, 1e-5)):
+        freq = runs[tol][2]
+        assert np.max(np.abs(freq[band] / ref_freq[band] - 1)) < bound
+
+
+def test_sampled_rule_needs_a_reduced_model(tmp_path, capsys):
+    args = ["run", str(CASES / "pad_disc.toml"), "-o", str(tmp_path / "x.h5"),
+            "--set", 'contact.pad_disc.rule="sampled"', "--set", "solver.reduction.enabled=false",
+            "--set", 'solver.scheme="explicit"']
+    for o in SMALL:
+        args += ["--set", o]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "contact.pad_disc.rule" in err and "reduction" in err and "Traceback" not in err

@@ -1,0 +1,187 @@
+"""Contact points sampled on the reduced dynamics: a few of a rich rule's points, with weights
+that reproduce what the vibration sees of the contact (ECSW, the energy-conserving sampling and
+weighting of Farhat et al., 2014, carried to the contact-linearized stiffness).
+
+A reduced model built on a rich rule (the fine rule, regularized or not) sees the contact about
+the preload through Kc = Cr^T diag(w k_t) Cr and the preload force Cr^T (w p). In the
+coordinates y = Omega q of the linearized modes (Omega^2 = diag(omega2)), Kc~ = Omega^-1 Kc
+Omega^-1: its diagonal is the relative shift of each eigenvalue that the contact makes, and its
+column j the coupling of mode j to all others (second-order shifts). A subset of the points with
+new weights w' >= 0 is asked to reproduce the columns of Kc~ of the modes in the band (below
+fmax), and the preload displacement Omega^-1 Cr^T (w p) relative to |Omega q0|: the band's
+frequencies and shapes then follow the rich rule's, and so do the histories.
+
+Each point's contribution is one feature column z_i (k_t,i c~_i c~_iJ^T, p_i c~_i), c~ = Cr
+Omega^-1, so the Gram matrix G = Z^T Z is known in closed form: G_il = (c~_i . c~_l)
+(k_t,i k_t,l (c~_iJ . c~_lJ) + p_i p_l / s^2). Lawson-Hanson's active-set NNLS runs on it with
+the columns formed only for the points it takes (memory N x m, not N^2, nor features x N), and
+stops at the relative residual asked: the tolerance sets the number of points.
+"""
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+
+@dataclass(frozen=True)
+class Sample:
+    chosen: np.ndarray       # indices of the sampled points among the candidates
+    weights: np.ndarray      # their weights w' >= 0
+    residual: float          # relative residual of the features reproduced
+    band: int                # modes whose stiffness columns are reproduced
+    seconds: float
+
+
+def features(omega2, Cr, pressure, tangent, q0, band):
+    """(c~, c~ of the band, k_t, p / s): what the Gram matrix of the points is made of."""
+    omega = np.sqrt(np.maximum(omega2, omega2[omega2 > 0].min() if np.any(omega2 > 0) else 1.0))
+    c = Cr / omega
+    s = max(np.linalg.norm(omega * q0), 1e-300)
+    return c, np.ascontiguousarray(c[:, :band]), tangent, pressure / s
+
+
+def gram_column(feats, j):
+    c, cb, kt, ps = feats
+    return (c @ c[j]) * (kt * kt[j] * (cb @ cb[j]) + ps * ps[j])
+
+
+def gram_target(feats, w):
+    """h = G w (the candidates' features against the rich rule's combination b = Z w)."""
+    c, cb, kt, ps = feats
+    Mf = (c * (w * kt)[:, None]).T @ cb
+    F = c.T @ (w * ps)
+    return kt * np.einsum("ia,ab,ib->i", c, Mf, cb, optimize=True) + ps * (c @ F)
+
+
+def nnls_gram(column, h, bb, tol, max_points):
+    """Lawson-Hanson NNLS on min |Z x - b|^2 given G = Z^T Z column by column, h = Z^T b and
+    |b|^2, stopped when |Z x - b| <= tol |b| or at max_points. The passive set's Gram block is
+    kept as a Cholesky factor, extended by one row per point taken and refactored only when a
+    point leaves. Returns (indices, x on them, relative residual)."""
+    N = len(h)
+    cap = min(max_points, N)
+    P = np.zeros(0, np.int64)
+    cols = np.empty((N, cap))
+    L = np.zeros((0, 0))
+    x = np.zeros(0)
+    grad = h.copy()
+    banned = np.zeros(N, bool)
+
+    def residual(x):
+        return np.sqrt(max(bb - 2 * h[P] @ x + x @ (cols[P, :len(P)] @ x), 0.0) / bb)
+
+    res = 1.0
+    while len(P) < cap:
+        res = residual(x) if len(P) else 1.0
+        if res <= tol:
+            break
+        score = np.where(banned, -np.inf, grad)
+        score[P] = -np.inf
+        j = int(np.argmax(score))
+        if score[j] <= 0:
+            break
+        g = column(j)
+        l = sla.solve_triangular(L, g[P], lower=True) if len(P) else np.zeros(0)
+        d2 = g[j] - l @ l
+        if d2 <= 1e-12 * g[j]:
+            banned[j] = True          # already in the span of the points taken
+            continue
+        cols[:, len(P)] = g
+        P = np.append(P, j)
+        L = np.block([[L, np.zeros((len(L), 1))], [l[None], np.sqrt(d2)[None, None]]])
+        x = np.append(x, 0.0)
+        while True:
+            z = sla.cho_solve((L, True), h[P])
+            if np.all(z > 0):
+                x = z
+                break
+            # step from x towards z until a weight reaches zero; those points leave
+            neg = z <= 0
+            alpha = np.min(x[neg] / (x[neg] - z[neg]))
+            x = x + alpha * (z - x)
+            keep = x > 1e-14 * max(x.max(), 1e-300)
+            if np.all(keep):
+                keep[np.argmin(x)] = False
+            P, x = P[keep], x[keep]
+            cols[:, :len(P)] = cols[:, np.flatnonzero(keep)]
+            L = np.linalg.cholesky(cols[P, :len(P)])
+        grad = h - cols[:, :len(P)] @ x
+    res = residual(x) if len(P) else 1.0
+    return P, x, float(res)
+
+
+def sample(omega2, Cr, weights, pressure, tangent, q0, band, tol, max_points):
+    """The points and weights reproducing the rich rule's contact on the reduced dynamics."""
+    t0 = time.perf_counter()
+    band = max(1, min(band, len(omega2)))
+    feats = features(omega2, Cr, pressure, tangent, q0, band)
+    h = gram_target(feats, weights)
+    bb = float(weights @ h)
+    chosen, w, res = nnls_gram(lambda j: gram_column(feats, j), h, bb, tol, max_points)
+    order = np.argsort(chosen)
+    return Sample(chosen[order], w[order], res, band, time.perf_counter() - t0)
+
+
+class ReducedPreloadError(RuntimeError):
+    pass
+
+
+@dataclass(frozen=True)
+class Sampled:
+    contacts: object         # ContactSet of the points kept (the sampled ones, and the others)
+    keep: np.ndarray         # their indices among the rich rule's points
+    W: np.ndarray            # (n, n) the linearized modes with the sampled contact, in q
+    omega2: np.ndarray       # their eigenvalues, ascending
+    q: np.ndarray            # preload in the new coordinates (q_old = W q)
+    gap: np.ndarray          # preload gaps, pressures and tangents of the points kept
+    pressure: np.ndarray
+    tangent: np.ndarray
+    iterations: int          # Newton iterations of the reduced preload
+    residual: float
+    sample: Sample
+
+
+def sample_contact(contacts, candidate, omega2, Cr, q0, gap, pressure, tangent, band, tol,
+                   max_points, newton_tol=1e-10, max_iter=50):
+    """Sample the candidate points (bool mask) of a reduced model built on the rich rule, then
+    re-solve the preload with the points kept and re-diagonalize the linearized stiffness.
+
+    omega2, Cr, q0: the rich model's (its linearized modes diagonalize K + Cr^T diag(w k_t) Cr);
+    gap, pressure, tangent: its preload state at every point. Points outside `candidate` are
+    kept with their weights and left out of the features (their contribution is exact).
+    """
+    cand = np.flatnonzero(candidate)
+    w = contacts.weights
+    s = sample(omega2, Cr[cand], w[cand], pressure[cand], tangent[cand], q0, band, tol,
+               max_points or len(cand))
+    weights = w.copy()
+    weights[cand] = 0.0
+    weights[cand[s.chosen]] = s.weights
+    keep = np.flatnonzero(~candidate | (weights > 0))
+    sub = contacts.subset(keep, weights[keep])
+    # the structure alone, and the constant load balancing the rich rule's preload
+    Kr = np.diag(omega2) - (Cr.T * (w * tangent)) @ Cr
+    fr = Kr @ q0 - Cr.T @ (w * pressure)
+    Ck = Cr[keep]
+    q, g, p, kt, iterations, res = reduced_preload(Kr, fr, Ck, sub, q0, newton_tol, max_iter)
+    omega2_s, W = np.linalg.eigh(Kr + (Ck.T * (sub.weights * kt)) @ Ck)
+    return Sampled(sub, keep, W, np.maximum(omega2_s, 0.0), W.T @ q, g, p, kt, iterations, res,
+                   s)
+
+
+def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter):
+    """Newton on fr + Cr^T (w p(Cr q + g0)) - Kr q = 0 (dense: a reduced model)."""
+    q = q.copy()
+    scale = max(np.linalg.norm(fr), 1e-300)
+    for it in range(max_iter + 1):
+        g = Cr @ q + contacts.gap0
+        p, kt, _ = contacts.laws(g)
+        r = fr + Cr.T @ (contacts.weights * p) - Kr @ q
+        res = np.linalg.norm(r) / scale
+        if res <= tol:
+            return q, g, p, kt, it, float(res)
+        if it < max_iter:
+            q += np.linalg.solve(Kr + (Cr.T * (contacts.weights * kt)) @ Cr, r)
+    raise ReducedPreloadError(f"the preload with the sampled points did not converge in "
+                              f"{max_iter} Newton iterations (residual {res:.1e})")
