@@ -27,3 +27,27 @@ def test_updates_solve_the_updated_system(m):
         A = (K + 4.0 * M + C.T @ sp.diags(d) @ C).tocsc()
         assert np.allclose(x, spla.spsolve(A, b), rtol=1e-9, atol=1e-12)
         assert np.allclose(cs.solver(d)(b[:, 0]), x[:, 0])
+
+
+def test_rows_of_low_rank_run_on_their_row_space():
+    """Regularized rows: dense on the touched dofs but of rank rho < k < m."""
+    rng = np.random.default_rng(7)
+    n, m, k, rho = 80, 60, 20, 6
+    A = sp.random(n, n, density=0.05, random_state=2)
+    K = (A + A.T + n * sp.eye(n)).tocsr()
+    M = sp.eye(n).tocsr()
+    cols = np.sort(rng.choice(n, k, replace=False))
+    dense = np.zeros((m, n))
+    dense[:, cols] = rng.standard_normal((m, rho)) @ rng.standard_normal((rho, k))
+    C = sp.csr_matrix(dense)
+    cs = ContactSolver(K, M, C, -4.0)
+    assert cs.by_columns and cs.Rm.shape == (m, rho) and cs.Z.shape == (n, rho)
+    b = rng.standard_normal((n, 2))
+    d = rng.uniform(0, 1e2, m)
+    x = cs.solver(d)(b)
+    direct = (K + 4.0 * M + C.T @ sp.diags(d) @ C).tocsc()
+    assert np.allclose(x, spla.spsolve(direct, b), rtol=1e-9, atol=1e-12)
+    cols_, V, Z, R = cs.solver(d).on_columns
+    B = np.zeros((n, rho))
+    B[cols_] = V
+    assert np.allclose(Z @ R(), spla.spsolve(direct, B), rtol=1e-9, atol=1e-12)

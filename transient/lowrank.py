@@ -16,15 +16,18 @@ from .linsolve import factorize
 
 MAX_BYTES = 1.5e9     # Z = A0^-1 C^T dense; beyond this, factorize A0 + C^T D C directly
 BLOCK = 256           # right-hand sides per solve when forming Z (bounds the solver's copies)
+ROW_SPACE_TOL = 1e-12
 
 
 class ContactSolver:
     """Factorization of A0 = K - sigma M on the free dofs, updated by contact tangents.
 
-    The update C^T D C has rank at most min(m, k), k the dofs the contact rows touch: with more
-    points than interface dofs (a fine rule: 7734 points on 1194 dofs for pad_disc) it is
-    written E (Cc^T D Cc) E^T, E the selection of those dofs and Cc = C E, and Woodbury runs on
-    the k columns of E instead of the m rows of C.
+    The update C^T D C has rank at most min(m, rank C). With more points than the k dofs the
+    rows touch (a fine rule: 7734 points on the pad_disc interface), C is written Rm B^T with
+    B = E V: E selects those dofs and V (k x rho) is an orthonormal basis of the row space of
+    C E. Woodbury then runs on the rho columns of B instead of the m rows of C: rho = k for the
+    fine rule, and only r1 + r2 (the kept shapes' traces) for a regularized one, whose dense
+    rows touch every interface dof (pad_disc: 2668 dofs, rank 612).
     """
 
     def __init__(self, K, M, C, sigma, backend="auto"):
@@ -39,22 +42,22 @@ class ContactSolver:
         rank = min(m, k)
         self.lowrank = m > 0 and 8.0 * n * rank <= MAX_BYTES
         self.solve0 = factorize(self.A0, backend, definite=sigma <= 0)
-        if self.lowrank:
-            CT = self.C.T.tocsc()
-            self.Z = np.empty((n, rank), order="F")
-            for start in range(0, rank, BLOCK):
-                stop = min(start + BLOCK, rank)
-                if self.by_columns:
-                    b = np.zeros((n, stop - start), order="F")
-                    b[self.cols[start:stop], np.arange(stop - start)] = 1.0
-                else:
-                    b = np.asfortranarray(CT[:, start:stop].toarray())
-                self.Z[:, start:stop] = np.atleast_2d(self.solve0(b).T).T
+        if not self.lowrank:
+            return
+        if self.by_columns:
+            self.Rm, self.V = row_space(self.C[:, self.cols].toarray())
+            rank = self.Rm.shape[1]
+        CT = self.C.T.tocsc()
+        self.Z = np.empty((n, rank), order="F")
+        for start in range(0, rank, BLOCK):
+            stop = min(start + BLOCK, rank)
             if self.by_columns:
-                self.G = self.Z[self.cols]
-                self.Cc = self.C[:, self.cols].toarray()
+                b = np.zeros((n, stop - start), order="F")
+                b[self.cols] = self.V[:, start:stop]
             else:
-                self.G = np.asarray(self.C @ self.Z)
+                b = np.asfortranarray(CT[:, start:stop].toarray())
+            self.Z[:, start:stop] = np.atleast_2d(self.solve0(b).T).T
+        self.G = self.V.T @ self.Z[self.cols] if self.by_columns else np.asarray(self.C @ self.Z)
 
     def solver(self, d):
         """solve(b) for (A0 + C^T diag(d) C) x = b; b (n,) or (n, k)."""
@@ -66,16 +69,16 @@ class ContactSolver:
             return factorize(A, self.backend, definite=False)
         Z, solve0 = self.Z, self.solve0
         if self.by_columns:
-            core = self.Cc.T @ (d[:, None] * self.Cc)
-            lu = sla.lu_factor(np.eye(len(self.cols)) + core @ self.G)
-            cols = self.cols
+            core = self.Rm.T @ (d[:, None] * self.Rm)
+            lu = sla.lu_factor(np.eye(len(core)) + core @ self.G)
+            cols, V = self.cols, self.V
 
             def solve(b):
                 y = solve0(b)
-                return y - Z @ sla.lu_solve(lu, core @ y[cols])
-            # the responses to unit loads on the touched dofs E without solving again:
-            # (A0 + E core E^T)^-1 E = Z R, R = I - (I + core G)^-1 core G
-            solve.on_columns = (cols, Z, lambda: np.eye(len(cols))
+                return y - Z @ sla.lu_solve(lu, core @ (V.T @ y[cols]))
+            # the responses to the loads B = E V without solving again:
+            # (A0 + B core B^T)^-1 B = Z R, R = I - (I + core G)^-1 core G
+            solve.on_columns = (cols, V, Z, lambda: np.eye(len(core))
                                 - sla.lu_solve(lu, core @ self.G))
         else:
             lu = sla.lu_factor(np.eye(len(d)) + d[:, None] * self.G)
@@ -87,3 +90,13 @@ class ContactSolver:
                 return y - Z @ sla.lu_solve(lu, d[:, None] * Cy if Cy.ndim == 2 else d * Cy)
         solve.backend = getattr(self.solve0, "backend", "?") + "+woodbury"
         return solve
+
+
+def row_space(Cc, tol=ROW_SPACE_TOL):
+    """Cc (m x k) = Rm V^T with V (k x rho) orthonormal: the eigenvectors of Cc^T Cc above
+    tol of its largest eigenvalue. The eigenvalues of the Gram carry round-off of about 1e-16
+    of the largest, so tol 1e-12 keeps singular values from 1e-6 of the largest: the part of
+    C dropped is below 1e-6 of it (projected rows have such round-off directions)."""
+    lam, V = np.linalg.eigh(Cc.T @ Cc)
+    V = V[:, lam > tol * max(lam.max(), 1e-300)]
+    return Cc @ V, V

@@ -120,17 +120,25 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
     """contact_shapes when the m points touch only k < m dofs (a fine rule): with E the
     selection of those dofs, C = Cc E^T and F = Cc H Cc^T, H = E^T K^-1 E minus the modes'
     part (k x k, from k solves). With X = D^1/2 Cc and H = H^1/2 H^1/2, D^1/2 F D^1/2 = Y Y^T,
-    Y = X H^1/2 (m x k): its SVD gives mu and the u_i, and the shapes are (K^-1 E) X^T u_i."""
+    Y = X H^1/2 (m x k): its singular values give mu and its left vectors the u_i, and the
+    shapes are (K^-1 E) X^T u_i. When the solver is a ContactSolver, E is replaced by the
+    basis E V of the rows' space it already solved for (Cc = Rm V^T; rho < k columns for a
+    regularized rule)."""
     n, k = C.shape[1], len(cols)
+    Cc = sp.csr_matrix(C)[:, cols].toarray()
     known = getattr(solve, "on_columns", None)
     if known is not None and np.array_equal(known[0], cols):
-        # the solver has K^-1 E = Z R already (lowrank.ContactSolver): no k solves, no n x k
-        Z, R = known[1], known[2]()
-        H = Z[cols] @ R
+        # the solver has K^-1 E V = Z R already, V a basis of the rows' space
+        # (lowrank.ContactSolver): no solves here, no n x k array
+        _, V, Z, R = known
+        R = R()
+        H = (V.T @ Z[cols]) @ R
+        Cc = Cc @ V
 
         def response(Y):
             return Z @ (R @ Y)
     else:
+        V = None
         E = np.zeros((n, k), order="F")
         E[cols, np.arange(k)] = 1.0
         KE = np.atleast_2d(solve(E).T).T
@@ -138,15 +146,18 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
 
         def response(Y):
             return KE @ Y
-    PhiE = Phi[cols]
+    PhiE = Phi[cols] if V is None else V.T @ Phi[cols]
     H = H - (PhiE / np.maximum(omega2, 1e-300)) @ PhiE.T
     lam, W = np.linalg.eigh(0.5 * (H + H.T))
     root = (W * np.sqrt(np.maximum(lam, 0.0))) @ W.T
-    X = np.sqrt(np.maximum(stiffness, 0.0))[:, None] * sp.csr_matrix(C)[:, cols].toarray()
-    U, sv, _ = np.linalg.svd(X @ root, full_matrices=False)
-    mu = sv ** 2
+    X = np.sqrt(np.maximum(stiffness, 0.0))[:, None] * Cc
+    # Y Y^T and Y^T Y = H^1/2 X^T X H^1/2 share their eigenvalues mu: the k x k one is the
+    # cheap one (m >= k), and X^T u_i = X^T Y v_i / sqrt(mu_i) = X^T X H^1/2 v_i / sqrt(mu_i)
+    XtX = X.T @ X
+    mu, Q = np.linalg.eigh(root @ XtX @ root)
+    mu, Q = np.maximum(mu[::-1], 0.0), Q[:, ::-1]
     kept = mu >= tol
-    return response(X.T @ U[:, kept]), mu
+    return response(XtX @ (root @ (Q[:, kept] / np.sqrt(mu[kept])))), mu
 
 
 def exponential_coefficients(omega2, damp, dt):
