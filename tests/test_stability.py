@@ -32,6 +32,8 @@ EXPECTED = {
     "no contact/bar explicit": {"stable"},
     "eps/fine eps=1e-12": {"stable"},
     "eps/greedy eps=1e-12": {"stable"},
+    "eps/sampled eps=1e-12": {"stable"},
+    "sampling/sampled tol=1e0": {"stable"},
     "m/greedy m=1": {"stable"},
     f"m/greedy m=1000 (> {study.PAD_FINE_POINTS} fine points)": {"stable", "refused"},
     "implicit/bar dt=5x": {"stable"},

@@ -19,9 +19,10 @@ a wall (cases/bar_impact.toml, explicit, exponential wall law) and on two bars; 
 1.2 times the critical step of the explicit bar (from a first run's JSON), with and without
 solver.force_dt; a bar started penetrating the wall by 1, 10 and 100 / lambda (and the linear
 law by the same depths); impact speeds 1, 10 and 50 m/s; a fully open start (wall out of
-reach) and scenes without any [contact] table; eps from 1e-12 to 1 on the regularized pad (fine
-and greedy rules); greedy m from 1 to the rank (0) and above the fine rule's points; the
-implicit scheme on the full bar and the reduced pad. Case variants go to a temporary directory
+reach) and scenes without any [contact] table; eps from 1e-12 to 1 on the regularized pad (fine,
+greedy and sampled rules); greedy m from 1 to the rank (0) and above the fine rule's points; the
+sampled rule's tolerance from 1 (one point) to 1e-8, and capped at one point; the implicit
+scheme on the full bar and the reduced pad. Case variants go to a temporary directory
 (--keep DIR keeps them with the histories, so each row's command reruns as printed).
 
 --quick runs a few scenarios per axis (tests/test_stability.py pins their outcomes). The exit
@@ -172,7 +173,7 @@ def scenarios():
     add("no contact", "bar explicit", "bar_free", [], quick=True)
     add("no contact", "bar implicit", "bar_free", ['solver.scheme="implicit"'], dt_factor=2.0)
     add("no contact", "pad exponential", "pad_free", ["solver.t_end=2e-3"])
-    for rule in ("fine", "greedy"):
+    for rule in ("fine", "greedy", "sampled"):
         for eps in (1e-12, 1e-8, 1e-4, 1e-2, 1.0):
             add("eps", f"{rule} eps={_g(eps)}", "pad",
                 [f'contact.pad_disc.rule="{rule}"', "contact.pad_disc.regularized=true",
@@ -183,6 +184,13 @@ def scenarios():
         add("m", f"greedy m={label}", "pad",
             ['contact.pad_disc.rule="greedy"', f"contact.pad_disc.points={m}"],
             quick=m in (1, 1000))
+    # the sampled rule from one point (tolerance 1: the first point meets it) to all of them
+    for tol in (1.0, 1e-1, 1e-3, 1e-8):
+        add("sampling", f"sampled tol={_g(tol)}", "pad",
+            ['contact.pad_disc.rule="sampled"', f"contact.pad_disc.sampling_tolerance={tol!r}"],
+            quick=tol == 1.0)
+    add("sampling", "sampled at most 1 point", "pad",
+        ['contact.pad_disc.rule="sampled"', "contact.pad_disc.points=1"])
     implicit = 'solver.scheme="implicit"'
     add("implicit", "bar dt=0.9x", "bar", [implicit], dt_factor=0.9)
     add("implicit", "bar dt=5x", "bar", [implicit], quick=True, dt_factor=5.0)

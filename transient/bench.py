@@ -204,6 +204,9 @@ def _plot(rows, path):
             ax.annotate(row["label"], (row[key], err), fontsize=7, xytext=(4, 3),
                         textcoords="offset points")
         ax.axhline(0.01, color="0.6", lw=0.8, ls="--")
+        # ticks at 1, 2, 5 per decade: a sweep's totals often span less than one decade
+        ax.xaxis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+        ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda x, _: f"{x:g}"))
         ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.set_xlabel(f"{name} time [s]")
         ax.grid(True, which="both", alpha=0.3)

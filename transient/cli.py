@@ -355,6 +355,20 @@ def cmd_compat(args):
     return 0
 
 
+def _model_line(meta):
+    """What was integrated: the reduced model's size and each pair's contact points."""
+    parts = []
+    if meta.get("reduced_dofs"):
+        parts.append(f"reduced model {meta['reduced_dofs']} dofs")
+    for name, p in meta.get("pairs", {}).items():
+        of = f" of {p['candidates']}" if p.get("candidates") else ""
+        parts.append(f"{name}: {p['rule']} rule, {p['points']}{of} points")
+    if "sampling" in meta:
+        parts.append(f"sampling residual {meta['sampling']['residual']:.1e} on "
+                     f"{meta['sampling']['band_modes']} modes")
+    return "; ".join(parts)
+
+
 def cmd_run(args):
     import os
     from pathlib import Path
@@ -375,6 +389,9 @@ def cmd_run(args):
         print(f"{case.path}: {result.status}, {result.steps} steps of {result.dt:.4g} s "
               f"(critical {result.dt_critical:.4g} s) to t = {result.t_end:.6g} s")
         print("stages: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.stages.items()))
+        model = _model_line(result.meta or {})
+        if model:
+            print(model)
         print(f"kernel {result.timings['kernel']:.2f} s, total {result.timings['total']:.2f} s,"
               f" energy drift {result.energy_drift:.2e}; history: {result.path}")
     if result.status != "complete":

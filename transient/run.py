@@ -224,7 +224,8 @@ def _sampled_pairs(pairs, rich, keep, contacts):
 
 
 def _sample(case, contacts, candidate, omega2, Cr, q0, preload):
-    """The sampled rule's points (sampling.py), with the reduced preload they hold."""
+    """The sampled rule's points (sampling.py), with the reduced preload they hold. The points
+    of every sampled pair are chosen together, to the first one's tolerance and cap."""
     solver = case["solver"]
     name = next(n for n, s in contacts.slices.items() if candidate[s].any())
     spec = case["contact"][name]
@@ -555,6 +556,7 @@ class RunResult:
     stages: dict
     timings: dict
     energy_drift: float
+    meta: dict = None         # what prepare reports: contact points of each pair, reduced dofs
 
 
 def choose_dt(case, problem, stored=None):
@@ -683,7 +685,7 @@ def run(case, path, resume=False, progress=None):
         history.finish(status, _timings(problem, t_kernel, t_start))
     return RunResult(str(path), status, step, float(problem.state[3, 0]), dt,
                      problem.dt_critical, problem.stages, _timings(problem, t_kernel, t_start),
-                     drift)
+                     drift, problem.meta)
 
 
 def _finite_rows(out, rows):

@@ -74,7 +74,7 @@ def nnls_gram(column, h, bb, tol, max_points):
     res = 1.0
     while len(P) < cap:
         res = residual(x) if len(P) else 1.0
-        if res <= tol:
+        if res <= tol and len(P):          # at least one point, whatever the tolerance
             break
         score = np.where(banned, -np.inf, grad)
         score[P] = -np.inf
@@ -182,6 +182,11 @@ def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter):
         if res <= tol:
             return q, g, p, kt, it, float(res)
         if it < max_iter:
-            q += np.linalg.solve(Kr + (Cr.T * (contacts.weights * kt)) @ Cr, r)
+            try:
+                q += np.linalg.solve(Kr + (Cr.T * (contacts.weights * kt)) @ Cr, r)
+            except np.linalg.LinAlgError:
+                raise ReducedPreloadError("the preload tangent with the sampled points is "
+                                          "singular: too few points hold the parts (lower "
+                                          "sampling_tolerance)") from None
     raise ReducedPreloadError(f"the preload with the sampled points did not converge in "
                               f"{max_iter} Newton iterations (residual {res:.1e})")
