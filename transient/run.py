@@ -151,12 +151,14 @@ def prepare(case, quiet=True):
     candidate = _candidates(case, pairs, contacts)
     if reduction["enabled"]:
         M = sp.diags(model.lumped_mass).tocsr() if solver["mass"] == "lumped" else model.M
-        problem, sampled, reduced_preload = _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig,
-                                    stages, cs.solver(contacts.weights * preload.tangent),
-                                    candidate)
+        problem, sampled, held = _reduced(case, model, M, contacts, preload, K_lin, patterns,
+                                          v0, sig, stages,
+                                          cs.solver(contacts.weights * preload.tangent),
+                                          candidate)
         if sampled is not None:
+            # from here on the points kept, and the preload they hold
             pairs = _sampled_pairs(pairs, contacts, sampled.keep, sampled.contacts)
-            contacts, preload = sampled.contacts, reduced_preload
+            contacts, preload = sampled.contacts, held
             problem.meta["sampling"] = {"candidates": int(candidate.sum()),
                                         "points": int(len(sampled.sample.chosen)),
                                         "residual": sampled.sample.residual,
@@ -258,7 +260,8 @@ def _reduced(case, model, M, contacts, preload, K_lin, patterns, v0, sig, stages
     q0 = MT.T @ preload.u
     v = MT.T @ v0
     omega2 = basis.omega2
-    projection = float(np.linalg.norm(T @ q0 - preload.u) / max(np.linalg.norm(preload.u), 1e-300))
+    projection = float(np.linalg.norm(T @ q0 - preload.u)
+                       / max(np.linalg.norm(preload.u), 1e-300))
     sampled = None
     if candidate is not None:
         sampled = _timed(stages, "sampling", _sample, case, contacts, candidate, omega2,
