@@ -109,3 +109,21 @@ def test_sampled_rule_needs_a_reduced_model(tmp_path, capsys):
     assert main(args) == 2
     err = capsys.readouterr().err
     assert "contact.pad_disc.rule" in err and "reduction" in err and "Traceback" not in err
+
+
+def test_a_resumed_sampled_run_equals_an_uninterrupted_one(tmp_path):
+    """Resuming prepares again: the sampling must pick the same points and weights."""
+    import h5py
+    from transient.case import load
+    from transient.run import run
+    base = SMALL + ['contact.pad_disc.rule="sampled"', "solver.chunk=50", "output.contact=true"]
+    whole = run(load(CASES / "pad_disc.toml", base + ["solver.t_end=1e-3"]), tmp_path / "w.h5")
+    part = run(load(CASES / "pad_disc.toml", base + ["solver.t_end=5e-4"]), tmp_path / "p.h5")
+    assert part.steps < whole.steps
+    resumed = run(load(CASES / "pad_disc.toml", base + ["solver.t_end=1e-3"]), tmp_path / "p.h5",
+                  resume=True)
+    assert resumed.status == "complete" and resumed.steps == whole.steps
+    with h5py.File(tmp_path / "w.h5", "r") as a, h5py.File(tmp_path / "p.h5", "r") as b:
+        for name in ("time", "sensors/pad_back", "contact/pad_disc/pressure",
+                     "geometry/contact/pad_disc/weights"):
+            np.testing.assert_array_equal(a[name][()], b[name][()], err_msg=name)
