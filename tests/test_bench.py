@@ -71,3 +71,18 @@ def test_bench_refuses_bad_options(tmp_path, capsys):
     case.write_text((CASES / "pad_disc.toml").read_text())
     assert main(["bench", str(case), "--eps", "x"]) == 2
     assert "--eps" in capsys.readouterr().err
+
+
+def test_rules_a_scene_refuses_are_rows_that_say_why(tmp_path):
+    """A rigid wall has no second mesh: every rule but the fine one is refused, the sweep goes
+    on and its files are written."""
+    from transient.bench import write
+    rows = bench(CASES / "bar_impact.toml", eps_list=[1e-3], points_list=[0], t_end=2e-5,
+                 tolerances=[1e-2])
+    assert rows[0]["status"] == "complete" and len(rows) == 6
+    for row in rows[1:]:
+        assert row["status"].startswith("refused: contact.wall.rule:")
+        assert row["error_rms"] is None and row["kernel_s"] is None
+    assert target(rows) is None
+    files = write(rows, tmp_path)
+    assert all(f.stat().st_size > 0 for f in files)

@@ -147,7 +147,18 @@ def bench(path, overrides=(), pair=None, eps_list=(1e-6, 1e-4, 1e-3, 1e-2),
     k = 0
     while k < len(todo):
         variant = todo[k]
-        row, series, freq = run_variant(path, overrides, pair, variant, t_end)
+        k += 1
+        try:
+            row, series, freq = run_variant(path, overrides, pair, variant, t_end)
+        except CaseError as exc:
+            if ref is None:
+                raise            # no reference, nothing to compare with
+            # a rule the scene does not admit (a rigid wall has no second mesh to regularize
+            # or select on): a row that says so, and the sweep goes on
+            rows.append(refused(variant, exc))
+            if progress:
+                progress(rows[-1])
+            continue
         if ref is None:
             ref, ref_freq = series, freq
         row.update(compare(ref, series, ref_freq, freq))
@@ -160,8 +171,16 @@ def bench(path, overrides=(), pair=None, eps_list=(1e-6, 1e-4, 1e-3, 1e-2),
             r, fine = row["points"], rows[0]["points"]
             todo += [Variant("greedy", f"greedy m={m}", dict(variant.settings, points=m))
                      for m in (r // 2, r // 4, 4 * r, 10 * r) if 0 < m < fine]
-        k += 1
     return rows
+
+
+def refused(variant, exc):
+    """The row of a variant refused before its run: no figures, the reason as status."""
+    row = {c: None for c in COLUMNS}
+    row.update({"rule": variant.rule, "label": variant.label,
+                "regularized": bool(variant.settings.get("regularized")),
+                "status": f"refused: {exc.key}: {exc.message}"})
+    return row
 
 
 def target(rows):
@@ -169,7 +188,7 @@ def target(rows):
     of its kernel time (None if there is none)."""
     ref = rows[0]
     good = [r for r in rows[1:] if r["regularized"] and r["rule"] != "fine"
-            and r["error_rms"] <= 0.01 and r["kernel_s"] <= ref["kernel_s"] / 3]
+            and r["error_rms"] is not None and r["error_rms"] <= 0.01 and r["kernel_s"] <= ref["kernel_s"] / 3]
     return min(good, key=lambda r: r["kernel_s"]) if good else None
 
 
@@ -197,6 +216,8 @@ def _plot(rows, path):
     markers = {"fine": "o", "centre": "s", "greedy": "^", "sampled": "D"}
     for ax, key, name in zip(axes, ("kernel_s", "total_s"), ("kernel", "setup + kernel")):
         for row in rows:
+            if row["error_rms"] is None or not np.isfinite(row["error_rms"]):
+                continue           # refused, or no motion to compare
             err = max(row["error_rms"], floor)
             filled = "none" if not row["regularized"] else None
             ax.loglog(row[key], err, markers[row["rule"]], ms=8,
@@ -219,6 +240,8 @@ def _plot(rows, path):
 
 
 def format_row(row):
+    if row["setup_s"] is None:
+        return f"{row['label']:<22} {row['status']}"
     kept = row["kept"] if row["kept"] is not None else "-"
     return (f"{row['label']:<22} {row['points']:>6} {kept:>5} "
             f"{row['setup_s']:8.2f} {row['kernel_s']:8.2f} {row['total_s']:8.2f} "
