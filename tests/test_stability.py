@@ -35,7 +35,7 @@ EXPECTED = {
     "eps/sampled eps=1e-12": {"stable"},
     "sampling/sampled tol=1e0": {"stable"},
     "m/greedy m=1": {"stable"},
-    f"m/greedy m=1000 (> {study.PAD_FINE_POINTS} fine points)": {"stable", "refused"},
+    f"m/greedy m=1000 (> {study.PAD_FINE_POINTS} fine points)": {"refused"},
     "implicit/bar dt=5x": {"stable"},
     "implicit/pad": {"stable"},
     "scheme/exponential on the full bar": {"refused"},
@@ -100,12 +100,10 @@ def test_scenes_without_contact_are_stable_with_a_tiny_drift(rows):
         assert row["energy_drift"] < 1e-9
 
 
-def test_greedy_m_above_the_fine_points_is_capped_or_refused(rows):
+def test_greedy_m_above_the_fine_points_is_refused_by_name(rows):
     row = rows[f"m/greedy m=1000 (> {study.PAD_FINE_POINTS} fine points)"]
-    if row["outcome"] == "stable":
-        assert row["points"] <= study.PAD_FINE_POINTS
-    else:
-        assert "points" in row["reason"]
+    assert row["outcome"] == "refused"
+    assert "contact.pad_disc.points" in row["reason"] and "1000" in row["reason"]
     assert rows["m/greedy m=1"]["points"] == 1
 
 

@@ -118,6 +118,9 @@ def build_pair(case, model, name, need_compatibility=False):
             fine = interface.fine
         timings["regularize"] = time.perf_counter() - t0
     if greedy:
+        if spec["points"] > rule.n_points:
+            raise CaseError(case.path, f"{key}.points", f"{spec['points']} points asked, but "
+                            f"the greedy rule selects among {rule.n_points} candidates")
         t0 = time.perf_counter()
         B1, B2 = side_bases(comp, eps)
         try:
