@@ -454,6 +454,17 @@ def scheme_kernel(case, problem, dt):
             damp, omega2, Cr, g0, w, kt0, code, params, P, sig, S, blocks, Z, Cr @ Z,
             newton["tolerance"], newton["max_iter"])
     coef = exponential_coefficients(omega2, damp, dt)
+    if solver["corrector"] == "implicit":
+        # the end state moves by D = diag(G1x) per unit end force: Z = D C^T, G = C Z
+        if 8.0 * len(g0) ** 2 > MAX_WOODBURY_BYTES:
+            raise CaseError(case.path, "solver.corrector", f"the implicit corrector keeps "
+                            f"C D C^T dense: {len(g0)} contact points is "
+                            f"{8e-9 * len(g0) ** 2:.1f} GB; sample the points "
+                            f"(contact rule \"sampled\") or use corrector \"evaluated\"")
+        Z = np.ascontiguousarray(coef[:, 6:7] * Cr.T)
+        return stepping.exponential_implicit, (
+            coef, damp, omega2, Cr, g0, w, kt0, code, params, P, sig, S, blocks, Z, Cr @ Z,
+            newton["max_iter"], problem.state[4])
     return stepping.exponential_reduced, (coef, damp, omega2, Cr, g0, w, kt0, code, params, P,
                                           sig, S, blocks, solver["corrections"],
                                           solver["corrector"] == "propagated", problem.state[4])

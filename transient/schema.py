@@ -276,8 +276,12 @@ SOLVER = Table("solution settings", {
     "corrector": Value("choice", "exponential: a step ends at the state its forces were last "
                        "evaluated at (evaluated: robust on stiff penalties closing), or "
                        "propagates once more from them (propagated: with corrections = 0 one "
-                       "contact pass per step, as accurate on smooth contact)", "evaluated",
-                       choices=("evaluated", "propagated")),
+                       "contact pass per step, as accurate on smooth contact), or solves for "
+                       "its end forces by Newton with the exact contact tangent (implicit: "
+                       "stable where contact stiffens far beyond the preload's, a hard tap; "
+                       "its cost grows with the points whose tangent moved, so it suits "
+                       "sampled and coarse rules; corrections is then unused)", "evaluated",
+                       choices=("evaluated", "propagated", "implicit")),
     "t_end": Value("float", "simulated time after the preload", 0.0, "s", minimum=0.0),
     "mass": Value("choice", "mass matrix of the transient: lumped (HRZ), consistent, or auto "
                   "(lumped for central differences on the full model, which need it diagonal; "

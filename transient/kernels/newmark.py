@@ -10,17 +10,15 @@ so those rows are added exactly through the Woodbury identity with the precomput
 Z = S^-1 C^T and G = C Z:
     J^-1 r = y - Z_A (I + diag(e_A) G_AA)^-1 diag(e_A) C_A y,   y = S^-1 r,
 for the set A of rows that matter (the others, whose sum of |e_i| G_ii stays below WOODBURY_REST,
-are left to the fixed-operator iteration, which they slow by at most that factor).
+are left to the fixed-operator iteration, which they slow by at most that factor: woodbury.py).
 """
 import numpy as np
 
 from ..jit import njit_fast
-from .laws import pressure
 from .sparse import csr_abs_matvec, csr_matvec, factor_solve
 from .stepping import (NO_CONVERGENCE, NOT_FINITE, OK, _energies, _external, _finite, _store,
                        _store_sparse, remainder_dense, remainder_sparse)
-
-WOODBURY_REST = 0.1
+from .woodbury import active_rows, woodbury
 
 
 @njit_fast
@@ -29,48 +27,6 @@ def _corrected(qp, vp, a, dt, q, v):
     for k in range(q.shape[0]):
         q[k] = qp[k] + 0.25 * dt * dt * a[k]
         v[k] = vp[k] + 0.5 * dt * a[k]
-
-
-@njit_fast
-def _active_rows(code, params, gap, w, kt0, h2, Gd, e, active):
-    """Fills e and the rows to correct exactly (largest |e_i| G_ii first); returns their count."""
-    m = gap.shape[0]
-    size = np.empty(m)
-    total = 0.0
-    for i in range(m):
-        _, kt = pressure(code[i], params[i], gap[i])
-        e[i] = h2 * w[i] * (kt - kt0[i])
-        size[i] = abs(e[i]) * Gd[i]
-        total += size[i]
-    if total <= WOODBURY_REST:
-        return 0
-    order = np.argsort(-size)
-    n_active = 0
-    for i in order:
-        if total <= WOODBURY_REST:
-            break
-        active[n_active] = i
-        n_active += 1
-        total -= size[i]
-    return n_active
-
-
-@njit_fast
-def _woodbury(y, u, active, n_active, e, Z, G):
-    """y -= Z_A (I + diag(e_A) G_AA)^-1 diag(e_A) u, u = C_A y."""
-    H = np.empty((n_active, n_active))
-    rhs = np.empty(n_active)
-    for a in range(n_active):
-        i = active[a]
-        for b in range(n_active):
-            H[a, b] = e[i] * G[i, active[b]]
-        H[a, a] += 1.0
-        rhs[a] = e[i] * u[a]
-    z = np.linalg.solve(H, rhs)
-    for a in range(n_active):
-        i = active[a]
-        for k in range(y.shape[0]):
-            y[k] -= Z[k, i] * z[a]
 
 
 @njit_fast
@@ -138,7 +94,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
             if rnorm <= tol * tol * max(fnorm, 1e-300):
                 converged = True
                 break
-            n_active = _active_rows(code, params, gap, w, kt0, h2, Gd, e, active)
+            n_active = active_rows(code, params, gap, w, kt0, h2, Gd, e, active)
             if n_active:
                 for j in range(n_active):
                     row_c = C[active[j]]
@@ -146,7 +102,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
                     for k in range(n):
                         s += row_c[k] * y[k]
                     u[j] = s
-                _woodbury(y, u, active, n_active, e, Z, G)
+                woodbury(y, u, active, n_active, e, Z, G)
             for k in range(n):
                 a[k] -= y[k]
         _corrected(qp, vp, a, dt, q, v)
@@ -255,7 +211,7 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
                 converged = True
                 break
             factor_solve(p_in, L, U, p_out, r, y, work_n)
-            n_active = _active_rows(code, params, gap, w, kt0, h2, Gd, e, active)
+            n_active = active_rows(code, params, gap, w, kt0, h2, Gd, e, active)
             if n_active:
                 for j in range(n_active):
                     i = active[j]
@@ -263,7 +219,7 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
                     for k in range(Cp[i], Cp[i + 1]):
                         s += Cd[k] * y[Ci[k]]
                     u[j] = s
-                _woodbury(y, u, active, n_active, e, Z, G)
+                woodbury(y, u, active, n_active, e, Z, G)
             for k in range(n):
                 a[k] -= y[k]
         _corrected(qp, vp, a, dt, q, v)
