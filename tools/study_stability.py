@@ -21,7 +21,8 @@ solver.force_dt; a bar started penetrating the wall by 1, 10 and 100 / lambda (a
 law by the same depths); impact speeds 1, 10 and 50 m/s; a fully open start (wall out of
 reach) and scenes without any [contact] table; eps from 1e-12 to 1 on the regularized pad (fine,
 greedy and sampled rules); greedy m from 1 to the rank (0) and above the fine rule's points; the
-sampled rule's tolerance from 1 (one point) to 1e-8, and capped at one point; the implicit
+sampled rule's tolerance from 1 (one point) to 1e-8, and capped at one point; taps of 4 and
+8 kN on the pad (pressed by 4.4 kN) with the evaluated and the implicit corrector; the implicit
 scheme on the full bar and the reduced pad. Case variants go to a temporary directory
 (--keep DIR keeps them with the histories, so each row's command reruns as printed).
 
@@ -191,6 +192,13 @@ def scenarios():
             quick=tol == 1.0)
     add("sampling", "sampled at most 1 point", "pad",
         ['contact.pad_disc.rule="sampled"', "contact.pad_disc.points=1"])
+    # a tap of several times the preload: the exponential scheme's explicit remainder against
+    # its implicit corrector, at the step set by accuracy
+    for force in (4e3, 8e3):
+        for corrector in ("evaluated", "implicit"):
+            add("tap", f"pad {force / 1e3:g} kN tap, {corrector}", "pad",
+                [f"loads.tap.vector=[0.0, 0.0, {-force!r}]",
+                 f'solver.corrector="{corrector}"', "solver.t_end=2e-3"])
     implicit = 'solver.scheme="implicit"'
     add("implicit", "bar dt=0.9x", "bar", [implicit], dt_factor=0.9)
     add("implicit", "bar dt=5x", "bar", [implicit], quick=True, dt_factor=5.0)
