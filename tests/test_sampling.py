@@ -111,12 +111,15 @@ def test_sampled_rule_needs_a_reduced_model(tmp_path, capsys):
     assert "contact.pad_disc.rule" in err and "reduction" in err and "Traceback" not in err
 
 
-def test_a_resumed_sampled_run_equals_an_uninterrupted_one(tmp_path):
-    """Resuming prepares again: the sampling must pick the same points and weights."""
+@pytest.mark.parametrize("corrector", ["evaluated", "implicit"])
+def test_a_resumed_sampled_run_equals_an_uninterrupted_one(tmp_path, corrector):
+    """Resuming prepares again: the sampling must pick the same points and weights, and the
+    kernel restart from the state stored (its end forces recomputed there) bit for bit."""
     import h5py
     from transient.case import load
     from transient.run import run
-    base = SMALL + ['contact.pad_disc.rule="sampled"', "solver.chunk=50", "output.contact=true"]
+    base = SMALL + ['contact.pad_disc.rule="sampled"', "solver.chunk=50", "output.contact=true",
+                    f'solver.corrector="{corrector}"']
     whole = run(load(CASES / "pad_disc.toml", base + ["solver.t_end=1e-3"]), tmp_path / "w.h5")
     part = run(load(CASES / "pad_disc.toml", base + ["solver.t_end=5e-4"]), tmp_path / "p.h5")
     assert part.steps < whole.steps
