@@ -17,8 +17,8 @@ import numpy as np
 from ..jit import njit_fast
 from .sparse import csr_abs_matvec, csr_matvec, factor_solve
 from .stepping import (NO_CONVERGENCE, NOT_FINITE, OK, _energies, _external, _finite, _store,
-                       _store_sparse, remainder_dense, remainder_sparse)
-from .woodbury import active_rows, woodbury
+                       _store_sparse, modal_step_energies, remainder_dense, remainder_sparse)
+from .woodbury import active_rows, woodbury, woodbury_dense
 
 
 @njit_fast
@@ -96,27 +96,14 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
                 break
             n_active = active_rows(code, params, gap, w, kt0, h2, Gd, e, active)
             if n_active:
-                for j in range(n_active):
-                    row_c = C[active[j]]
-                    s = 0.0
-                    for k in range(n):
-                        s += row_c[k] * y[k]
-                    u[j] = s
-                woodbury(y, u, active, n_active, e, Z, G)
+                woodbury_dense(y, C, u, active, n_active, e, Z, G)
             for k in range(n):
                 a[k] -= y[k]
         _corrected(qp, vp, a, dt, q, v)
-        work = 0.0
-        power = 0.0
-        kin = 0.0
-        strain = -lin
+        modal_step_energies(q, v, q_old, v_old, fext_old, fext, damp, omega2, lin, phi, dt,
+                            acc, energy)
         for k in range(n):
-            work += 0.5 * (fext_old[k] + fext[k]) * (q[k] - q_old[k])
-            power += damp[k] * (v_old[k] * v_old[k] + v[k] * v[k])
-            kin += 0.5 * v[k] * v[k]
-            strain += 0.5 * omega2[k] * q[k] * q[k]
             fext_old[k] = fext[k]
-        _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
         if not (_finite(q) and _finite(v) and _finite(energy)):
             state[3, 0] = t
             return NOT_FINITE, step

@@ -23,7 +23,7 @@ from ..jit import njit, njit_fast, njit_parallel
 from .laws import pressure_potential
 from ..signals import signal_values
 from .sparse import csr_matvec
-from .woodbury import active_rows, woodbury
+from .woodbury import active_rows, woodbury_dense
 
 OK, NOT_FINITE, NO_CONVERGENCE = 0, 1, 2
 IMPLICIT_TOL = 1e-3     # the implicit corrector's residual, relative to the step's motion
@@ -312,6 +312,24 @@ def _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, 
 
 
 @njit_fast
+def modal_step_energies(q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt, acc, energy):
+    """The energies after a step of a modal system (M = I, diagonal damping and K_lin) from
+    (q0, v0) to (q, v): external work and dissipation by the trapezoidal rule, kinetic and
+    strain (K_lin's, less the contact's linear part lin) at the end; phi the contact
+    potential."""
+    work = 0.0
+    power = 0.0
+    kin = 0.0
+    strain = -lin
+    for k in range(q.shape[0]):
+        work += 0.5 * (fext0[k] + fext[k]) * (q[k] - q0[k])
+        power += damp[k] * (v0[k] * v0[k] + v[k] * v[k])
+        kin += 0.5 * v[k] * v[k]
+        strain += 0.5 * omega2[k] * q[k] * q[k]
+    _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
+
+
+@njit_fast
 def _propagate(coef, q0, v0, f0, f1, q, v):
     """(q, v) at the end of a step from (q0, v0) and forces f0, f1 at its ends, mode by mode."""
     for k in range(q.shape[0]):
@@ -377,19 +395,12 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
                 f1[k] = fext[k] + rem[k]
         if propagate:
             _propagate(coef, q0, v0, f0, f1, q, v)
-        work = 0.0
-        power = 0.0
-        kin = 0.0
-        strain = -lin
+        modal_step_energies(q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt, acc,
+                            energy)
         for k in range(n):
-            work += 0.5 * (fext0[k] + fext[k]) * (q[k] - q0[k])
-            power += damp[k] * (v0[k] * v0[k] + v[k] * v[k])
-            kin += 0.5 * v[k] * v[k]
-            strain += 0.5 * omega2[k] * q[k] * q[k]
             fprev[k] = f0[k]
             f0[k] = f1[k]
             fext0[k] = fext[k]
-        _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
         if not (_finite(q) and _finite(v) and _finite(energy)):
             state[3, 0] = t
             return NOT_FINITE, step
@@ -474,31 +485,18 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
                 break
             n_active = active_rows(code, params, gap, w, kt0, 1.0, Gd, e, active)
             if n_active > 0:
-                for j in range(n_active):
-                    row_c = C[active[j]]
-                    s = 0.0
-                    for k in range(n):
-                        s += row_c[k] * y[k]
-                    u[j] = s
-                woodbury(y, u, active, n_active, e, Z, G)
+                woodbury_dense(y, C, u, active, n_active, e, Z, G)
             for k in range(n):
                 q[k] += y[k]
         # v from the forces found; q stays the state they were evaluated at (within the
         # tolerance of the propagated one), so a chunk restarting from it finds the same forces
         _propagate(coef, q0, v0, f0, f1, qb, v)
-        work = 0.0
-        power = 0.0
-        kin = 0.0
-        strain = -lin
+        modal_step_energies(q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt, acc,
+                            energy)
         for k in range(n):
-            work += 0.5 * (fext0[k] + fext[k]) * (q[k] - q0[k])
-            power += damp[k] * (v0[k] * v0[k] + v[k] * v[k])
-            kin += 0.5 * v[k] * v[k]
-            strain += 0.5 * omega2[k] * q[k] * q[k]
             fprev[k] = f0[k]
             f0[k] = f1[k]
             fext0[k] = fext[k]
-        _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
         if not (_finite(q) and _finite(v) and _finite(energy)):
             state[3, 0] = t
             return NOT_FINITE, step

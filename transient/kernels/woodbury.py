@@ -55,3 +55,15 @@ def woodbury(y, u, active, n_active, e, Z, G):
         i = active[a]
         for k in range(y.shape[0]):
             y[k] -= Z[k, i] * z[a]
+
+
+@njit_fast
+def woodbury_dense(y, C, u, active, n_active, e, Z, G):
+    """woodbury for dense contact rows C (m, n): u = C_A y first (u is scratch)."""
+    for j in range(n_active):
+        row_c = C[active[j]]
+        s = 0.0
+        for k in range(y.shape[0]):
+            s += row_c[k] * y[k]
+        u[j] = s
+    woodbury(y, u, active, n_active, e, Z, G)
