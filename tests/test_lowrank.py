@@ -47,7 +47,8 @@ def test_rows_of_low_rank_run_on_their_row_space():
     x = cs.solver(d)(b)
     direct = (K + 4.0 * M + C.T @ sp.diags(d) @ C).tocsc()
     assert np.allclose(x, spla.spsolve(direct, b), rtol=1e-9, atol=1e-12)
-    cols_, V, Z, R = cs.solver(d).on_columns
+    cols_, V, Rm, Z, R = cs.solver(d).on_columns
+    assert np.allclose(Rm @ V.T, dense[:, cols_])
     B = np.zeros((n, rho))
     B[cols_] = V
     assert np.allclose(Z @ R(), spla.spsolve(direct, B), rtol=1e-9, atol=1e-12)

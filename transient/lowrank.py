@@ -77,8 +77,9 @@ class ContactSolver:
                 y = solve0(b)
                 return y - Z @ sla.lu_solve(lu, core @ (V.T @ y[cols]))
             # the responses to the loads B = E V without solving again:
-            # (A0 + B core B^T)^-1 B = Z R, R = I - (I + core G)^-1 core G
-            solve.on_columns = (cols, V, Z, lambda: np.eye(len(core))
+            # (A0 + B core B^T)^-1 B = Z R, R = I - (I + core G)^-1 core G; with the solver's
+            # rows in that basis, C = Rm B^T
+            solve.on_columns = (cols, V, self.Rm, Z, lambda: np.eye(len(core))
                                 - sla.lu_solve(lu, core @ self.G))
         else:
             lu = sla.lu_factor(np.eye(len(d)) + d[:, None] * self.G)

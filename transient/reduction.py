@@ -125,20 +125,20 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
     basis E V of the rows' space it already solved for (Cc = Rm V^T; rho < k columns for a
     regularized rule)."""
     n, k = C.shape[1], len(cols)
-    Cc = sp.csr_matrix(C)[:, cols].toarray()
     known = getattr(solve, "on_columns", None)
-    if known is not None and np.array_equal(known[0], cols):
-        # the solver has K^-1 E V = Z R already, V a basis of the rows' space
-        # (lowrank.ContactSolver): no solves here, no n x k array
-        _, V, Z, R = known
+    if known is not None and np.array_equal(known[0], cols) and len(known[2]) == C.shape[0]:
+        # the solver, built on these contact rows (lowrank.ContactSolver), has K^-1 E V = Z R
+        # already, V a basis of the rows' space, and the rows in it, Cc = Rm: no solves here,
+        # no n x k array
+        _, V, Cc, Z, R = known
         R = R()
         H = (V.T @ Z[cols]) @ R
-        Cc = Cc @ V
 
         def response(Y):
             return Z @ (R @ Y)
     else:
         V = None
+        Cc = sp.csr_matrix(C)[:, cols].toarray()
         E = np.zeros((n, k), order="F")
         E[cols, np.arange(k)] = 1.0
         KE = np.atleast_2d(solve(E).T).T
