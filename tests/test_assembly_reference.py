@@ -29,9 +29,9 @@ from skfem.helpers import dot  # noqa: E402
 from skfem.models.elasticity import lame_parameters, linear_elasticity  # noqa: E402
 from skfem.quadrature import get_quadrature  # noqa: E402
 
-from transient import generators  # noqa: E402
-from transient.assembly import CellBlock, assemble  # noqa: E402
-from transient.elements import ELEMENTS, VOLUME_TYPES  # noqa: E402
+from transient.mesh import generators  # noqa: E402
+from transient.model.assembly import CellBlock, assemble  # noqa: E402
+from transient.mesh.elements import ELEMENTS, VOLUME_TYPES  # noqa: E402
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 SIZE = np.array([1.0, 0.8, 0.6])

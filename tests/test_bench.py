@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from transient.bench import bench, compare, target
+from transient.studies.bench import bench, compare, target
 from transient.cli import main
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
@@ -76,7 +76,7 @@ def test_bench_refuses_bad_options(tmp_path, capsys):
 def test_rules_a_scene_refuses_are_rows_that_say_why(tmp_path):
     """A rigid wall has no second mesh: every rule but the fine one is refused, the sweep goes
     on and its files are written."""
-    from transient.bench import write
+    from transient.studies.bench import write
     rows = bench(CASES / "bar_impact.toml", eps_list=[1e-3], points_list=[0], t_end=2e-5,
                  tolerances=[1e-2])
     assert rows[0]["status"] == "complete" and len(rows) == 6

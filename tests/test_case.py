@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-from transient.case import load
+from transient.case.loading import load
 from transient.cli import main
 from transient.errors import CaseError
 
@@ -40,26 +40,26 @@ def error_of(tmp_path, text, overrides=()):
     path = write(tmp_path, text)
     with pytest.raises(CaseError) as info:
         case = load(path, overrides)
-        from transient.model import build_model
+        from transient.model.model import build_model
         build_model(case)
     return str(info.value)
 
 
 def test_defaults_are_filled(tmp_path):
     case = load(write(tmp_path))
-    assert case["parts"]["block"]["mesh"]["origin"] == [0.0, 0.0, 0.0]
-    assert case["constraints"]["root"]["dofs"] == ["x", "y", "z"]
-    assert case["solver"]["linear_solver"] == "auto"
-    assert case["loads"] == {}
+    assert case.parts["block"].mesh.params["origin"] == (0.0, 0.0, 0.0)
+    assert case.constraints["root"].dofs == ("x", "y", "z")
+    assert case.solver.linear_solver == "auto"
+    assert case.loads == {}
 
 
 def test_set_overrides_any_value_with_a_toml_literal(tmp_path):
     case = load(write(tmp_path), ["parts.block.mesh.divisions=[3,3,3]", "materials.steel.E=1e9",
                                   "parts.block.mesh.element=hex20", "solver.modes.count = 7"])
-    assert case["parts"]["block"]["mesh"]["divisions"] == [3, 3, 3]
-    assert case["materials"]["steel"]["E"] == 1e9
-    assert case["parts"]["block"]["mesh"]["element"] == "hex20"
-    assert case["solver"]["modes"]["count"] == 7
+    assert case.parts["block"].mesh.params["divisions"] == (3, 3, 3)
+    assert case.materials["steel"].E == 1e9
+    assert case.parts["block"].mesh.params["element"] == "hex20"
+    assert case.solver.modes.count == 7
 
 
 @pytest.mark.parametrize("change, key, words", [
@@ -107,8 +107,8 @@ def test_inverted_element_is_an_error(tmp_path):
     # a negative scale mirrors the mesh, which turns every cell inside out
     text = BLOCK.replace('kind = "box"\nsize = [0.1, 0.02, 0.02]\ndivisions = [5, 1, 1]',
                          'kind = "file"\npath = "block.vtu"\nscale = -1.0')
-    from transient.generators import box
-    from transient.meshfile import write_vtu
+    from transient.mesh.generators import box
+    from transient.mesh.meshfile import write_vtu
     write_vtu(tmp_path / "block.vtu", box((0.1, 0.02, 0.02), (5, 1, 1)))
     message = error_of(tmp_path, text)
     assert "parts.block.mesh" in message and "inverted" in message

@@ -5,12 +5,12 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg as sla
 
-from transient.case import load
+from transient.case.loading import load
 from transient.cli import main
-from transient.contact import build_contact, contact_stiffness
+from transient.contact.pair import build_contact, contact_stiffness
 from transient.kernels.greedy import greedy_rows
-from transient.model import build_model
-from transient.modes import normal_modes
+from transient.model.model import build_model
+from transient.solve.modes import normal_modes
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 

@@ -5,11 +5,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from transient.case import load
-from transient.contact import build_contact
-from transient.model import build_model
-from transient.static import solve_static
-from transient.studies import drilled_cube_errors
+from transient.case.loading import load
+from transient.contact.pair import build_contact
+from transient.model.model import build_model
+from transient.solve.static import solve_static
+from transient.studies.drilled_cube import drilled_cube_errors
 
 E, NU, P, K = 2.1e11, 0.3, 1.0e6, 1.0e13
 

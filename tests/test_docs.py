@@ -1,14 +1,14 @@
 """The key reference in cases/README.md is generated from the schema and stays in step with it."""
 from pathlib import Path
 
-from transient.schema import reference_markdown
+from transient.case.schema import reference_markdown
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def test_case_reference_is_up_to_date():
     text = (ROOT / "cases" / "README.md").read_text()
-    assert reference_markdown() in text, "regenerate with: python -m transient.schema"
+    assert reference_markdown() in text, "regenerate with: python -m transient.case.schema"
 
 
 def test_readme_quick_start_commands():

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 import pyvista as pv
 
-from transient.case import load
+from transient.case.loading import load
 from transient.cli import main
-from transient.export import exported_rows
-from transient.history import CASE_TEXT
-from transient.model import build_model
+from transient.io.export import exported_rows
+from transient.io.history import CASE_TEXT
+from transient.model.model import build_model
 from transient.run import run
 
 CASE = Path(__file__).resolve().parent.parent / "cases" / "bar_impact.toml"

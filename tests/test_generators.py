@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from transient.elements import ELEMENTS, VOLUME_TYPES
-from transient.generators import annular_disc, box, brake_pad, drilled_box
-from transient.mesh import all_faces, boundary_faces, face_key
+from transient.mesh.elements import ELEMENTS, VOLUME_TYPES
+from transient.mesh.generators import annular_disc, box, brake_pad, drilled_box
+from transient.mesh.mesh import all_faces, boundary_faces, face_key
 
 LINEAR = ("hexahedron", "tetra")
 

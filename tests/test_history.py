@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from transient.errors import RunAborted
-from transient.history import (CASE_TEXT, History, energy_drift, format_summary,
+from transient.io.history import (CASE_TEXT, History, energy_drift, format_summary,
                                load_checkpoint, summary)
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -198,7 +198,7 @@ def test_resume_drops_the_rows_past_the_checkpoint(tmp_path):
 def test_a_killed_writer_leaves_a_readable_file(tmp_path):
     path = tmp_path / "run.h5"
     code = ("import os, signal\nimport numpy as np\n"
-            "from transient.history import History\n"
+            "from transient.io.history import History\n"
             f"h = History.create({str(path)!r}, {{}}, {{'time': (), 'x': (3,)}})\n"
             "with h:\n"
             "    for k in range(2):\n"

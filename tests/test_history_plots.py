@@ -5,13 +5,13 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
-from transient.case import load
+from transient.case.loading import load
 from transient.cli import main
-from transient.history import History
-from transient.history_plots import (amplitude_spectrum, contact_force, plane_frame,
+from transient.io.history import History
+from transient.plots.history import (amplitude_spectrum, contact_force, plane_frame,
                                      pressure_panels, sample_step, transfer_function)
 from transient.run import run
-from transient.stored import open_history
+from transient.io.stored import open_history
 
 CASE = Path(__file__).resolve().parent.parent / "cases" / "bar_impact.toml"
 SHORT = ["solver.t_end=3e-5"]      # contact from 10 us: 190 rows, a third of them in contact

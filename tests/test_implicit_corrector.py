@@ -3,7 +3,7 @@ tap, and stable on a hard one, where the explicit remainder diverges at the same
 import numpy as np
 import pytest
 
-from transient.case import load
+from transient.case.loading import load
 from transient.run import choose_dt, prepare, simulate
 
 from test_bench import CASES, SMALL
@@ -12,13 +12,13 @@ from test_bench import CASES, SMALL
 def _runs(force, t_end=2e-3):
     base = SMALL + [f"loads.tap.vector=[0.0,0.0,{-force!r}]", "solver.t_end=2e-3",
                     'contact.pad_disc.rule="sampled"']
-    problem = prepare(load(CASES / "pad_disc.toml", base))
-    dt = choose_dt(load(CASES / "pad_disc.toml", base), problem)
+    setup = prepare(load(CASES / "pad_disc.toml", base))
+    dt = choose_dt(load(CASES / "pad_disc.toml", base), setup)
     n = int(round(t_end / dt))
     out = {}
     for corrector, k in (("evaluated", 1), ("implicit", 1), ("evaluated", 16)):
         case = load(CASES / "pad_disc.toml", base + [f'solver.corrector="{corrector}"'])
-        series, status, _ = simulate(case, problem, dt / k, n * k, k)
+        series, status, _ = simulate(case, setup, dt / k, n * k, k)
         out[corrector, k] = (series, status)
     return out
 

@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from transient.compatibility import FALLBACK_EPS, auto_eps, compatibility, gap_energy
-from transient.generators import annular_disc, box, brake_pad, drilled_box
-from transient.interface import InterfaceError, build_interface
+from transient.contact.compatibility import FALLBACK_EPS, auto_eps, compatibility, gap_energy
+from transient.mesh.generators import annular_disc, box, brake_pad, drilled_box
+from transient.contact.interface import InterfaceError, build_interface
 
 
 def pair(upper, lower, set1="zmin", set2="zmax", degree=4):

@@ -2,11 +2,11 @@
 import numpy as np
 import pytest
 
-from transient.case import load
-from transient.generators import annular_disc, box, brake_pad
-from transient.loads import face_area, pressure_forces
-from transient.model import build_model
-from transient.selections import select_nodes
+from transient.case.loading import load
+from transient.mesh.generators import annular_disc, box, brake_pad
+from transient.model.loads import face_area, pressure_forces
+from transient.model.model import build_model
+from transient.mesh.selections import select_nodes
 
 ELEMENTS = ["hexahedron", "hexahedron20", "tetra", "tetra10"]
 

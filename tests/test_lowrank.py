@@ -5,7 +5,7 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from transient.lowrank import ContactSolver
+from transient.solve.lowrank import ContactSolver
 
 
 @pytest.mark.parametrize("m", [5, 60])

@@ -5,9 +5,9 @@ import meshio
 import numpy as np
 import pytest
 
-from transient.elements import ELEMENTS
-from transient.mesh import Mesh
-from transient.meshfile import MeshFileError, jacobian_check, read_mesh, write_vtu
+from transient.mesh.elements import ELEMENTS
+from transient.mesh.mesh import Mesh
+from transient.mesh.meshfile import MeshFileError, jacobian_check, read_mesh, write_vtu
 
 DATA = Path(__file__).parent / "data"
 

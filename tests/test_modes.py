@@ -3,10 +3,10 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from transient.assembly import CellBlock, assemble
-from transient.generators import box
-from transient.linsolve import available
-from transient.modes import normal_modes
+from transient.model.assembly import CellBlock, assemble
+from transient.mesh.generators import box
+from transient.solve.linsolve import available
+from transient.solve.modes import normal_modes
 
 E, NU, RHO = 2.1e11, 0.3, 7800.0
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
 
-from transient import generators
-from transient.assembly import CellBlock, assemble, lame
-from transient.elements import ELEMENTS, VOLUME_TYPES
+from transient.mesh import generators
+from transient.model.assembly import CellBlock, assemble, lame
+from transient.mesh.elements import ELEMENTS, VOLUME_TYPES
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 SIZE = np.array([0.9, 0.7, 0.5])

@@ -4,11 +4,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from transient import plots
-from transient.case import load
+from transient.plots import compat as plots
+from transient.case.loading import load
 from transient.cli import main
-from transient.contact import build_contact
-from transient.model import build_model
+from transient.contact.pair import build_contact
+from transient.model.model import build_model
 
 CASE = Path(__file__).resolve().parent.parent / "cases" / "drilled_cube.toml"
 # a smaller drilled cube: the 4 x 4 upper grid stays nested in the 8 x 8 lower one (the fine

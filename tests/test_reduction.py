@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from transient.linsolve import factorize
-from transient.reduction import reduced_basis
+from transient.solve.linsolve import factorize
+from transient.reduce.basis import reduced_basis
 
 
 def chain(n=300, m=12):
@@ -51,7 +51,7 @@ def test_contact_flexibility_kept_to_the_tolerance(tol, m):
 def test_contact_shapes_from_the_woodbury_solver_match_a_direct_factorization():
     """With more points than touched dofs, the shapes come from the ContactSolver's K^-1 E
     (no solves of their own): the same basis as from a factorization of K_lin itself."""
-    from transient.lowrank import ContactSolver
+    from transient.solve.lowrank import ContactSolver
     K, M, C = chain(m=90)
     tangent = np.geomspace(1e3, 1e6, C.shape[0])
     K_lin = (K + C.T @ sp.diags(tangent) @ C).tocsr()

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from scipy.optimize import nnls
 
-from transient.bench import Variant, compare, run_variant
+from transient.studies.bench import Variant, compare, run_variant
 from transient.cli import main
-from transient.sampling import features, gram_column, gram_target, nnls_gram, sample
+from transient.reduce.sampling import features, gram_column, gram_target, nnls_gram, sample
 
 from test_bench import CASES, SMALL
 
@@ -116,7 +116,7 @@ def test_a_resumed_sampled_run_equals_an_uninterrupted_one(tmp_path, corrector):
     """Resuming prepares again: the sampling must pick the same points and weights, and the
     kernel restart from the state stored (its end forces recomputed there) bit for bit."""
     import h5py
-    from transient.case import load
+    from transient.case.loading import load
     from transient.run import run
     base = SMALL + ['contact.pad_disc.rule="sampled"', "solver.chunk=50", "output.contact=true",
                     f'solver.corrector="{corrector}"']

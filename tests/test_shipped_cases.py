@@ -5,10 +5,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from transient.case import load
+from transient.case.loading import load
 from transient.cli import main
-from transient.history import summary
-from transient.model import build_model
+from transient.io.history import summary
+from transient.model.model import build_model
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 
@@ -38,7 +38,7 @@ def test_every_case_is_tested():
 def test_drilled_cube_mass_and_modes(capsys):
     case = load(CASES / "drilled_cube.toml")
     model = build_model(case)
-    lower = case["parts"]["lower"]["mesh"]
+    lower = case.parts["lower"].mesh.params
     # the hole is a polygon inscribed in the circle, one vertex in the direction of each node of
     # the O-grid square (half-width 3 background cells of 0.1/12 here)
     r, t = lower["hole_radius"], np.linspace(-1.0, 1.0, 7)[:-1]
@@ -60,7 +60,7 @@ def test_drilled_cube_mass_and_modes(capsys):
 def test_pad_disc_mass_and_modes_to_16khz(capsys):
     case = load(CASES / "pad_disc.toml")
     model = build_model(case)
-    d, p = case["parts"]["disc"]["mesh"], case["parts"]["pad"]["mesh"]
+    d, p = case.parts["disc"].mesh.params, case.parts["pad"].mesh.params
     disc = np.pi * (d["outer_radius"] ** 2 - d["inner_radius"] ** 2) * d["thickness"] * 7850
     sector = np.radians(p["angle"]) / 2 * (p["outer_radius"] ** 2 - p["inner_radius"] ** 2)
     pad = sector * (p["lining_thickness"] * 2500 + p["backplate_thickness"] * 7850)
@@ -87,7 +87,7 @@ def test_pad_disc_transient_preload_and_energy_over_1e5_steps(tmp_path, capsys):
     piston = -build_model(case).load_patterns["piston"].reshape(-1, 3)[:, 2].sum()
     # the pad is held in its plane only: the contact carries the whole piston force
     assert force == pytest.approx(piston, rel=1e-8)
-    p = case["parts"]["pad"]["mesh"]
+    p = case.parts["pad"].mesh.params
     sector = 0.5 * (p["outer_radius"] ** 2 - p["inner_radius"] ** 2) * np.radians(p["angle"])
     assert force == pytest.approx(1.0e6 * sector, rel=1e-4)     # quadratic arcs
 
@@ -104,18 +104,18 @@ def test_pad_disc_schemes_agree_below_5khz():
     cases = {scheme: load(CASES / "pad_disc.toml", base + [f"solver.scheme={scheme}"])
              for scheme in ("explicit", "implicit", "exponential")}
     cases["one pass"] = load(CASES / "pad_disc.toml", base + [
-        f"solver.{key}={long['solver'][key]!r}".replace("'", '"')
+        f"solver.{key}={getattr(long.solver, key)!r}".replace("'", '"')
         for key in ("scheme", "corrections", "corrector")])
-    problem = prepare(cases["explicit"])
+    setup = prepare(cases["explicit"])
     # pad_disc_long: 1 s at 20 steps per period of 16 kHz
-    assert long["solver"]["t_end"] == 1.0
-    assert choose_dt(long, problem) == pytest.approx(1.0 / (20 * 16000))
-    dt = 0.9 * problem.dt_critical
+    assert long.solver.t_end == 1.0
+    assert choose_dt(long, setup) == pytest.approx(1.0 / (20 * 16000))
+    dt = 0.9 * setup.system.critical.dt
     n = int(5e-3 / dt) // 8 * 8
     runs = {}
     for name, case in cases.items():
-        k = 8 if case["solver"]["scheme"] == "exponential" else 1
-        series, status, _ = simulate(case, problem, k * dt, n // k)
+        k = 8 if case.solver.scheme == "exponential" else 1
+        series, status, _ = simulate(case, setup, k * dt, n // k)
         assert status == "complete"
         runs[name] = series
     sos = butter(4, 5000, fs=1 / dt, output="sos")

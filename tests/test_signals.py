@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from transient.signals import (SIGNAL_FIELDS, check_signal, compile_signals, evaluate,
-                               signal_value, signal_values)
+from transient.case.signals import SIGNAL_FIELDS, check_signal, compile_signals, evaluate
+from transient.kernels.signals import signal_value, signal_values
 
 SPECS = [
     {"kind": "constant"},

@@ -5,7 +5,7 @@ import scipy.sparse as sp
 
 from transient.kernels.newmark import factor_columns
 from transient.kernels.sparse import csr_abs_matvec, csr_matvec, factor_solve
-from transient.linsolve import available, triangular_factors
+from transient.solve.linsolve import available, triangular_factors
 
 
 def spd(n=60, seed=0):

@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from transient.history import History
+from transient.io.history import History
 
 TOOL = Path(__file__).resolve().parent.parent / "tools" / "study_stability.py"
 spec = importlib.util.spec_from_file_location("study_stability", TOOL)

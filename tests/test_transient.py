@@ -7,9 +7,9 @@ import h5py
 import numpy as np
 import pytest
 
-from transient.case import load
+from transient.case.loading import load
 from transient.cli import main
-from transient.history import summary
+from transient.io.history import summary
 from transient.run import run
 
 CASES = Path(__file__).resolve().parent.parent / "cases"

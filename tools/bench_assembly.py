@@ -65,8 +65,8 @@ def divisions_for(dofs):
 
 def distorted_box(div, seed=0):
     """Hex20 box with corners moved by up to 10 % of the cell size, midside nodes re-centred."""
-    from transient import generators
-    from transient.elements import ELEMENTS
+    from transient.mesh import generators
+    from transient.mesh.elements import ELEMENTS
     size = np.array(div, float) / max(div)
     mesh = generators.box(size, div, element=CELL)
     conn = mesh.cells[CELL]
@@ -92,7 +92,7 @@ def rss_mb():
 # --- ours -------------------------------------------------------------------------------------
 
 def assemble_ours(points, conn):
-    from transient.assembly import CellBlock, assemble
+    from transient.model.assembly import CellBlock, assemble
     ne = len(conn)
     return assemble(points, [CellBlock(CELL, conn, np.full(ne, E), np.full(ne, NU),
                                        np.full(ne, RHO))])

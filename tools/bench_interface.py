@@ -21,13 +21,13 @@ import time
 
 import numpy as np
 
-from transient.case import load
-from transient.compatibility import compatibility
-from transient.elements import ALIASES
-from transient.generators import box
-from transient.interface import build_interface
-from transient.model import build_model, resolve_set
-from transient.selections import set_faces
+from transient.case.loading import load
+from transient.contact.compatibility import compatibility
+from transient.mesh.elements import ALIASES
+from transient.mesh.generators import box
+from transient.contact.interface import build_interface
+from transient.model.model import build_model, resolve_set
+from transient.mesh.selections import set_faces
 
 GOLDEN = 0.5 * (1 + 5 ** 0.5)   # ratio of the two grids: far from any ratio of small integers
 TARGET_S = 10.0                 # fine rule plus eigendecomposition [s]

@@ -12,7 +12,7 @@ roofline: for each (n, m) of --sizes, interleaved and best of --repeat, per step
 step needs with NumPy/BLAS (C @ q, np.exp on m values, C.T @ p, timed in a Python loop, so
 about 1 us of call overhead per product is part of the roofline; BLAS threads as configured);
 explicit_reduced on one row block and one Numba thread, and on one block per Numba thread
-(run._blocks); exponential_reduced with 0 and 1 corrections (1 and 2 contact passes per step),
+(dynamics.chunks.threaded_blocks); exponential_reduced with 0 and 1 corrections (1 and 2 contact passes per step),
 on whichever blocks run faster. Issue target: explicit at or below the roofline at n = 300,
 m = 1000, within 1.2x at every size.
 
@@ -48,12 +48,13 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from transient.kernels import newmark, stepping
-from transient.kernels.laws import law_params
-from transient.reduction import exponential_coefficients
-from transient.run import _blocks
-from transient.signals import compile_signals
+from transient.case.specs import LawSpec
+from transient.contact.laws import law_params
+from transient.dynamics.schemes import exponential_coefficients
+from transient.dynamics.chunks import threaded_blocks
+from transient.case.signals import compile_signals
 
-LAW = {"kind": "exponential", "p0": 1e4, "lambda": 5e5, "p_lin": 1e9}
+LAW = LawSpec("exponential", p0=1e4, lam=5e5, p_lin=1e9)
 PRELOAD = 1e6          # [Pa]
 AREA = 1e-3            # [m^2]
 ZETA = 0.01            # modal damping ratio
@@ -193,7 +194,7 @@ def roofline_row(n, m, repeat, target_s, seed):
     s = contact_system(np.geomspace(100.0, 16e3, n), m, 0.1, seed)
     dt = 0.8 * 2.0 / np.sqrt(s.omega2.max())       # stable for the explicit scheme
     # one block on one thread (with more, the pool's threads take part even in one block)
-    threaded = _blocks(m)
+    threaded = threaded_blocks(m)
     blocks = {"1": (np.array([0, m], np.int64), 1)}
     if len(threaded) > 2:
         blocks["threads"] = (threaded, numba.get_num_threads())

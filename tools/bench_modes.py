@@ -29,9 +29,9 @@ def block_divisions(dofs):
 
 def child(dofs, modes, backend):
     import numpy as np
-    from transient.assembly import CellBlock, assemble
-    from transient.generators import box
-    from transient.modes import normal_modes
+    from transient.model.assembly import CellBlock, assemble
+    from transient.mesh.generators import box
+    from transient.solve.modes import normal_modes
     divisions = block_divisions(dofs)
     mesh = box((4.0, 1.0, 1.0), divisions, element="hexahedron20")
     conn = mesh.cells["hexahedron20"]
@@ -64,7 +64,7 @@ def main():
     if args.child:
         print(json.dumps(child(args.dofs, args.modes, args.child)))
         return
-    from transient.linsolve import available
+    from transient.solve.linsolve import available
     backends = available() if args.backends == "auto" else args.backends.split(",")
     rows = []
     for backend in backends:

@@ -22,12 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
-from transient.case import load
-from transient.contact import build_pair, contact_stiffness
+from transient.case.loading import load
+from transient.contact.pair import build_pair, contact_stiffness
 from transient.errors import CaseError
 from transient.kernels.greedy import greedy_rows
-from transient.model import build_model
-from transient.modes import normal_modes
+from transient.model.model import build_model
+from transient.solve.modes import normal_modes
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 FIELDS = ["rule", "weights", "points", "fraction", "energy_error", "max_error_pct",
@@ -48,13 +48,13 @@ def main():
 
     greedy_rows(np.eye(3), 2, 1e-8, True)    # compile (or load) the kernel outside the timings
     case = load(args.case, args.overrides)
-    name = args.pair or next(iter(case["contact"]))
+    name = args.pair or next(iter(case.contact))
     key = f"contact.{name}"
     t0 = time.perf_counter()
     model = build_model(case)
     # the case's other pairs, as the case defines them: tied in every run
     K_base = model.K + contact_stiffness(
-        [build_pair(case, model, other) for other in case["contact"] if other != name],
+        [build_pair(case, model, other) for other in case.contact if other != name],
         model.ndof)
     t_model = time.perf_counter() - t0
     log = (lambda *a: None) if args.json else print

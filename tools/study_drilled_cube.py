@@ -8,7 +8,7 @@ import json
 import time
 from pathlib import Path
 
-from transient.studies import drilled_cube_errors
+from transient.studies.drilled_cube import drilled_cube_errors
 
 CASE = Path(__file__).resolve().parent.parent / "cases" / "drilled_cube.toml"
 

@@ -275,7 +275,7 @@ def inspect(path):
     path = Path(path)
     if not path.exists():
         return None
-    from transient.history import summary
+    from transient.io.history import summary
     with h5py.File(path, "r", locking=False) as f:
         status = f.attrs.get("status")
         status = status.decode() if isinstance(status, bytes) else status
@@ -412,10 +412,10 @@ def classify(result, drift_tolerance=DEFAULT_DRIFT_TOLERANCE):
 
 def drift_tolerance(case, settings):
     """solver.drift_tolerance of the case with its overrides (the default if it does not load)."""
-    from transient.case import load
+    from transient.case.loading import load
     from transient.errors import CaseError
     try:
-        return load(case, settings)["solver"]["drift_tolerance"]
+        return load(case, settings).solver.drift_tolerance
     except CaseError:
         return DEFAULT_DRIFT_TOLERANCE
 

@@ -14,7 +14,7 @@ def _numba_cache_dir():
     would otherwise keep a stale copy after that module changes."""
     here = Path(__file__).parent
     digest = hashlib.sha1()
-    for path in [here / "jit.py", here / "signals.py"] + sorted((here / "kernels").glob("*.py")):
+    for path in [here / "jit.py"] + sorted((here / "kernels").glob("*.py")):
         digest.update(path.read_bytes())
     base = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
     return str(base / "transient" / "numba" / digest.hexdigest()[:16])

@@ -12,22 +12,7 @@ bilateral: 1/2 k g^2).
 import numpy as np
 
 from ..jit import njit
-
-EXPONENTIAL, LINEAR, BILATERAL = 0, 1, 2
-NAMES = {"exponential": EXPONENTIAL, "linear": LINEAR, "bilateral": BILATERAL}
-
-
-def law_params(spec, k):
-    """(code, params) of a validated [contact.NAME.law] table; k: the pair's stiffness density."""
-    code = NAMES[spec["kind"]]
-    params = np.zeros(4)
-    if code == EXPONENTIAL:
-        p0, lam = spec["p0"], spec["lambda"]
-        # the law turns linear where the pressure reaches p_lin
-        params[:3] = p0, lam, -np.log(spec["p_lin"] / p0) / lam
-    else:
-        params[0] = k
-    return code, params
+from .codes import BILATERAL, EXPONENTIAL, LINEAR
 
 
 @njit

@@ -20,14 +20,13 @@ import numba
 import numpy as np
 
 from ..jit import njit, njit_fast, njit_parallel
+from .codes import CONTACT, DISSIPATED, KINETIC, NO_CONVERGENCE, NOT_FINITE, OK, STRAIN, WORK
 from .laws import pressure_potential
-from ..signals import signal_values
+from .signals import signal_values
 from .sparse import csr_matvec
 from .woodbury import active_rows, woodbury_dense
 
-OK, NOT_FINITE, NO_CONVERGENCE = 0, 1, 2
 IMPLICIT_TOL = 1e-3     # the implicit corrector's residual, relative to the step's motion
-KINETIC, STRAIN, CONTACT, WORK, DISSIPATED = 0, 1, 2, 3, 4
 
 
 @njit_fast
@@ -348,7 +347,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
 
     coef (n, 8): per mode, the propagator [E11, E12, E21, E22] in columns 0-3, then the responses
     to F0 and to the ramp F1 - F0, [G0x, G0v, G1x, G1v], in columns 4-7
-    (reduction.exponential_coefficients).
+    (dynamics.schemes.exponential_coefficients).
     A predictor extrapolates F linearly from the previous step (fprev (n,): F at the start of
     the previous step, carried between chunks); F at the end point is evaluated at the
     predicted state, then `corrections` times more at the state propagated with it (one

@@ -1,0 +1,105 @@
+"""Checks that need several keys of a case, run at load: before any mesh is built, a wrong
+combination is a one-line error naming the key to change."""
+from ..errors import CaseError
+
+
+def check(case):
+    """Raise CaseError on the first combination of keys that no stage admits (every case)."""
+    _references(case)
+    _contact(case)
+
+
+def check_transient(case):
+    """Raise CaseError on the first combination of keys the transient stages would refuse:
+    run by the commands that integrate in time, before their first stage."""
+    _sampled(case)
+    _solver(case)
+
+
+def _fail(case, key, message):
+    raise CaseError(case.path, key, message)
+
+
+def _part_of(ref):
+    return ref.split(".", 1)[0] if isinstance(ref, str) and "." in ref else None
+
+
+def _known(case, key, name, names, what):
+    if name not in names:
+        _fail(case, key, f"unknown {what} '{name}' ({what}s: {', '.join(names) or 'none'})")
+
+
+def _references(case):
+    """Parts and materials named by other tables exist (sets need the meshes: model stage)."""
+    parts = list(case.parts)
+    for name, part in case.parts.items():
+        _known(case, f"parts.{name}.material", part.material, list(case.materials), "material")
+        for cset, material in part.region_materials.items():
+            _known(case, f"parts.{name}.region_materials.{cset}", material,
+                   list(case.materials), "material")
+    refs = [(f"constraints.{n}.set", c.set) for n, c in case.constraints.items()]
+    refs += [(f"loads.{n}.set", s.set) for n, s in case.loads.items() if s.kind == "pressure"]
+    refs += [(f"contact.{n}.surface1", c.surface1) for n, c in case.contact.items()]
+    refs += [(f"contact.{n}.surface2", c.surface2) for n, c in case.contact.items()
+             if c.surface2]
+    for key, ref in refs:
+        part = _part_of(ref)
+        if part is None:
+            _fail(case, key, f"expected PART.SET, got '{ref}'")
+        _known(case, key, part, parts, "part")
+    for name, load in case.loads.items():
+        if load.kind == "force":
+            _known(case, f"loads.{name}.part", load.part, parts, "part")
+        for p in load.parts if load.kind == "gravity" else ():
+            _known(case, f"loads.{name}.parts", p, parts, "part")
+    for name, sensor in case.sensors.items():
+        _known(case, f"sensors.{name}.part", sensor.part, parts, "part")
+    for name, initial in case.initial.items():
+        _known(case, f"initial.{name}.part", initial.part, parts, "part")
+
+
+def _contact(case):
+    for name, c in case.contact.items():
+        key = f"contact.{name}"
+        if c.wall:
+            if len(c.wall_point) != 3 or c.surface2:
+                _fail(case, f"{key}.wall_point", "a wall takes a point [x, y, z] and no "
+                      "surface2")
+            if c.regularized or c.rule not in ("fine", "sampled"):
+                _fail(case, f"{key}.rule", "a rigid wall is observed by the fine rule, or "
+                      "points sampled from it, unregularized (no second mesh to be "
+                      "compatible with)")
+        else:
+            if not c.surface2:
+                _fail(case, f"{key}.surface2", "missing: a second surface as PART.SET, or a "
+                      "wall_point")
+            if _part_of(c.surface1) == _part_of(c.surface2):
+                _fail(case, f"{key}.surface2", "both surfaces belong to the same part")
+        if c.rule == "greedy" and not c.regularized:
+            _fail(case, f"{key}.regularized", "the greedy rule selects points on the "
+                  "regularized observation: set regularized = true")
+
+
+def _sampled(case):
+    for name, c in case.contact.items():
+        if c.rule == "sampled" and not case.solver.reduction.enabled:
+            _fail(case, f"contact.{name}.rule", "the sampled rule picks its points on the "
+                  "reduced model: set solver.reduction.enabled = true")
+
+
+def _solver(case):
+    solver = case.solver
+    reduced = solver.reduction.enabled
+    if solver.scheme == "exponential" and not reduced:
+        _fail(case, "solver.scheme", "the exponential scheme propagates the modes of a reduced "
+              "model: set solver.reduction.enabled = true")
+    if not reduced:
+        if solver.damping.modal > 0:
+            _fail(case, "solver.damping.modal", "modal damping needs the reduced model "
+                  "(solver.reduction.enabled = true); use alpha and beta")
+        if solver.mass == "consistent" and solver.scheme == "explicit":
+            _fail(case, "solver.mass", "central differences on the full model need the "
+                  "lumped mass: use lumped (or auto), or a reduced model")
+        if solver.scheme == "implicit" and solver.dt == 0.0:
+            _fail(case, "solver.dt", "the implicit scheme on the full model has no frequency "
+                  "to resolve: give dt")

@@ -1,0 +1,400 @@
+"""The case file schema: every key, its type, default, unit and meaning.
+
+Tables keyed by name (`[parts.NAME]`) give every value a dotted path. The schema drives
+validation (`case.py`), `--set` overrides, and the key reference in `cases/README.md`
+(`python -m transient.case.schema` prints it).
+"""
+from dataclasses import dataclass, field
+
+REQUIRED = object()
+
+
+@dataclass(frozen=True)
+class Value:
+    """A leaf value. kind: float, int, str, bool, floats, ints, strs (lists), choice, table
+    (names to strings), eps (a float within bounds or the string "auto")."""
+    kind: str
+    doc: str
+    default: object = REQUIRED
+    unit: str = ""
+    length: int = 0            # exact list length when > 0
+    choices: tuple = ()
+    minimum: float = None      # inclusive bounds on numbers (and list items)
+    maximum: float = None
+    open_min: float = None     # exclusive bounds
+    open_max: float = None
+
+
+@dataclass(frozen=True)
+class Table:
+    doc: str
+    fields: dict
+    optional: bool = False     # an absent table is filled with its defaults
+
+
+@dataclass(frozen=True)
+class Named:
+    """Tables keyed by a user-chosen name, such as [parts.NAME]."""
+    doc: str
+    item: object
+    min_items: int = 0
+
+
+@dataclass(frozen=True)
+class Variant:
+    """A table whose fields depend on its `kind` key."""
+    doc: str
+    options: dict
+    common: dict = field(default_factory=dict)
+    default: str = None        # kind taken when the table is absent (None: required)
+
+
+def _pos(doc, unit="", default=REQUIRED):
+    return Value("float", doc, default, unit, open_min=0.0)
+
+
+def _vec3(doc, unit="m", default=REQUIRED):
+    return Value("floats", doc, default, unit, length=3)
+
+
+ELEMENT = Value("choice", "element type of the generated mesh", "hex8",
+                choices=("hex8", "hex20", "tet4", "tet10"))
+
+MESH = Variant("mesh of the part: a generator or a file", {
+    "box": {
+        "size": Value("floats", "edge lengths along x, y, z", unit="m", length=3, open_min=0.0),
+        "divisions": Value("ints", "cells along x, y, z", length=3, minimum=1),
+        "origin": _vec3("corner with the smallest coordinates", default=[0.0, 0.0, 0.0]),
+        "element": ELEMENT,
+    },
+    "drilled_box": {
+        "size": Value("floats", "edge lengths along x, y, z", unit="m", length=3, open_min=0.0),
+        "divisions": Value("ints", "background cells along x, y, z", length=3, minimum=1),
+        "origin": _vec3("corner with the smallest coordinates", default=[0.0, 0.0, 0.0]),
+        "hole_center": Value("floats", "x, y of the axis of the hole (along z)", unit="m",
+                             length=2),
+        "hole_radius": _pos("radius of the hole", "m"),
+        "ogrid_cells": Value("int", "half-width in background cells of the square meshed as an "
+                             "O-grid around the hole (0: smallest that fits 1.5 radius)", 0,
+                             minimum=0),
+        "filled": Value("bool", "mesh the hole too (a plain block with the drilled block's plan)",
+                        False),
+        "element": ELEMENT,
+    },
+    "annular_disc": {
+        "inner_radius": _pos("radius of the hub (inner) face", "m"),
+        "outer_radius": _pos("outer radius", "m"),
+        "thickness": _pos("thickness along z", "m"),
+        "divisions": Value("ints", "cells along radius, circumference, thickness", length=3,
+                           minimum=1),
+        "center": _vec3("centre of the lower face", default=[0.0, 0.0, 0.0]),
+        "element": ELEMENT,
+    },
+    "brake_pad": {
+        "inner_radius": _pos("inner radius of the annular sector", "m"),
+        "outer_radius": _pos("outer radius of the annular sector", "m"),
+        "angle": Value("float", "opening angle of the sector", unit="deg", open_min=0.0,
+                       maximum=360.0),
+        "center_angle": Value("float", "polar angle of the sector's middle", 90.0, "deg"),
+        "lining_thickness": _pos("thickness of the friction lining", "m"),
+        "backplate_thickness": _pos("thickness of the steel backplate", "m"),
+        "divisions": Value("ints", "cells along radius, angle, lining thickness, backplate "
+                           "thickness", length=4, minimum=1),
+        "z0": Value("float", "height of the friction face (bottom of the lining)", 0.0, "m"),
+        "center": Value("floats", "x, y of the axis of the sector", [0.0, 0.0], "m", length=2),
+        "element": ELEMENT,
+    },
+    "file": {
+        "path": Value("str", "mesh file read by meshio (Gmsh .msh, Abaqus .inp, VTU...), "
+                      "relative to the case file"),
+        "scale": _pos("factor applied to the coordinates (1e-3 for a file in mm)", "-", 1.0),
+        "translate": _vec3("translation applied after scaling", default=[0.0, 0.0, 0.0]),
+    },
+})
+
+SELECTION = Variant("named selection from geometry: nodes within tol, and the boundary faces "
+                    "whose nodes are all selected", {
+                        "plane": {
+                            "point": _vec3("a point of the plane"),
+                            "normal": Value("floats", "normal of the plane", length=3),
+                        },
+                        "box": {
+                            "min": _vec3("smallest corner"),
+                            "max": _vec3("largest corner"),
+                        },
+                        "cylinder": {
+                            "point": _vec3("a point of the axis"),
+                            "axis": Value("floats", "direction of the axis", length=3),
+                            "radius": _pos("radius of the cylindrical surface", "m"),
+                        },
+                    }, common={
+                        "tol": Value("float", "distance tolerance", 1e-9, "m", minimum=0.0),
+                    })
+
+PART = Table("a solid part", {
+    "mesh": MESH,
+    "material": Value("str", "name of the material of the part's cells"),
+    "region_materials": Value("table", "cell set name -> material name, overriding `material` "
+                              "on those cells", {}),
+    "sets": Named("named selections from geometry (mesh and generator sets are named too)",
+                  SELECTION),
+})
+
+MATERIAL = Table("linear isotropic elastic material", {
+    "E": _pos("Young's modulus", "Pa"),
+    "nu": Value("float", "Poisson's ratio", open_min=-1.0, open_max=0.5),
+    "rho": _pos("mass density", "kg/m^3"),
+})
+
+CONSTRAINT = Table("zero displacement of the nodes of a selection", {
+    "set": Value("str", "selection as PART.SET"),
+    "dofs": Value("strs", "clamped directions", ["x", "y", "z"], choices=("x", "y", "z")),
+})
+
+def _signal_variant():
+    """The `signal` table of a load, from the signals module's fields."""
+    from .signals import SIGNAL_DOC, SIGNAL_FIELDS
+    options = {}
+    for kind, fields in SIGNAL_FIELDS.items():
+        options[kind] = {key: Value(typ, doc, REQUIRED if default is None else default,
+                                    "" if unit == "-" else unit)
+                         for key, (typ, default, unit, doc) in fields.items()}
+    return Variant(SIGNAL_DOC + " (constant: the preload, in equilibrium at t = 0)", options,
+                   default="constant")
+
+
+SIGNAL = _signal_variant()
+
+LOAD = Variant("load: its nodal forces times its time signal", {
+    "pressure": {
+        "set": Value("str", "face selection as PART.SET"),
+        "value": Value("float", "pressure, positive when pushing into the surface", unit="Pa"),
+        "signal": SIGNAL,
+    },
+    "force": {
+        "part": Value("str", "part carrying the force"),
+        "point": _vec3("the force goes to the node nearest this point"),
+        "vector": _vec3("force", "N"),
+        "signal": SIGNAL,
+    },
+    "gravity": {
+        "vector": _vec3("acceleration of gravity", "m/s^2"),
+        "parts": Value("strs", "parts it applies to (empty: all)", []),
+        "signal": SIGNAL,
+    },
+})
+
+CONTACT = Table("a contact pair: two face sets of two parts, gap observed on the fine rule or a "
+                "coarser one, optionally regularized by the (1-eps)-compatible shapes", {
+    "surface1": Value("str", "first surface as PART.SET (the gap is positive when it lies "
+                      "outside part 2)"),
+    "surface2": Value("str", "second surface as PART.SET; its outward normal is the contact "
+                      "normal ('' with a wall)", ""),
+    "wall_point": Value("floats", "a point of a rigid plane wall replacing surface 2 ([] : no "
+                        "wall)", [], "m"),
+    "wall_normal": Value("floats", "normal of the wall, pointing out of it towards surface 1",
+                         [0.0, 0.0, 1.0], length=3),
+    "law": Table("contact law of the transient (p >= 0 as a function of the gap g)", {
+        "kind": Value("choice", "exponential p0 exp(-lambda g) with a linear continuation, "
+                      "linear (unilateral penalty k max(-g, 0)) or bilateral (tied, -k g)",
+                      "linear", choices=("exponential", "linear", "bilateral")),
+        "p0": Value("float", "exponential: pressure at zero gap", 1e4, "Pa", open_min=0.0),
+        "lambda": Value("float", "exponential: decay rate (tangent at pressure p: lambda p)",
+                        5e5, "1/m", open_min=0.0),
+        "p_lin": Value("float", "exponential: pressure beyond which the law continues linearly "
+                       "(no overflow at any penetration)", 1e9, "Pa", open_min=0.0),
+    }, optional=True),
+    "order": Value("int", "degree of the triangle Gauss rule of the fine rule on Gamma", 4,
+                   minimum=1, maximum=20),
+    "k": Value("float", "stiffness density of the gap energy and of linear penalty contact",
+               5e11, "Pa/m", open_min=0.0),
+    "rule": Value("choice", "contact points: fine (the exact rule on Gamma), centre (one "
+                  "point per face of the master surface), greedy (a coarse rule selected on "
+                  "the regularized observation) or sampled (the fewest fine points whose "
+                  "weights reproduce the contact stiffness that the reduced model's modes below "
+                  "fmax see, and the preload: ECSW on the contact-linearized dynamics; needs "
+                  "solver.reduction)", "fine", choices=("fine", "centre", "greedy", "sampled")),
+    "candidates": Value("choice", "greedy: candidate points, the fine points or the face "
+                        "centres of a surface", "fine", choices=("fine", "surface1", "surface2")),
+    "points": Value("int", "greedy: number of points m (0: the rank of the kept shapes; more "
+                    "restarts the selection); sampled: at most this many (0: no cap)", 0,
+                    minimum=0),
+    "sampling_tolerance": Value("float", "sampled: relative residual of the contact stiffness "
+                                "and preload force reproduced; it sets the number of points "
+                                "(pad_disc: 1e-2 gives 421 of 7734 points, histories within "
+                                "0.4%)", 1e-2, open_min=0.0, maximum=1.0),
+    "tolerance": Value("float", "greedy: stop when the largest remaining row norm falls below "
+                       "this fraction of the largest", 1e-8, open_min=0.0, maximum=1.0),
+    "weights": Value("choice", "greedy: nearest (each fine weight to its nearest point: exact "
+                     "area, best tied frequencies), nnls (non-negative least squares on the gap "
+                     "energy of the kept subspace and the area), best (the lower energy error of "
+                     "the two) or exact (NNLS over all candidates: the energy reproduced exactly, "
+                     "with as many points as needed; small interfaces only)", "nearest",
+                     choices=("nearest", "nnls", "best", "exact")),
+    "master": Value("choice", "surface whose face centres carry the centre rule", "surface1",
+                    choices=("surface1", "surface2")),
+    "regularized": Value("bool", "observe the gap through the (1-eps)-compatible shapes only",
+                         False),
+    "eps": Value("eps", "compatibility tolerance: shapes with sigma_i / max sigma <= eps are "
+                 "kept; \"auto\" puts it in the largest jump of the spectrum", "auto",
+                 minimum=0.0, maximum=1.0),
+    "formulation": Value("choice", "dual (regularized gap observation, eq. 15) or primal "
+                         "(interface dofs replaced by the kept shapes, eq. 11)", "dual",
+                         choices=("dual", "primal")),
+    "project": Value("choice", "dual: surfaces whose displacement is projected", "both",
+                     choices=("both", "surface1", "surface2")),
+    "norm": Value("choice", "norm of the pseudo-inverse of the dual projection: mass "
+                  "(interface mass C^T W C) or identity (the paper's)", "mass",
+                  choices=("mass", "identity")),
+})
+
+SENSOR = Table("displacement observed at a point", {
+    "part": Value("str", "part observed"),
+    "point": _vec3("the node nearest this point is observed"),
+    "direction": Value("floats", "direction observed", [0.0, 0.0, 1.0], length=3),
+})
+
+SOLVER = Table("solution settings", {
+    "modes": Table("modal analysis", {
+        "count": Value("int", "number of modes (when fmax is 0)", 20, minimum=1),
+        "fmax": Value("float", "compute all modes up to this frequency (0: use count)", 0.0,
+                      "Hz", minimum=0.0),
+        "shift": Value("float", "shift of shift-invert Lanczos, below the first frequency; a "
+                       "negative value keeps free parts' rigid modes solvable", -1.0, "Hz"),
+    }, optional=True),
+    "scheme": Value("choice", "time integration: explicit (central differences), implicit "
+                    "(reduced or full model: Newmark average acceleration, iteration operator at "
+                    "the preload factorized once, Newton with the exact contact tangent through "
+                    "low-rank updates) or exponential "
+                    "(reduced model: each mode's linear part, with the contact linearized at the "
+                    "preload, integrated exactly; the contact remainder taken linear in time "
+                    "over the step)", "explicit",
+                    choices=("explicit", "implicit", "exponential")),
+    "corrections": Value("int", "exponential: evaluations of the contact forces at the end of "
+                         "each step after the one at the predicted state", 1, minimum=0,
+                         maximum=5),
+    "corrector": Value("choice", "exponential: a step ends at the state its forces were last "
+                       "evaluated at (evaluated: robust on stiff penalties closing), or "
+                       "propagates once more from them (propagated: with corrections = 0 one "
+                       "contact pass per step, as accurate on smooth contact), or solves for "
+                       "its end forces by Newton with the exact contact tangent (implicit: "
+                       "stable where contact stiffens far beyond the preload's, a hard tap; "
+                       "its cost grows with the points whose tangent moved, so it suits "
+                       "sampled and coarse rules; corrections is then unused)", "evaluated",
+                       choices=("evaluated", "propagated", "implicit")),
+    "t_end": Value("float", "simulated time after the preload", 0.0, "s", minimum=0.0),
+    "mass": Value("choice", "mass matrix of the transient: lumped (HRZ), consistent, or auto "
+                  "(lumped for central differences on the full model, which need it diagonal; "
+                  "consistent otherwise)", "auto",
+                  choices=("auto", "lumped", "consistent")),
+    "dt": Value("float", "time step (0: 0.9 times the critical step for explicit, "
+                "1 / (20 reduction.fmax) for exponential)", 0.0, "s", minimum=0.0),
+    "force_dt": Value("bool", "run explicit with dt above the critical step anyway", False),
+    "chunk": Value("int", "steps per kernel call (output and checks between calls)", 2000,
+                   minimum=1),
+    "drift_tolerance": Value("float", "stop when the energy balance drifts by more than this "
+                             "fraction of the peak total energy", 0.05, open_min=0.0),
+    "damping": Table("damping", {
+        "modal": Value("float", "modal damping ratio of every mode (reduced model)", 0.0,
+                       minimum=0.0),
+        "residual": Value("float", "damping ratio added to the reduced modes above "
+                          "reduction.fmax only (the quasi-static contact and load statics): "
+                          "numerical, it leaves the band of interest undamped", 0.0,
+                          minimum=0.0),
+        "alpha": Value("float", "Rayleigh mass-proportional coefficient", 0.0, "1/s",
+                       minimum=0.0),
+        "beta": Value("float", "Rayleigh stiffness-proportional coefficient", 0.0, "s",
+                      minimum=0.0),
+    }, optional=True),
+    "reduction": Table("reduced model: normal modes up to fmax plus static responses", {
+        "enabled": Value("bool", "integrate a reduced model (false: the full model)", False),
+        "fmax": Value("float", "normal modes of the preloaded structure up to this frequency",
+                      16000.0, "Hz", open_min=0.0),
+        "statics": Value("bool", "add static responses to the contact point loads and the load "
+                         "patterns", True),
+        "statics_tolerance": Value("float", "keep the contact static shapes whose structural "
+                                   "flexibility beyond the modes is at least this fraction of "
+                                   "the contact law's at the preload (0: keep one per point)",
+                                   1e-3, minimum=0.0),
+    }, optional=True),
+    "newton": Table("Newton iterations of the preload and of the implicit scheme", {
+        "tolerance": Value("float", "relative residual of the Newton iterations", 1e-10,
+                           open_min=0.0),
+        "max_iter": Value("int", "iteration cap (non-convergence stops the run)", 50, minimum=1),
+    }, optional=True),
+    "linear_solver": Value("choice", "sparse factorization: auto picks CHOLMOD if installed, "
+                           "else PARDISO, else SuperLU", "auto",
+                           choices=("auto", "cholmod", "pardiso", "superlu")),
+    "quadrature": Table("quadrature degrees of the element matrices (0: element default)", {
+        "stiffness": Value("int", "degree for K", 0, minimum=0),
+        "mass": Value("int", "degree for M", 0, minimum=0),
+    }, optional=True),
+}, optional=True)
+
+OUTPUT = Table("outputs", {
+    "vtu": Value("str", "write the model (and modes) to this VTU file, relative to the case "
+                 "file ('' = none)", ""),
+    "file": Value("str", "HDF5 history of `transient run`, relative to the case file ('': the "
+                  "case's name with .h5)", ""),
+    "every": Value("int", "store one step in this many", 1, minimum=1),
+    "sensors": Value("bool", "store the sensors' histories", True),
+    "contact": Value("bool", "store gap and pressure at the contact points", False),
+    "energy": Value("bool", "store the energy balance terms (always computed: the run "
+                    "checks the balance)", True),
+    "field": Value("bool", "store the state q every `every` steps (reduced coordinates, or "
+                   "the free dofs of the full model) so `transient export` can write the "
+                   "displacement field", False),
+}, optional=True)
+
+INITIAL = Table("initial velocity of a part (impact)", {
+    "part": Value("str", "part set in motion"),
+    "velocity": _vec3("velocity", "m/s"),
+})
+
+CASE = Table("a case", {
+    "title": Value("str", "one-line description", ""),
+    "materials": Named("materials by name", MATERIAL, min_items=1),
+    "parts": Named("parts by name", PART, min_items=1),
+    "constraints": Named("constraints by name", CONSTRAINT),
+    "loads": Named("loads by name", LOAD),
+    "contact": Named("contact pairs by name", CONTACT),
+    "sensors": Named("sensors by name", SENSOR),
+    "initial": Named("initial velocities by name", INITIAL),
+    "solver": SOLVER,
+    "output": OUTPUT,
+})
+
+
+def reference(node=CASE, prefix=""):
+    """Markdown rows (path, type, default, unit, meaning) of every key under a schema node."""
+    rows = []
+    if isinstance(node, Table):
+        for key, sub in node.fields.items():
+            rows += reference(sub, f"{prefix}.{key}" if prefix else key)
+    elif isinstance(node, Named):
+        rows += reference(node.item, f"{prefix}.NAME")
+    elif isinstance(node, Variant):
+        rows.append((f"{prefix}.kind", "choice", repr(node.default) if node.default else
+                     "required", "",
+                     f"{node.doc}: one of {', '.join(node.options)}"))
+        for key, sub in node.common.items():
+            rows += reference(sub, f"{prefix}.{key}")
+        for kind, fields in node.options.items():
+            for key, sub in fields.items():
+                rows += reference(sub, f"{prefix}.{key} ({kind})")
+    else:
+        default = "required" if node.default is REQUIRED else repr(node.default)
+        kind = node.kind + (f"[{node.length}]" if node.length else "")
+        doc = node.doc + (f" ({', '.join(node.choices)})" if node.choices else "")
+        rows.append((prefix, kind, default, node.unit, doc))
+    return rows
+
+
+def reference_markdown():
+    lines = ["| key | type | default | unit | meaning |", "|---|---|---|---|---|"]
+    lines += [f"| `{p}` | {k} | {d} | {u} | {m} |" for p, k, d, u, m in reference()]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    print(reference_markdown())

@@ -1,0 +1,216 @@
+"""Frozen specs of a case, built once from the validated tables: the stages read these, never
+the raw TOML dict. Field names are the case keys ("lambda", a Python keyword, becomes `lam`);
+units SI as in the schema. Tables keyed by name become dicts of specs in file order.
+"""
+from dataclasses import dataclass, fields
+
+SHIFT_HZ = 1.0     # -(2 pi SHIFT_HZ)^2 shifts K so that floating parts stay solvable
+
+
+@dataclass(frozen=True)
+class MaterialSpec:
+    E: float
+    nu: float
+    rho: float
+
+
+@dataclass(frozen=True)
+class MeshSpec:
+    kind: str                # a generator of mesh.generators, or "file"
+    params: dict             # the generator's arguments, or path, scale, translate
+
+
+@dataclass(frozen=True)
+class SelectionSpec:
+    kind: str                # plane, box, cylinder
+    params: dict             # point, normal, min, max, axis, radius, tol
+
+
+@dataclass(frozen=True)
+class PartSpec:
+    mesh: MeshSpec
+    material: str
+    region_materials: dict   # cell set -> material name
+    sets: dict               # name -> SelectionSpec
+
+
+@dataclass(frozen=True)
+class ConstraintSpec:
+    set: str
+    dofs: tuple
+
+
+@dataclass(frozen=True)
+class LoadSpec:
+    kind: str                # pressure, force, gravity
+    signal: dict             # kind and that kind's keys (case.signals)
+    set: str = ""
+    value: float = 0.0
+    part: str = ""
+    point: tuple = ()
+    vector: tuple = ()
+    parts: tuple = ()
+
+
+@dataclass(frozen=True)
+class LawSpec:
+    kind: str
+    p0: float
+    lam: float
+    p_lin: float
+
+
+@dataclass(frozen=True)
+class ContactSpec:
+    name: str
+    surface1: str
+    surface2: str
+    wall_point: tuple
+    wall_normal: tuple
+    law: LawSpec
+    order: int
+    k: float
+    rule: str
+    candidates: str
+    points: int
+    sampling_tolerance: float
+    tolerance: float
+    weights: str
+    master: str
+    regularized: bool
+    eps: object              # float or "auto"
+    formulation: str
+    project: str
+    norm: str
+
+    @property
+    def wall(self):
+        return bool(self.wall_point)
+
+
+@dataclass(frozen=True)
+class SensorSpec:
+    part: str
+    point: tuple
+    direction: tuple
+
+
+@dataclass(frozen=True)
+class InitialSpec:
+    part: str
+    velocity: tuple
+
+
+@dataclass(frozen=True)
+class ModesSpec:
+    count: int
+    fmax: float
+    shift: float
+
+
+@dataclass(frozen=True)
+class DampingSpec:
+    modal: float
+    residual: float
+    alpha: float
+    beta: float
+
+
+@dataclass(frozen=True)
+class ReductionSpec:
+    enabled: bool
+    fmax: float
+    statics: bool
+    statics_tolerance: float
+
+
+@dataclass(frozen=True)
+class NewtonSpec:
+    tolerance: float
+    max_iter: int
+
+
+@dataclass(frozen=True)
+class QuadratureSpec:
+    stiffness: int
+    mass: int
+
+
+@dataclass(frozen=True)
+class SolverSpec:
+    modes: ModesSpec
+    scheme: str
+    corrections: int
+    corrector: str
+    t_end: float
+    mass: str
+    dt: float
+    force_dt: bool
+    chunk: int
+    drift_tolerance: float
+    damping: DampingSpec
+    reduction: ReductionSpec
+    newton: NewtonSpec
+    linear_solver: str
+    quadrature: QuadratureSpec
+    shift_hz: float = SHIFT_HZ
+
+    @property
+    def lumped(self):
+        """The transient's mass is the lumped one (auto: for central differences on the full
+        model, which need it diagonal)."""
+        return self.mass == "lumped" or (self.mass == "auto" and self.scheme == "explicit"
+                                         and not self.reduction.enabled)
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    vtu: str
+    file: str
+    every: int
+    sensors: bool
+    contact: bool
+    energy: bool
+    field: bool
+
+
+def _plain(value):
+    """Lists as tuples: a spec's values do not change."""
+    return tuple(_plain(v) for v in value) if isinstance(value, list) else value
+
+
+def _make(cls, table, **given):
+    names = {f.name for f in fields(cls)}
+    values = {("lam" if k == "lambda" else k): _plain(v) for k, v in table.items()}
+    values.update(given)
+    return cls(**{k: v for k, v in values.items() if k in names})
+
+
+def _variant(cls, table):
+    return cls(table["kind"], {k: _plain(v) for k, v in table.items() if k != "kind"})
+
+
+def build(data):
+    """The specs of a validated case dict: name -> spec (or dict of specs)."""
+    solver = data["solver"]
+    return {
+        "title": data["title"],
+        "materials": {n: _make(MaterialSpec, t) for n, t in data["materials"].items()},
+        "parts": {n: PartSpec(_variant(MeshSpec, t["mesh"]), t["material"],
+                              dict(t["region_materials"]),
+                              {s: _variant(SelectionSpec, v) for s, v in t["sets"].items()})
+                  for n, t in data["parts"].items()},
+        "constraints": {n: _make(ConstraintSpec, t) for n, t in data["constraints"].items()},
+        "loads": {n: _make(LoadSpec, t, signal=dict(t["signal"]))
+                  for n, t in data["loads"].items()},
+        "contact": {n: _make(ContactSpec, t, name=n, law=_make(LawSpec, t["law"]))
+                    for n, t in data["contact"].items()},
+        "sensors": {n: _make(SensorSpec, t) for n, t in data["sensors"].items()},
+        "initial": {n: _make(InitialSpec, t) for n, t in data["initial"].items()},
+        "solver": _make(SolverSpec, solver, modes=_make(ModesSpec, solver["modes"]),
+                        damping=_make(DampingSpec, solver["damping"]),
+                        reduction=_make(ReductionSpec, solver["reduction"]),
+                        newton=_make(NewtonSpec, solver["newton"]),
+                        quadrature=_make(QuadratureSpec, solver["quadrature"])),
+        "output": _make(OutputSpec, data["output"]),
+    }

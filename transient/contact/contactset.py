@@ -1,0 +1,64 @@
+"""All contact points of a run stacked: observation rows, initial gaps, weights and laws."""
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..kernels.laws import evaluate
+from .laws import law_params
+
+
+@dataclass(frozen=True)
+class ContactSet:
+    C: sp.csr_matrix         # (P, ndof) gap observation of every point, pairs one after another
+    gap0: np.ndarray         # (P,) initial gaps [m]
+    weights: np.ndarray      # (P,) w J [m^2]
+    code: np.ndarray         # (P,) law code of each point
+    params: np.ndarray       # (P, 4) law parameters of each point
+    slices: dict             # pair name -> slice of its points
+
+    @property
+    def n_points(self):
+        return len(self.gap0)
+
+    def laws(self, g):
+        """Pressure p, tangent k_t and potential Phi at gaps g (P,)."""
+        p, kt, phi = np.empty_like(g), np.empty_like(g), np.empty_like(g)
+        evaluate(self.code, self.params, np.ascontiguousarray(g), p, kt, phi)
+        return p, kt, phi
+
+    def subset(self, keep, weights):
+        """The points keep (sorted indices) with new weights; pairs stay contiguous."""
+        bounds = {name: np.searchsorted(keep, [s.start, s.stop]) for name, s in self.slices.items()}
+        return ContactSet(self.C[keep], self.gap0[keep], weights, self.code[keep],
+                          self.params[keep], {name: slice(int(a), int(b))
+                                              for name, (a, b) in bounds.items()})
+
+    def force(self, u):
+        """Contact force C^T (w p) [N] at displacement u, with gaps, pressures and tangents."""
+        g = self.C @ u + self.gap0
+        p, kt, _ = self.laws(g)
+        return self.C.T @ (self.weights * p), g, p, kt
+
+
+def stack(pairs, ndof):
+    """The contact set of a run's pairs (empty when there are none)."""
+    if not pairs:
+        return ContactSet(sp.csr_matrix((0, ndof)), np.zeros(0), np.zeros(0),
+                          np.zeros(0, np.int64), np.zeros((0, 4)), {})
+    rows, gap0, w, code, params, slices = [], [], [], [], [], {}
+    start = 0
+    for pair in pairs:
+        n = pair.rule.n_points
+        c, prm = law_params(pair.spec.law, pair.k)
+        rows.append(sp.csr_matrix(pair.observation(ndof)))
+        gap0.append(pair.rule.gap0)
+        w.append(pair.rule.weights)
+        code.append(np.full(n, c, np.int64))
+        params.append(np.tile(prm, (n, 1)))
+        slices[pair.name] = slice(start, start + n)
+        start += n
+    C = sp.vstack(rows).tocsr()
+    C.eliminate_zeros()
+    return ContactSet(C, np.concatenate(gap0), np.concatenate(w), np.concatenate(code),
+                      np.vstack(params), slices)

@@ -1,0 +1,160 @@
+"""Contact pairs of a case through the stages interface -> compatibility -> regularize -> rule.
+
+The sampled rule leaves this stage as the (regularized) fine rule: its points are chosen after
+the reduction, on the reduced dynamics (sampling.py).
+
+A stage runs only when the pair needs it: the fine rule without regularization does no
+eigendecomposition; `need_compatibility` forces it (for `transient compat`).
+"""
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from .coarse import select, side_bases
+from .compatibility import auto_eps, compatibility
+from ..errors import CaseError
+from .interface import InterfaceError, build_interface, build_wall_interface
+from ..model.model import resolve_set
+from .regularize import dual_projectors, primal_basis, regularized_rule
+from .rules import centre_rule
+from ..mesh.selections import set_faces
+
+DENSE_FILL = 0.1   # fill of the rows above which C^T diag(k w) C is formed dense
+
+
+@dataclass(frozen=True)
+class ContactPair:
+    name: str
+    spec: object              # ContactSpec of the pair
+    interface: object         # Interface (fine rule)
+    compat: object            # Compatibility, or None when not computed
+    eps: float                # eps used (None without compatibility)
+    eps_source: str           # where eps comes from: the case, or the automatic choice
+    rule: object              # the Rule whose observation the solvers use
+    primal: object            # T_eps for the primal formulation, else None
+    coarse: object            # CoarseRule of the greedy rule, else None
+    timings: dict             # stage -> seconds, in the order run
+    candidates: int = 0       # sampled rule: the fine points it was sampled from
+
+    @property
+    def k(self):
+        return self.spec.k
+
+    def observation(self, ndof):
+        """(P, ndof) gap observation of the pair's rule in model dofs."""
+        return self.interface.observation(self.rule, ndof)
+
+
+def _surface(case, model, ref, key):
+    part, name = resolve_set(case, model.parts, ref, key)
+    faces = set_faces(part.mesh, name)
+    if not faces:
+        raise CaseError(case.path, key, f"selection '{ref}' holds no boundary face")
+    return part, faces
+
+
+def build_pair(case, model, name, need_compatibility=False):
+    spec = case.contact[name]
+    key = f"contact.{name}"
+    timings = {}
+    t0 = time.perf_counter()
+    p1, faces1 = _surface(case, model, spec.surface1, f"{key}.surface1")
+    try:
+        if spec.wall:
+            interface = build_wall_interface(name, p1.mesh.points, faces1, p1.offset,
+                                             spec.wall_point, spec.wall_normal, spec.order)
+        else:
+            p2, faces2 = _surface(case, model, spec.surface2, f"{key}.surface2")
+            interface = build_interface(name, p1.mesh.points, faces1, p1.offset,
+                                        p2.mesh.points, faces2, p2.offset, spec.order)
+    except InterfaceError as exc:
+        raise CaseError(case.path, key, str(exc)) from None
+    timings["interface"] = time.perf_counter() - t0
+
+    comp, eps, eps_source, primal, coarse = None, None, "", None, None
+    greedy = spec.rule == "greedy"
+    if spec.regularized or need_compatibility:
+        t0 = time.perf_counter()
+        comp = compatibility(interface.fine, spec.k)
+        eps, eps_source = (auto_eps(comp.normalized) if spec.eps == "auto"
+                           else (spec.eps, "case"))
+        timings["compatibility"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    if spec.rule == "centre" or (greedy and spec.candidates != "fine"):
+        master = spec.master if spec.rule == "centre" else spec.candidates
+        rule = centre_rule(interface, master)
+        timings["centre_rule"] = time.perf_counter() - t0
+    else:
+        rule = interface.fine
+    if spec.regularized:
+        t0 = time.perf_counter()
+        if spec.formulation == "dual":
+            P1, P2 = dual_projectors(comp, eps, interface.fine, spec.project, spec.norm)
+            rule = regularized_rule(rule, P1, P2)
+            fine = regularized_rule(interface.fine, P1, P2) if greedy else None
+        else:
+            primal = primal_basis(interface, comp, eps, model.ndof)
+            fine = interface.fine
+        timings["regularize"] = time.perf_counter() - t0
+    if greedy:
+        if spec.points > rule.n_points:
+            raise CaseError(case.path, f"{key}.points", f"{spec.points} points asked, but "
+                            f"the greedy rule selects among {rule.n_points} candidates")
+        t0 = time.perf_counter()
+        B1, B2 = side_bases(comp, eps)
+        try:
+            coarse = select(rule, fine if spec.candidates != "fine" else rule, B1, B2,
+                            spec.points, spec.tolerance, spec.weights)
+        except ValueError as exc:
+            raise CaseError(case.path, f"{key}.weights", str(exc)) from None
+        rule = coarse.rule
+        timings["coarse_rule"] = time.perf_counter() - t0
+    return ContactPair(name, spec, interface, comp, eps, eps_source, rule, primal, coarse,
+                       timings)
+
+
+def build_contact(case, model, need_compatibility=False):
+    """Every contact pair of the case, in file order."""
+    return [build_pair(case, model, name, need_compatibility) for name in case.contact]
+
+
+def contact_stiffness(pairs, ndof, active=None, kw=None):
+    """Sum over pairs of C^T diag(k w) C on model dofs (linear penalty, all points active unless
+    `active` gives a bool mask per pair); `kw` gives instead the stiffness w k_t of every point
+    per pair (a nonlinear law's tangent).
+
+    Formed on the interface normal dofs first (N1 + N2 square, dense for regularized rules),
+    then lifted to the model dofs by the node normals: never a dense (points x dofs) product.
+    """
+    K = sp.csr_matrix((ndof, ndof))
+    for i, pair in enumerate(pairs):
+        rule = pair.rule
+        kw_i = pair.k * rule.weights if kw is None else kw[i]
+        if active is not None:
+            kw_i = kw_i * active[i]
+        B = sp.hstack([sp.csr_matrix(rule.C1), -sp.csr_matrix(rule.C2)]).tocsr()
+        if B.nnz > DENSE_FILL * B.shape[0] * B.shape[1]:
+            # regularized rows are dense: BLAS, not a sparse product of dense-filled matrices
+            Bd = B.toarray()
+            A = sp.csr_matrix((Bd.T * kw_i) @ Bd)
+        else:
+            A = (B.T @ sp.diags(kw_i) @ B).tocsr()
+        D = sp.vstack([pair.interface.side1.dof_map(ndof),
+                       pair.interface.side2.dof_map(ndof)]).tocsr()
+        K = K + (D.T @ A @ D).tocsr()
+    return K
+
+
+def contact_preload(pairs, ndof, active=None):
+    """Sum over pairs of -C^T diag(k w) g0: the force of the initial gaps under linear penalty."""
+    f = np.zeros(ndof)
+    for i, pair in enumerate(pairs):
+        C = pair.observation(ndof)
+        kw = pair.k * pair.rule.weights
+        if active is not None:
+            kw = kw * active[i]
+        f -= C.T @ (kw * pair.rule.gap0)
+    return f

@@ -1,0 +1,83 @@
+"""Chunks of steps, as pyMOR's time stepping yields states: the kernel integrates a chunk, then
+Python gets it back to store, check and report before the next.
+
+`chunks` yields one Chunk per kernel call; its rows are a view of a buffer the next chunk
+overwrites, so the consumer stores them before asking for the next.
+"""
+import time
+from dataclasses import dataclass, replace
+
+import numba
+import numpy as np
+
+from ..kernels.codes import NOT_FINITE, OK
+from .schemes import single_block
+from .state import Rows
+
+
+@dataclass(frozen=True)
+class Chunk:
+    rows: Rows           # the rows stored by this chunk (finite ones only)
+    status: int          # kernels.codes OK, NOT_FINITE, NO_CONVERGENCE
+    done: int            # steps the kernel made
+    step: int            # steps done since t = 0, after this chunk
+    seconds: float       # kernel time
+
+
+def buffer(system, rows, store_contact):
+    """Output rows for chunks of `rows` rows."""
+    return Rows.empty(rows, system.sensors.shape[0], system.n_points if store_contact else 0)
+
+
+def chunks(stepper, state, n_total, chunk, every, out, step=0):
+    """Advance state to n_total steps, chunk steps per kernel call, one row stored every
+    `every` steps into out (a buffer of chunk // every rows); stops after a chunk whose status
+    is not OK. A chunk that went non-finite keeps only the rows before the first with
+    anything not finite, and the state's time is that of its last row kept."""
+    while step < n_total:
+        n = min(chunk, n_total - step)
+        t0 = time.perf_counter()
+        status, done = stepper(state, n, every, out)
+        seconds = time.perf_counter() - t0
+        # a kernel stopping on a non-finite state has not stored that step
+        rows = (done - (status == NOT_FINITE)) // every
+        finite = all(np.all(np.isfinite(x[:rows])) for x in out.arrays) and \
+            np.all(np.isfinite(state.array))
+        if not finite or status == NOT_FINITE:
+            rows = out.finite_rows(rows)
+            state.time = out.time[rows - 1] if rows else state.time - done * stepper.dt
+            yield Chunk(out.head(rows), NOT_FINITE, done, step + rows * every, seconds)
+            return
+        step += done
+        yield Chunk(out.head(rows), status, done, step, seconds)
+        if status != OK:
+            return
+
+
+def threaded_blocks(m):
+    """Row blocks of the contact pass, one per Numba thread."""
+    nb = max(1, min(numba.get_num_threads(), m // 64 or 1))
+    return np.linspace(0, m, nb + 1).astype(np.int64)
+
+
+def fastest_blocks(stepper, state, n_sensors, m, steps=20):
+    """Row blocks of the contact pass: one per thread or a single one, whichever runs faster
+    here and now (threads stall when the machine's cores are busy). The choice fixes the
+    summation order, so a resumed run reuses it."""
+    candidates = [single_block(m)]
+    threaded = threaded_blocks(m)
+    if len(threaded) > 2:
+        candidates.append(threaded)
+    if len(candidates) == 1:
+        return candidates[0]
+    times = []
+    for blocks in candidates:
+        trial = replace(stepper, blocks=blocks)
+        best = np.inf
+        for _ in range(2):       # the first call may compile
+            out = Rows.empty(steps, n_sensors, m)
+            t0 = time.perf_counter()
+            trial(state.copy(), steps, 1, out)
+            best = min(best, time.perf_counter() - t0)
+        times.append(best)
+    return candidates[int(np.argmin(times))]

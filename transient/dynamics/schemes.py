@@ -1,0 +1,192 @@
+"""One factory per time integration scheme: it binds a system and a step once and is the only
+place that knows its kernel's argument order.
+
+A Stepper advances a State by a chunk of steps into output Rows, in place, and returns
+(status, steps done); status is one of kernels.codes OK, NOT_FINITE, NO_CONVERGENCE.
+"""
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from ..errors import CaseError
+from ..kernels import newmark, stepping
+from ..solve.linsolve import FactorizationError, factorize, triangular_factors
+
+MAX_WOODBURY_BYTES = 2e9   # the implicit schemes keep S^-1 C^T (or D C^T) dense
+
+
+@dataclass(frozen=True)
+class Stepper:
+    scheme: str
+    dt: float
+    advance: object              # (state, n_steps, every, rows, blocks) -> (status, done)
+    blocks: np.ndarray = None    # row blocks of the reduced contact pass (summation order)
+    stages: dict = field(default_factory=dict)   # setup it timed, name -> seconds
+    meta: dict = field(default_factory=dict)
+
+    def __call__(self, state, n_steps, every, rows):
+        """Advance state by n_steps, storing one row in `every` into rows."""
+        return self.advance(state, n_steps, every, rows, self.blocks)
+
+
+def single_block(m):
+    return np.array([0, m], np.int64)
+
+
+def _contact(system):
+    return system.contacts.gap0, system.contacts.weights, system.tangent, \
+        system.contacts.code, system.contacts.params
+
+
+def _csr(A):
+    A = sp.csr_matrix(A)
+    return (A.indptr.astype(np.int64), A.indices.astype(np.int64), A.data.astype(np.float64))
+
+
+def explicit(system, dt, blocks=None):
+    """Central differences (velocity Verlet); the state's gmin follows the smallest gaps."""
+    if system.reduced:
+        blocks = single_block(system.n_points) if blocks is None else blocks
+        args = (system.omega2, system.damp, system.C, *_contact(system), system.patterns,
+                system.signals, system.sensors)
+
+        def advance(state, n_steps, every, rows, blocks):
+            return stepping.explicit_reduced(state.array, state.acc, n_steps, every, dt, *args,
+                                             blocks, state.gmin, *rows.arrays)
+    else:
+        args = (_csr(system.K), system.mass, system.alpha, system.beta, _csr(system.C),
+                *_contact(system), system.patterns, system.signals, _csr(system.sensors))
+
+        def advance(state, n_steps, every, rows, blocks):
+            return stepping.explicit_full(state.array, state.acc, n_steps, every, dt, *args,
+                                          state.gmin, *rows.arrays)
+    return Stepper("explicit", dt, advance, blocks)
+
+
+def implicit(system, dt, newton, linear_solver="auto", blocks=None):
+    """Newmark average acceleration, Newton with the exact contact tangent (newton: NewtonSpec).
+    The reduced iteration operator is diagonal; the full one is factorized here."""
+    if system.reduced:
+        blocks = single_block(system.n_points) if blocks is None else blocks
+        op = 1.0 + 0.5 * dt * system.damp + 0.25 * dt * dt * system.omega2
+        Z = np.ascontiguousarray(system.C.T / op[:, None])
+        head = (system.damp, system.omega2, system.C, *_contact(system), system.patterns,
+                system.signals, system.sensors)
+        tail = (Z, system.C @ Z, newton.tolerance, newton.max_iter)
+        stages, meta = {}, {}
+
+        def advance(state, n_steps, every, rows, blocks):
+            return newmark.newmark_reduced(state.array, state.acc, n_steps, every, dt, *head,
+                                           blocks, *tail, *rows.arrays)
+    else:
+        t0 = time.perf_counter()
+        factors, Z, G, meta = _newmark_operator(system, dt, linear_solver)
+        stages = {"iteration_operator": time.perf_counter() - t0}
+        args = (_csr(system.K), _csr(system.M), system.alpha, system.beta, _csr(system.C),
+                *_contact(system), system.patterns, system.signals, _csr(system.sensors),
+                factors, Z, G, newton.tolerance, newton.max_iter)
+
+        def advance(state, n_steps, every, rows, blocks):
+            return newmark.newmark_full(state.array, state.acc, n_steps, every, dt, *args,
+                                        *rows.arrays)
+    return Stepper("implicit", dt, advance, blocks, stages, meta)
+
+
+def _newmark_operator(system, dt, linear_solver):
+    """Newmark's iteration operator S = (1 + dt/2 alpha) M + (dt/2 beta + dt^2/4) K_lin on the
+    full model, factorized for the kernel, with Z = S^-1 C^T and G = C Z for the exact contact
+    corrections."""
+    n, m = system.K.shape[0], system.n_points
+    if 8.0 * n * m > MAX_WOODBURY_BYTES:
+        raise CaseError("", "solver.scheme", f"the implicit scheme on the full model keeps "
+                        f"S^-1 C^T dense: {n} dofs x {m} contact points is "
+                        f"{8e-9 * n * m:.1f} GB; use a reduced model (solver.reduction)")
+    h = 0.5 * dt
+    op = ((1.0 + h * system.alpha) * system.M + (h * system.beta + h * h) * system.K).tocsr()
+    try:
+        p_in, L, U, p_out, backend = triangular_factors(op, linear_solver)
+    except FactorizationError as exc:
+        raise CaseError("", "solver", f"Newmark's iteration operator: {exc}") from None
+    factors = (p_in, L, U, p_out)
+    Z = newmark.factor_columns(factors, _csr(system.C), n)
+    meta = {"iteration_operator": {"backend": backend,
+                                   "factor_nonzeros": int(len(L[2]) + len(U[2]))}}
+    return factors, Z, np.ascontiguousarray(system.C @ Z), meta
+
+
+def exponential(system, dt, corrections, corrector, newton, blocks=None):
+    """The exponential integrator of a reduced system: each mode's linear part propagated
+    exactly, the contact remainder corrected `corrections` times ("evaluated" or
+    "propagated"), or solved for by Newton ("implicit")."""
+    if not system.reduced:
+        raise CaseError("", "solver.scheme", "the exponential scheme propagates the modes of a "
+                        "reduced model: set solver.reduction.enabled = true")
+    blocks = single_block(system.n_points) if blocks is None else blocks
+    coef = exponential_coefficients(system.omega2, system.damp, dt)
+    head = (coef, system.damp, system.omega2, system.C, *_contact(system), system.patterns,
+            system.signals, system.sensors)
+    if corrector == "implicit":
+        m = system.n_points
+        if 8.0 * m * m > MAX_WOODBURY_BYTES:
+            raise CaseError("", "solver.corrector", f"the implicit corrector keeps C D C^T "
+                            f"dense: {m} contact points is {8e-9 * m * m:.1f} GB; sample the "
+                            f"points (contact rule \"sampled\") or use corrector \"evaluated\"")
+        # the end state moves by D = diag(G1x) per unit end force: Z = D C^T, G = C Z
+        Z = np.ascontiguousarray(coef[:, 6:7] * system.C.T)
+        tail = (Z, system.C @ Z, newton.max_iter)
+        kernel = stepping.exponential_implicit
+    else:
+        tail = (corrections, corrector == "propagated")
+        kernel = stepping.exponential_reduced
+
+    def advance(state, n_steps, every, rows, blocks):
+        return kernel(state.array, state.acc, n_steps, every, dt, *head, blocks, *tail,
+                      state.forces, *rows.arrays)
+    return Stepper("exponential", dt, advance, blocks)
+
+
+def stepper(system, solver, dt, blocks=None):
+    """The Stepper of a solver spec's scheme at step dt."""
+    if solver.scheme == "explicit":
+        return explicit(system, dt, blocks)
+    if solver.scheme == "implicit":
+        return implicit(system, dt, solver.newton, solver.linear_solver, blocks)
+    return exponential(system, dt, solver.corrections, solver.corrector, solver.newton, blocks)
+
+
+def exponential_coefficients(omega2, damp, dt):
+    """Per mode of x'' + c x' + omega^2 x = F(t), F linear over a step of length dt:
+    (n, 8) = [E11, E12, E21, E22, G0x, G0v, G1x, G1v] with
+    (x, v)(dt) = E (x, v)(0) + G0 F(0) + G1 (F(dt) - F(0)), from the exponential of the
+    augmented matrix [[A, B, 0], [0, 0, 1/dt], [0, 0, 0]] (Van Loan), exact for every omega."""
+    out = np.empty((len(omega2), 8))
+    aug = np.zeros((4, 4))
+    aug[0, 1] = 1.0
+    aug[1, 2] = 1.0
+    aug[2, 3] = 1.0 / dt
+    for k, (w2, c) in enumerate(zip(omega2, damp)):
+        aug[1, 0], aug[1, 1] = -w2, -c
+        X = sla.expm(aug * dt)
+        out[k] = X[0, 0], X[0, 1], X[1, 0], X[1, 1], X[0, 2], X[1, 2], X[0, 3], X[1, 3]
+    return out
+
+
+def initial_acceleration(system, state, M=None):
+    """a(0), the forces at t = 0 and the initial row (energies included), from the forces at
+    the initial state: an explicit step of length 0. M: a consistent mass of the full model
+    to redo a(0) with (the explicit step divides by the lumped one)."""
+    from .state import Rows
+    trial = state.copy()
+    rows = Rows.empty(1, system.sensors.shape[0], system.n_points)
+    explicit(system, 0.0)(trial, 1, 1, rows)
+    state.a[:] = trial.a
+    if system.reduced:
+        # the forces at t = 0: the first extrapolation then takes them constant
+        state.forces[:] = trial.a + system.omega2 * trial.q + system.damp * trial.v
+    elif M is not None:
+        force = system.mass * (state.a + system.alpha * state.v)
+        state.a[:] = factorize(M)(force) - system.alpha * state.v
+    return rows

@@ -1,0 +1,86 @@
+"""What the kernels update in place, under names: the integrated state and a chunk's output rows.
+
+The kernels take the state as one (5, n) array (q, v, a, the time in [3, 0], and the forces at
+the start of the previous step in [4], which the exponential predictor extrapolates from) and
+the outputs as five arrays; only this module and the scheme factories know that layout.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kernels.codes import ENERGY_TERMS
+
+Q, V, A, TIME, FORCES = range(5)
+
+
+class State:
+    """The state of a system between chunks: displacement, velocity, acceleration and time,
+    the previous forces, the external work and dissipated energy so far, and the smallest gap
+    each contact point has reached (the critical step is rechecked against it)."""
+
+    def __init__(self, array, acc, gmin):
+        self.array = array          # (5, n), the kernels' layout
+        self.acc = acc              # (2,) external work, dissipated energy [J]
+        self.gmin = gmin            # (m,) [m]
+
+    @classmethod
+    def zeros(cls, n, m):
+        return cls(np.zeros((5, n)), np.zeros(2), np.zeros(m))
+
+    q = property(lambda self: self.array[Q])
+    v = property(lambda self: self.array[V])
+    a = property(lambda self: self.array[A])
+    forces = property(lambda self: self.array[FORCES])
+
+    @property
+    def time(self):
+        return float(self.array[TIME, 0])
+
+    @time.setter
+    def time(self, t):
+        self.array[TIME, 0] = t
+
+    def copy(self):
+        return State(self.array.copy(), self.acc.copy(), self.gmin.copy())
+
+    def arrays(self):
+        """Name -> array, as a checkpoint stores them (bit for bit)."""
+        return {"state": self.array, "acc": self.acc, "gmin": self.gmin}
+
+    def restore(self, saved):
+        """Set from the arrays of a checkpoint."""
+        self.array[:] = saved["state"]
+        self.acc[:] = saved["acc"]
+        self.gmin[:] = saved["gmin"]
+
+
+@dataclass(frozen=True)
+class Rows:
+    """Output rows of a chunk: time [s], sensors (then the state itself when the field is
+    stored), gaps [m] and pressures [Pa] of the contact points if stored, energy terms [J]."""
+    time: np.ndarray         # (r,)
+    sensors: np.ndarray      # (r, s)
+    gap: np.ndarray          # (r, m) or (r, 0)
+    pressure: np.ndarray
+    energy: np.ndarray       # (r, 5), columns ENERGY_TERMS
+
+    @classmethod
+    def empty(cls, rows, n_sensors, n_contact):
+        return cls(np.zeros(rows), np.zeros((rows, n_sensors)), np.zeros((rows, n_contact)),
+                   np.zeros((rows, n_contact)), np.zeros((rows, len(ENERGY_TERMS))))
+
+    @property
+    def arrays(self):
+        """The outputs in the kernels' order."""
+        return self.time, self.sensors, self.gap, self.pressure, self.energy
+
+    def head(self, n):
+        """The first n rows."""
+        return Rows(*(x[:n] for x in self.arrays))
+
+    def finite_rows(self, n):
+        """How many of the first n rows are finite in every output."""
+        bad = np.zeros(n, bool)
+        for x in self.arrays:
+            bad |= ~np.isfinite(x[:n].reshape(n, -1)).all(axis=1)
+        return int(np.argmax(bad)) if bad.any() else n

@@ -1,0 +1,103 @@
+"""The frozen systems the schemes integrate: a reduced one (modal coordinates, M = I) or the
+free dofs of the full model, with the contact points, loads, observations and critical step.
+
+Both integrate M a + c v + K_lin q = F(t) + C^T [w (p(g) + k_t* (g - g0))], g = C q + g0, with
+K_lin the stiffness linearized at the preload (k_t*: the contact tangent there), so the contact
+rows carry only the nonlinear remainder; F(t) = sum_j patterns_j s_j(t).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from . import critical
+
+
+@dataclass(frozen=True)
+class System:
+    contacts: object         # ContactSet of the points integrated (weights, laws, slices)
+    tangent: np.ndarray      # (m,) k_t* at the preload [Pa/m]
+    patterns: np.ndarray     # (J, n) load patterns on the system's coordinates
+    signals: tuple           # their time signals, packed (case.signals.compile_signals)
+    sensors: object          # (s, n) observation of q: the sensors, then q itself if stored
+    sensor_names: tuple
+    n_field: int             # rows of `sensors` after the named ones (the state q itself)
+    critical: object         # CriticalStep (dynamics.critical)
+
+    @property
+    def n(self):
+        return self.patterns.shape[1]
+
+    @property
+    def n_points(self):
+        return self.contacts.n_points
+
+
+@dataclass(frozen=True)
+class ReducedSystem(System):
+    """q = T q_r with T^T M T = I and T^T K_lin T = diag(omega2)."""
+    omega2: np.ndarray = None    # (n,) [rad^2/s^2]
+    damp: np.ndarray = None      # (n,) modal damping coefficients 2 zeta omega + Rayleigh [1/s]
+    C: np.ndarray = None         # (m, n) contact rows C T, dense
+    T: np.ndarray = None         # (ndof, n) the basis, zero on fixed dofs
+    reduced = True
+
+
+@dataclass(frozen=True)
+class FullSystem(System):
+    """The free dofs of the model: K_lin, the lumped mass, Rayleigh damping alpha M + beta K."""
+    K: sp.csr_matrix = None      # (n, n) K_lin on the free dofs
+    mass: np.ndarray = None      # (n,) lumped mass [kg]
+    M: sp.csr_matrix = None      # the mass of the implicit scheme (consistent or lumped)
+    alpha: float = 0.0
+    beta: float = 0.0
+    C: sp.csr_matrix = None      # (m, n) contact rows on the free dofs
+    free: np.ndarray = None      # the free dofs q lives on
+    reduced = False
+
+
+def _observation(sensors, n, field, dense):
+    rows = sensors
+    if field:
+        rows = np.vstack([rows, np.eye(n)]) if dense else sp.vstack([rows, sp.eye(n)]).tocsr()
+    return np.ascontiguousarray(rows) if dense else sp.csr_matrix(rows)
+
+
+def patterns_matrix(vectors, n):
+    """Load patterns as rows (J, n) for the kernels."""
+    return np.ascontiguousarray(np.array(vectors, dtype=float).reshape(len(vectors), n))
+
+
+def reduced_system(T, omega2, fmax, damping, contacts, tangent, patterns, signals, sensors,
+                   sensor_names, field):
+    """The reduced system on the basis T (ndof, n) with eigenvalues omega2.
+
+    damping: DampingSpec; modes above fmax [Hz] take the residual ratio on top of the modal.
+    patterns: load vectors on the model's dofs; sensors (s, ndof) their observation.
+    """
+    omega = np.sqrt(omega2)
+    above = omega > 2 * np.pi * fmax
+    ratio = damping.modal + damping.residual * above
+    damp = 2 * ratio * omega + damping.alpha + damping.beta * omega2
+    Cr = np.ascontiguousarray(contacts.C @ T)
+    n = len(omega2)
+    S = _observation(sensors @ T, n, field, dense=True)
+    return ReducedSystem(contacts, tangent, patterns_matrix([T.T @ p for p in patterns], n),
+                         signals, S, sensor_names, n if field else 0,
+                         critical.reduced(omega2, Cr, contacts, tangent), omega2=omega2,
+                         damp=damp, C=Cr, T=T)
+
+
+def full_system(K_lin, lumped, M, damping, contacts, tangent, free, patterns, signals, sensors,
+                sensor_names, field):
+    """The full system on the free dofs. M: the mass the implicit scheme uses, None for the
+    lumped one."""
+    Kf = K_lin[free][:, free].tocsr()
+    mass = lumped[free]
+    Cf = contacts.C[:, free].tocsr()
+    S = _observation(sensors[:, free], len(free), field, dense=False)
+    return FullSystem(contacts, tangent, patterns_matrix([p[free] for p in patterns], len(free)),
+                      signals, S, sensor_names, len(free) if field else 0,
+                      critical.full(Kf, mass, Cf, contacts, tangent), K=Kf, mass=mass,
+                      M=sp.diags(mass).tocsr() if M is None else M[free][:, free].tocsr(),
+                      alpha=damping.alpha, beta=damping.beta, C=Cf, free=free)

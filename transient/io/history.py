@@ -1,0 +1,348 @@
+"""The HDF5 time history of a run, written chunk by chunk while the run goes.
+
+File layout: one float64 dataset per series, row i holding output row i (`/time`,
+`/sensors/<name>`, `/contact/<pair>/gap`, `/energy/<term>`, ...), resizable along axis 0;
+`/checkpoint/<name>`, the kernel state at the end of the last appended chunk; root attributes:
+the run's meta data (`status`, `rows`, the case text under `CASE_TEXT`, version, timings...).
+
+Readers and crashes. The writer opens the file for each call (append, checkpoint, finish) and
+closes it before returning, so between chunks the file on disk is complete and any HDF5 reader
+(h5py, h5dump, `transient info`) can open it without SWMR. The writer opens it without HDF5's
+file lock: a reader that keeps the file open never stops the run; the price is that a reader
+opening it during the few milliseconds of a write may fail and should retry. A killed run
+leaves the file readable with every appended chunk and status 'running'. (SWMR was not used: it
+needs SWMR-aware readers, forbids new attributes while writing, and a crashed SWMR file must be
+repaired with h5clear before it opens normally.) In the writing process, close any reader
+before the next append: HDF5 will not reopen for writing a file it holds open read-only.
+
+The root attribute `rows` counts the complete rows and is written last in `append`: rows past
+it (an append interrupted half way) are cut off by `finish` and `open_for_resume`.
+"""
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from ..dynamics.energy import drift as energy_drift
+from ..errors import RunAborted
+from ..kernels.codes import ENERGY_TERMS
+
+CHUNK_BYTES = 2 ** 20      # ~1 MB chunks: fast sequential reads of long series
+CASE_TEXT = "case"         # root attribute holding the case file as written
+CHECKPOINT = "checkpoint"
+GEOMETRY = "geometry"      # fixed arrays written once (contact points, weights, normals)
+_BOOKKEEPING = ("status", "rows", "json_attrs")
+
+
+def _open(path, mode):
+    return h5py.File(path, mode, locking=False)
+
+
+class History:
+    """Writer of one history file; make one with `create` or `open_for_resume`.
+
+    Use it as a context manager: leaving the block normally marks the run complete (unless
+    `finish` was called), an exception (KeyboardInterrupt included) marks it 'aborted: <reason>';
+    either way the file is closed with every appended chunk.
+    """
+
+    def __init__(self, path, layout):
+        self.path = Path(path)
+        self.layout = layout
+        self.closed = False
+
+    @classmethod
+    def create(cls, path, meta, layout, overwrite=False, expected_rows=None, geometry=None):
+        """Create a history file with empty series and status 'running'.
+
+        Parameters
+        ----------
+        path : str or Path
+        meta : dict
+            Root attributes: strings and numbers as such, dicts, lists and None as JSON text.
+        layout : dict
+            Series name -> shape of one row, e.g. {"time": (), "contact/pad_disc/gap": (m,)}.
+        overwrite : bool
+            Replace an existing file (otherwise ValueError).
+        expected_rows : int, optional
+            Rows the run will store: caps the chunk length so short runs make small files.
+        geometry : dict, optional
+            Name -> array stored once under /geometry (not a series), e.g. the positions of
+            the contact points, which maps of the contact series need.
+        """
+        path = Path(path)
+        if path.exists() and not overwrite:
+            raise ValueError(f"{path}: file exists (pass overwrite=True to replace it)")
+        shapes = {name: tuple(int(n) for n in shape) for name, shape in layout.items()}
+        for reserved in (CHECKPOINT, GEOMETRY):
+            if reserved in shapes or any(n.startswith(reserved + "/") for n in shapes):
+                raise ValueError(f"series name '{reserved}' is reserved")
+        with _open(path, "w") as f:
+            for name, shape in shapes.items():
+                rows = _chunk_rows(shape, expected_rows)
+                # zero-length row axes cannot be chunked as fixed dimensions
+                f.create_dataset(name, shape=(0,) + shape,
+                                 maxshape=(None,) + tuple(n or None for n in shape),
+                                 chunks=(rows,) + tuple(max(n, 1) for n in shape), dtype="f8")
+            for name, value in (geometry or {}).items():
+                f.create_dataset(f"{GEOMETRY}/{name}", data=np.asarray(value))
+            _write_attrs(f.attrs, meta)
+            f.attrs["status"] = "running"
+            f.attrs["rows"] = 0
+        return cls(path, shapes)
+
+    @classmethod
+    def open_for_resume(cls, path):
+        """Reopen a history (running, aborted or complete) to append after its stored rows.
+
+        Rows past the checkpoint, if there is one, are dropped: the run resumes from the
+        checkpoint's state and recomputes them. Sets status back to 'running'.
+        """
+        path = Path(path)
+        with _open(path, "r+") as f:
+            rows = _rows(f, path)
+            if CHECKPOINT in f and 0 <= f[CHECKPOINT].attrs["rows"] < rows:
+                rows = int(f[CHECKPOINT].attrs["rows"])
+            layout = _series_shapes(f)
+            _truncate(f, layout, rows)
+            f.attrs["status"] = "running"
+        return cls(path, layout)
+
+    def rows(self):
+        """Number of complete rows stored."""
+        with _open(self.path, "r") as f:
+            return _rows(f, self.path)
+
+    def append(self, rows):
+        """Append n rows to every series: rows maps each series name to an array (n, *shape)."""
+        self._check_open()
+        arrays = self._check_rows(rows)
+        n = len(next(iter(arrays.values()), ()))
+        with _open(self.path, "r+") as f:
+            start = int(f.attrs["rows"])
+            for name, value in arrays.items():
+                ds = f[name]
+                ds.resize(start + n, axis=0)
+                ds[start:] = value
+            f.attrs["rows"] = start + n
+
+    def checkpoint(self, state):
+        """Store the kernel state (name -> array) at the end of the last appended chunk.
+
+        Arrays are rewritten in place when their shape and type are unchanged, so the file does
+        not grow with each checkpoint (HDF5 does not reuse the space of deleted datasets).
+        """
+        self._check_open()
+        arrays = {name: np.asarray(value) for name, value in state.items()}
+        for name in arrays:
+            if "/" in name:
+                raise ValueError(f"checkpoint name '{name}': no '/' allowed")
+        with _open(self.path, "r+") as f:
+            group = f.require_group(CHECKPOINT)
+            # marks the checkpoint as partly written until every array is in
+            group.attrs["rows"] = -1
+            for name in set(group) - set(arrays):
+                del group[name]
+            for name, value in arrays.items():
+                old = group.get(name)
+                if old is not None and old.shape == value.shape and old.dtype == value.dtype:
+                    old[...] = value
+                else:
+                    if old is not None:
+                        del group[name]
+                    group.create_dataset(name, data=value)
+            group.attrs["rows"] = f.attrs["rows"]
+
+    def finish(self, status, timings=None):
+        """Set the final status ('complete' or 'aborted: <reason>'), store timings, close.
+
+        Parameters
+        ----------
+        status : str
+        timings : dict, optional
+            Name -> seconds, e.g. {"setup": 1.2, "kernel": 30.5, "total": 32.0}; None keeps
+            the timings stored so far.
+        """
+        self._check_open()
+        if status != "complete" and not status.startswith("aborted: "):
+            raise ValueError(f"status: expected 'complete' or 'aborted: <reason>', got "
+                             f"{status!r}")
+        with _open(self.path, "r+") as f:
+            _truncate(f, self.layout, int(f.attrs["rows"]))
+            if timings is not None:
+                _write_attrs(f.attrs, {"timings": timings})
+            f.attrs["status"] = status
+        self.closed = True
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if not self.closed:
+            self.finish("complete" if exc is None else f"aborted: {_reason(exc)}")
+        return False
+
+    def _check_open(self):
+        if self.closed:
+            raise ValueError(f"{self.path}: history already finished")
+
+    def _check_rows(self, rows):
+        if set(rows) != set(self.layout):
+            missing = sorted(set(self.layout) - set(rows))
+            extra = sorted(set(rows) - set(self.layout))
+            raise ValueError(f"append: rows must hold every series (missing {missing}, "
+                             f"unknown {extra})")
+        arrays = {name: np.asarray(value, dtype=float) for name, value in rows.items()}
+        for name, a in arrays.items():
+            if a.ndim == 0 or a.shape[1:] != self.layout[name]:
+                raise ValueError(f"append: '{name}' has shape {a.shape}, expected (n,) + "
+                                 f"{self.layout[name]}")
+        counts = sorted({len(a) for a in arrays.values()})
+        if len(counts) > 1:
+            raise ValueError(f"append: series have different numbers of rows {counts}")
+        return arrays
+
+
+def _chunk_rows(shape, expected_rows):
+    rows = max(1, CHUNK_BYTES // (8 * max(1, int(np.prod(shape)))))
+    return min(rows, max(1, expected_rows)) if expected_rows else rows
+
+
+def _rows(f, path):
+    if "rows" not in f.attrs:
+        raise ValueError(f"{path}: not a transient history (no 'rows' attribute)")
+    return int(f.attrs["rows"])
+
+
+def _series_shapes(f):
+    shapes = {}
+
+    def visit(name, obj):
+        if isinstance(obj, h5py.Dataset) and not name.startswith((CHECKPOINT + "/",
+                                                                   GEOMETRY + "/")):
+            shapes[name] = obj.shape[1:]
+
+    f.visititems(visit)
+    return shapes
+
+
+def _truncate(f, layout, rows):
+    for name in layout:
+        if f[name].shape[0] != rows:
+            f[name].resize(rows, axis=0)
+    f.attrs["rows"] = rows
+
+
+def _reason(exc):
+    """One line saying why a run stopped."""
+    lines = str(exc).strip().splitlines()
+    if isinstance(exc, KeyboardInterrupt):
+        return "interrupted by the user"
+    if isinstance(exc, RunAborted) and lines:
+        return lines[0]
+    return f"{type(exc).__name__}: {lines[0]}" if lines else type(exc).__name__
+
+
+def _write_attrs(attrs, meta):
+    encoded = set(json.loads(attrs.get("json_attrs", "[]")))
+    for key, value in meta.items():
+        if key in _BOOKKEEPING:
+            raise ValueError(f"meta key '{key}' is reserved")
+        if isinstance(value, (dict, list, tuple)) or value is None:
+            attrs[key] = json.dumps(value)
+            encoded.add(key)
+        elif isinstance(value, (str, bool, int, float, np.number, np.bool_, np.ndarray)):
+            attrs[key] = value
+            encoded.discard(key)
+        else:
+            raise TypeError(f"meta key '{key}': cannot store a {type(value).__name__}")
+    attrs["json_attrs"] = json.dumps(sorted(encoded))
+
+
+def _read_attrs(attrs):
+    """Root attributes as plain Python values (JSON ones decoded), bookkeeping left out."""
+    encoded = set(json.loads(attrs.get("json_attrs", "[]")))
+    out = {}
+    for key, value in attrs.items():
+        if key == "json_attrs":
+            continue
+        if isinstance(value, bytes):
+            value = value.decode()
+        if key in encoded:
+            value = json.loads(value)
+        elif isinstance(value, (np.generic, np.ndarray)):
+            value = value.tolist()
+        out[key] = value
+    return out
+
+
+def load_checkpoint(path):
+    """The state stored by the last `History.checkpoint` (name -> array, bit for bit)."""
+    with _open(path, "r") as f:
+        if CHECKPOINT not in f:
+            raise ValueError(f"{path}: no checkpoint")
+        group = f[CHECKPOINT]
+        if group.attrs["rows"] < 0:
+            raise ValueError(f"{path}: the checkpoint was interrupted while being written")
+        return {name: group[name][()] for name in group}
+
+
+def stored_dt(path):
+    """The time step a history was run with (to resume it)."""
+    with _open(path, "r") as f:
+        return float(f.attrs["dt"])
+
+
+def summary(path):
+    """What `transient info` shows of a history file, as JSON-ready data.
+
+    Returns
+    -------
+    dict
+        path, status, steps (rows stored), t_end [s] (None without rows or /time), timings
+        (dict), energy_drift (`energy_drift` of the /energy/<term> series, None without them),
+        series (name -> shape of one row), meta (the other root attributes, the case text
+        left out), file_size [bytes].
+    """
+    path = Path(path)
+    with _open(path, "r") as f:
+        rows = _rows(f, path)
+        series = {name: list(shape) for name, shape in _series_shapes(f).items()}
+        meta = _read_attrs(f.attrs)
+        t_end = float(f["time"][rows - 1]) if rows and "time" in series else None
+        drift = energy_drift({name: f[f"energy/{name}"][:rows] for name in ENERGY_TERMS
+                              if f"energy/{name}" in series})
+    meta.pop(CASE_TEXT, None)
+    meta.pop("rows")
+    return {"path": str(path), "status": meta.pop("status"), "steps": rows, "t_end": t_end,
+            "timings": meta.pop("timings", {}), "energy_drift": drift, "series": series,
+            "meta": meta, "file_size": path.stat().st_size}
+
+
+def format_summary(d):
+    """`summary` as a human-readable table."""
+    drift = "n/a" if d["energy_drift"] is None else f"{d['energy_drift']:.3g}"
+    t_end = "n/a" if d["t_end"] is None else f"{d['t_end']:.6g} s"
+    timings = ", ".join(f"{k} {v:.3g} s" if isinstance(v, (int, float)) else f"{k} {v}"
+                        for k, v in d["timings"].items())
+    lines = [("file", f"{d['path']} ({_size(d['file_size'])})"), ("status", d["status"]),
+             ("steps", str(d["steps"])), ("t_end", t_end), ("energy drift", drift),
+             ("timings", timings or "n/a")]
+    lines += [("series" if i == 0 else "", f"{name} {tuple(shape)}")
+              for i, (name, shape) in enumerate(d["series"].items())]
+    lines += [("meta" if i == 0 else "", f"{key} = {_show(value)}")
+              for i, (key, value) in enumerate(d["meta"].items())]
+    width = max(len(label) for label, _ in lines)
+    return "\n".join(f"{label:<{width}}  {text}" for label, text in lines)
+
+
+def _size(n):
+    for unit in ("bytes", "kB", "MB", "GB"):
+        if n < 1000 or unit == "GB":
+            return f"{n:.0f} {unit}" if unit == "bytes" else f"{n:.1f} {unit}"
+        n /= 1000
+
+
+def _show(value):
+    return value if isinstance(value, str) else json.dumps(value)

@@ -1,0 +1,220 @@
+"""The finite element model of a case: parts meshed, K and M assembled, constraints, loads, sensors.
+
+Parts keep their own meshes and node numbering; the model numbers the nodes of all parts one
+after the other (part p's node i is global node offset_p + i) and the dofs as 3 node + component.
+"""
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..mesh import generators
+from .assembly import CellBlock, assemble
+from ..mesh.elements import ALIASES
+from ..errors import CaseError
+from .loads import nearest_node, pressure_forces
+from ..mesh.meshfile import MeshFileError, read_mesh
+from ..mesh.mesh import Mesh
+from ..mesh.selections import set_faces, set_nodes, with_geometric_sets
+
+AXES = {"x": 0, "y": 1, "z": 2}
+
+
+@dataclass(frozen=True)
+class Part:
+    name: str
+    mesh: Mesh
+    offset: int          # global id of the part's node 0
+
+
+@dataclass(frozen=True)
+class Model:
+    points: np.ndarray           # (nn, 3) global node coordinates [m]
+    parts: dict                  # name -> Part
+    K: sp.csr_matrix             # stiffness [N/m] on all dofs
+    M: sp.csr_matrix             # consistent mass [kg] on all dofs
+    lumped_mass: np.ndarray      # (ndof,) HRZ-lumped mass [kg]
+    fixed: np.ndarray            # (ndof,) bool, dofs clamped to zero
+    load: np.ndarray             # (ndof,) sum of the loads [N]
+    load_patterns: dict          # load name -> (ndof,) its nodal forces [N]
+    sensor_names: tuple
+    sensors: sp.csr_matrix       # (n_sensors, ndof) observation of the sensors [-]
+    timings: dict                # stage -> seconds
+
+    @property
+    def ndof(self):
+        return 3 * len(self.points)
+
+    @property
+    def free(self):
+        return np.flatnonzero(~self.fixed)
+
+    def mesh(self):
+        """All parts as one mesh in global node ids (no sets)."""
+        cells = {}
+        for part in self.parts.values():
+            for ctype, conn in part.mesh.cells.items():
+                cells.setdefault(ctype, []).append(conn + part.offset)
+        return Mesh(self.points, {t: np.vstack(c) for t, c in cells.items()})
+
+    def part_dofs(self, name):
+        p = self.parts[name]
+        n = len(p.mesh.points)
+        return np.arange(3 * p.offset, 3 * (p.offset + n))
+
+
+def part_mesh(case, name):
+    """Mesh of a part from its generator or file, with its geometric selections."""
+    spec = case.parts[name].mesh
+    key = f"parts.{name}.mesh"
+    kind = spec.kind
+    try:
+        if kind == "file":
+            path = case.directory / spec.params["path"]
+            mesh = read_mesh(path)
+            points = mesh.points * spec.params["scale"] + np.asarray(spec.params["translate"])
+            mesh = Mesh(points, mesh.cells, mesh.node_sets, mesh.face_sets, mesh.cell_sets)
+        else:
+            args = dict(spec.params)
+            args["element"] = ALIASES[args["element"]]
+            if kind == "drilled_box":
+                args["ogrid_cells"] = args["ogrid_cells"] or None
+            mesh = getattr(generators, kind)(**args)
+    except MeshFileError as exc:
+        raise CaseError(case.path, f"{key}.path", f"{exc.path}: {exc.message}") from None
+    except ValueError as exc:
+        raise CaseError(case.path, key, str(exc)) from None
+    return with_geometric_sets(mesh, case.parts[name].sets)
+
+
+def resolve_set(case, parts, ref, key):
+    """(part, set name) of a 'PART.SET' reference, with errors naming the key."""
+    if not isinstance(ref, str) or "." not in ref:
+        raise CaseError(case.path, key, f"expected PART.SET, got '{ref}'")
+    part, name = ref.split(".", 1)
+    if part not in parts:
+        raise CaseError(case.path, key, f"unknown part '{part}' (parts: {', '.join(parts)})")
+    mesh = parts[part].mesh
+    if name not in mesh.set_names():
+        raise CaseError(case.path, key, f"part '{part}' has no set '{name}' (sets: "
+                        f"{', '.join(mesh.set_names()) or 'none'})")
+    return parts[part], name
+
+
+def _cell_blocks(case, parts):
+    """Cell blocks in global node ids with the material of every cell."""
+    materials = case.materials
+    blocks = []
+    for name, part in parts.items():
+        spec = case.parts[name]
+        key = f"parts.{name}"
+        for ctype, conn in part.mesh.cells.items():
+            mat = np.full(len(conn), spec.material, dtype=object)
+            for cset, mname in spec.region_materials.items():
+                if cset not in part.mesh.cell_sets:
+                    raise CaseError(case.path, f"{key}.region_materials.{cset}",
+                                    f"part '{name}' has no cell set '{cset}' (cell sets: "
+                                    f"{', '.join(part.mesh.cell_sets) or 'none'})")
+                mat[part.mesh.cell_sets[cset].get(ctype, [])] = mname
+            props = {k: np.array([getattr(materials[m], k) for m in mat])
+                     for k in ("E", "nu", "rho")}
+            blocks.append((name, ctype, CellBlock(ctype, conn + part.offset, props["E"],
+                                                  props["nu"], props["rho"])))
+    return blocks
+
+
+def _check_cells(case, blocks, min_det, parts):
+    for (name, ctype, block), det in zip(blocks, min_det):
+        scale = np.median(np.abs(det)) if len(det) else 1.0
+        bad = np.flatnonzero(det <= 1e-10 * scale)
+        if len(bad):
+            e = int(bad[np.argmin(det[bad])])
+            what = "inverted" if det[e] < 0 else "degenerate"
+            raise CaseError(case.path, f"parts.{name}.mesh",
+                            f"{ctype} cell {e} is {what} (det J = {det[e]:.3g}; "
+                            f"{len(bad)} bad cell(s))")
+
+
+def _fixed(case, parts, ndof):
+    fixed = np.zeros(ndof, bool)
+    for cname, spec in case.constraints.items():
+        part, sname = resolve_set(case, parts, spec.set, f"constraints.{cname}.set")
+        nodes = set_nodes(part.mesh, sname) + part.offset
+        if len(nodes) == 0:
+            raise CaseError(case.path, f"constraints.{cname}.set",
+                            f"selection '{spec.set}' matches no node")
+        for d in spec.dofs:
+            fixed[3 * nodes + AXES[d]] = True
+    return fixed
+
+
+def _loads(case, parts, points, M):
+    """Nodal forces of every load, by name."""
+    out = {}
+    for lname, spec in case.loads.items():
+        f = np.zeros(3 * len(points))
+        key = f"loads.{lname}"
+        if spec.kind == "pressure":
+            part, sname = resolve_set(case, parts, spec.set, f"{key}.set")
+            faces = set_faces(part.mesh, sname)
+            if not faces:
+                raise CaseError(case.path, f"{key}.set",
+                                f"selection '{spec.set}' matches no boundary face")
+            local = pressure_forces(part.mesh.points, faces, spec.value)
+            f[3 * part.offset:3 * part.offset + local.size] += local.ravel()
+        elif spec.kind == "force":
+            part = parts[spec.part]
+            node = nearest_node(part.mesh.points, spec.point) + part.offset
+            f[3 * node:3 * node + 3] += spec.vector
+        else:
+            acc = np.zeros((len(points), 3))
+            for pname in spec.parts or list(parts):
+                p = parts[pname]
+                acc[p.offset:p.offset + p.mesh.n_nodes] = spec.vector
+            f += M @ acc.ravel()
+        out[lname] = f
+    return out
+
+
+def _sensors(case, parts, ndof):
+    names, rows, cols, vals = [], [], [], []
+    for i, (sname, spec) in enumerate(case.sensors.items()):
+        part = parts[spec.part]
+        d = np.asarray(spec.direction, float)
+        if np.linalg.norm(d) == 0:
+            raise CaseError(case.path, f"sensors.{sname}.direction", "expected a nonzero vector")
+        node = nearest_node(part.mesh.points, spec.point) + part.offset
+        names.append(sname)
+        rows += [i] * 3
+        cols += list(range(3 * node, 3 * node + 3))
+        vals += list(d / np.linalg.norm(d))
+    return tuple(names), sp.csr_matrix((vals, (rows, cols)), shape=(len(names), ndof))
+
+
+def build_model(case):
+    """Mesh every part, assemble K and M, and apply constraints, loads and sensors."""
+    timings = {}
+    t0 = time.perf_counter()
+    parts, offset = {}, 0
+    for name in case.parts:
+        mesh = part_mesh(case, name)
+        parts[name] = Part(name, mesh, offset)
+        offset += mesh.n_nodes
+    points = np.vstack([p.mesh.points for p in parts.values()])
+    timings["mesh"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    blocks = _cell_blocks(case, parts)
+    quad = case.solver.quadrature
+    ops = assemble(points, [b for _, _, b in blocks], quad.stiffness or None,
+                   quad.mass or None)
+    _check_cells(case, blocks, ops.min_det, parts)
+    timings["assembly"] = time.perf_counter() - t0
+
+    fixed = _fixed(case, parts, 3 * len(points))
+    patterns = _loads(case, parts, points, ops.M)
+    load = sum(patterns.values(), np.zeros(3 * len(points)))
+    names, sensors = _sensors(case, parts, 3 * len(points))
+    return Model(points, parts, ops.K, ops.M, ops.lumped_mass, fixed, load, patterns, names,
+                 sensors, timings)

@@ -1,0 +1,160 @@
+"""Reduced basis: normal modes of the preloaded structure up to fmax, plus static responses to
+the contact point loads and the load patterns, M-orthonormalized and re-diagonalized.
+
+The stiffness used is K_lin = K + C^T diag(w k_t*) C, linearized at the preload: in the reduced
+coordinates q = T q_r, T^T M T = I and T^T K_lin T = diag(omega^2).
+"""
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from ..solve.modes import normal_modes
+
+
+BY_COLUMNS_BYTES = 1.5e9   # K^-1 E dense (n x k) when the contact points outnumber their dofs
+
+
+@dataclass(frozen=True)
+class Basis:
+    T: np.ndarray            # (ndof, n), zero on fixed dofs
+    omega2: np.ndarray       # (n,) [rad^2/s^2], ascending
+    n_modes: int             # normal modes below fmax in the basis
+    n_static: int            # static vectors added (before removing dependent directions)
+    timings: dict
+    n_contact_shapes: int = 0      # contact shapes kept (reduction.statics_tolerance)
+    contact_flexibility: np.ndarray = None   # mu of contact_shapes, descending
+
+
+def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None, tol=0.0):
+    """Basis of the modes of (K_lin, M) up to fmax [Hz] and the responses to static loads.
+
+    statics (ndof, s): load vectors (load patterns, and K_lin u for a displacement u to
+    represent, such as the preload). solve applies (K_lin - sigma M)^-1 on the free dofs,
+    sigma = -(2 pi shift_hz)^2: the small shift keeps floating parts solvable.
+
+    contact (C (m, ndof), stiffness (m,)): adds the responses to the contact point loads C^T,
+    only the shapes of them that matter (`contact_shapes`, tol).
+    """
+    t0 = time.perf_counter()
+    free = np.flatnonzero(~fixed)
+    modes = normal_modes(K_lin, M, fixed, count=40, fmax=fmax, shift=-shift_hz, solve=solve)
+    t_modes = time.perf_counter() - t0
+    Phi = modes.shapes[free]
+    columns = [Phi]
+    mu = np.zeros(0)
+    n_shapes = 0
+    if contact is not None and contact[0].shape[0]:
+        C, stiffness = contact
+        omega2_modes = (2 * np.pi * modes.frequencies) ** 2
+        shapes, mu = contact_shapes(sp.csr_matrix(C)[:, free], stiffness, solve, Phi,
+                                    omega2_modes, tol)
+        columns.append(shapes)
+        n_shapes = shapes.shape[1]
+    if statics.shape[1]:
+        columns.append(np.atleast_2d(solve(np.asfortranarray(statics[free])).T).T)
+    X = np.hstack(columns)
+    t_static = time.perf_counter() - t0 - t_modes
+    Mf = M[free][:, free]
+    Kf = K_lin[free][:, free]
+    # unit M-norm columns (static responses to unit loads are tiny), then drop directions the
+    # others already span, then diagonalize
+    norms = np.sqrt(np.einsum("ij,ij->j", X, Mf @ X))
+    X = X[:, norms > 0] / norms[norms > 0]
+    Mr = X.T @ (Mf @ X)
+    lam, V = np.linalg.eigh(Mr)
+    keep = lam > 1e-12 * lam.max()
+    X = X @ (V[:, keep] / np.sqrt(lam[keep]))
+    Kr = X.T @ (Kf @ X)
+    omega2, W = sla.eigh(0.5 * (Kr + Kr.T))
+    T = np.zeros((K_lin.shape[0], len(omega2)))
+    T[free] = X @ W
+    timings = {"modes": t_modes, "statics": t_static,
+               "orthonormalization": time.perf_counter() - t0 - t_modes - t_static}
+    return Basis(T, np.maximum(omega2, 0.0), len(modes.frequencies), statics.shape[1], timings,
+                 n_shapes, mu)
+
+
+def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):
+    """The responses to the contact point loads that change the contact stiffness by tol or more.
+
+    S = K^-1 C^T (n, m) are the responses to the m contact point loads; beyond the modes Phi
+    (M-normalized, eigenvalues omega2) their flexibility at the points is
+    F = C S - (C Phi) diag(omega2)^-1 (C Phi)^T. With D = diag(stiffness) the contact law's
+    stiffness at each point (w k_t), the eigenvalues mu_i of D^1/2 F D^1/2 are the structural
+    flexibility of each contact shape relative to the law's: a shape with mu_i < tol changes
+    the stiffness of the two in series by less than tol, so it is dropped (tol = 0 keeps all).
+
+    F is accumulated from solves of `block` loads at a time and the shapes kept, K^-1 C^T D^1/2
+    u_i, solved for at the end: memory n x block and m x m, not n x m (a fine rule has
+    thousands of points).
+
+    Returns (shapes (n, r), mu (m,) descending).
+    """
+    m = C.shape[0]
+    CT = C.T.tocsc()
+    if tol <= 0:
+        return np.atleast_2d(solve(np.asfortranarray(CT.toarray())).T).T, np.zeros(0)
+    cols = np.unique(sp.csr_matrix(C).indices)
+    if len(cols) < m and 8.0 * C.shape[1] * len(cols) <= BY_COLUMNS_BYTES:
+        return _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols)
+    F = np.empty((m, m))
+    for start in range(0, m, block):
+        cols = slice(start, min(start + block, m))
+        F[:, cols] = C @ solve(np.asfortranarray(CT[:, cols].toarray()))
+    d = np.sqrt(np.maximum(stiffness, 0.0))
+    CPhi = np.asarray(C @ Phi)
+    F -= (CPhi / np.maximum(omega2, 1e-300)) @ CPhi.T
+    F = 0.5 * (F + F.T) * d[:, None] * d[None, :]
+    mu, U = sla.eigh(F, overwrite_a=True)
+    mu, U = mu[::-1], U[:, ::-1]
+    kept = mu >= tol
+    if not np.any(kept):
+        return np.zeros((C.shape[1], 0)), mu
+    return np.atleast_2d(solve(np.asfortranarray(CT @ (d[:, None] * U[:, kept]))).T).T, mu
+
+
+def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
+    """contact_shapes when the m points touch only k < m dofs (a fine rule): with E the
+    selection of those dofs, C = Cc E^T and F = Cc H Cc^T, H = E^T K^-1 E minus the modes'
+    part (k x k, from k solves). With X = D^1/2 Cc and H = H^1/2 H^1/2, D^1/2 F D^1/2 = Y Y^T,
+    Y = X H^1/2 (m x k): its singular values give mu and its left vectors the u_i, and the
+    shapes are (K^-1 E) X^T u_i. When the solver is a ContactSolver, E is replaced by the
+    basis E V of the rows' space it already solved for (Cc = Rm V^T; rho < k columns for a
+    regularized rule)."""
+    n, k = C.shape[1], len(cols)
+    known = getattr(solve, "on_columns", None)
+    if known is not None and np.array_equal(known[0], cols) and len(known[2]) == C.shape[0]:
+        # the solver, built on these contact rows (lowrank.ContactSolver), has K^-1 E V = Z R
+        # already, V a basis of the rows' space, and the rows in it, Cc = Rm: no solves here,
+        # no n x k array
+        _, V, Cc, Z, R = known
+        R = R()
+        H = (V.T @ Z[cols]) @ R
+
+        def response(Y):
+            return Z @ (R @ Y)
+    else:
+        V = None
+        Cc = sp.csr_matrix(C)[:, cols].toarray()
+        E = np.zeros((n, k), order="F")
+        E[cols, np.arange(k)] = 1.0
+        KE = np.atleast_2d(solve(E).T).T
+        H = KE[cols]
+
+        def response(Y):
+            return KE @ Y
+    PhiE = Phi[cols] if V is None else V.T @ Phi[cols]
+    H = H - (PhiE / np.maximum(omega2, 1e-300)) @ PhiE.T
+    lam, W = np.linalg.eigh(0.5 * (H + H.T))
+    root = (W * np.sqrt(np.maximum(lam, 0.0))) @ W.T
+    X = np.sqrt(np.maximum(stiffness, 0.0))[:, None] * Cc
+    # Y Y^T and Y^T Y = H^1/2 X^T X H^1/2 share their eigenvalues mu: the k x k one is the
+    # cheap one (m >= k), and X^T u_i = X^T Y v_i / sqrt(mu_i) = X^T X H^1/2 v_i / sqrt(mu_i)
+    XtX = X.T @ X
+    mu, Q = np.linalg.eigh(root @ XtX @ root)
+    mu, Q = np.maximum(mu[::-1], 0.0), Q[:, ::-1]
+    kept = mu >= tol
+    return response(XtX @ (root @ (Q[:, kept] / np.sqrt(mu[kept])))), mu

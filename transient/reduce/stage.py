@@ -1,0 +1,106 @@
+"""The reduce stage: the reduced basis of the preloaded structure and, for a sampled rule, the
+points sampled on its dynamics. It returns the contact set and the preload the reduced model
+integrates (the sampled points' and the preload they hold) instead of editing the pipeline's.
+"""
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..contact.coarse import subset_rule
+from ..errors import CaseError
+from ..solve.preload import Preload
+from .basis import reduced_basis
+from .sampling import ReducedPreloadError, sample_contact
+
+
+@dataclass(frozen=True)
+class ReducedModel:
+    T: np.ndarray            # (ndof, n) the basis, T^T M T = I
+    omega2: np.ndarray       # (n,) eigenvalues of T^T K_lin T (contact at the preload included)
+    q0: np.ndarray           # (n,) the preload in reduced coordinates
+    v0: np.ndarray           # (n,) the initial velocity there
+    contacts: object         # ContactSet integrated (the points kept, with their weights)
+    pairs: list              # ContactPairs with the rules of the points kept
+    preload: Preload         # the preload those points hold
+    meta: dict               # basis sizes and timings, sampling figures
+
+
+def candidates(case, pairs, contacts):
+    """Mask of the points a sampled rule picks from (None when no pair is sampled)."""
+    sampled = [p for p in pairs if p.spec.rule == "sampled"]
+    if not sampled:
+        return None
+    mask = np.zeros(contacts.n_points, bool)
+    for p in sampled:
+        mask[contacts.slices[p.name]] = True
+    return mask
+
+
+def reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0, solve, kt_crit,
+           stages):
+    """The reduced model of a case (solver.reduction) on its linearized stiffness K_lin."""
+    from time import perf_counter
+    reduction = case.solver.reduction
+    loads = [np.stack(patterns, axis=1)] if patterns and reduction.statics else []
+    loads.append(K_lin @ preload.u[:, None])          # its response is the preload itself
+    contact = ((contacts.C, contacts.weights * kt_crit)
+               if reduction.statics and contacts.n_points else None)
+    t0 = perf_counter()
+    basis = reduced_basis(K_lin, M, model.fixed, reduction.fmax, np.hstack(loads), solve,
+                          case.solver.shift_hz, contact, reduction.statics_tolerance)
+    stages["reduction"] = perf_counter() - t0
+    T = basis.T
+    MT = M @ T
+    q0, v = MT.T @ preload.u, MT.T @ v0
+    meta = {"reduced_dofs": len(basis.omega2), "normal_modes": basis.n_modes,
+            "contact_shapes": basis.n_contact_shapes, "basis_timings": basis.timings,
+            "basis_projection_error": float(np.linalg.norm(T @ q0 - preload.u)
+                                            / max(np.linalg.norm(preload.u), 1e-300)),
+            "free_dofs": int((~model.fixed).sum())}
+    mask = candidates(case, pairs, contacts)
+    if mask is None:
+        return ReducedModel(T, basis.omega2, q0, v, contacts, pairs, preload, meta)
+    t0 = perf_counter()
+    sampled = _sample(case, contacts, mask, basis.omega2, np.asarray(contacts.C @ T), q0,
+                      preload)
+    stages["sampling"] = perf_counter() - t0
+    T = T @ sampled.W
+    held = Preload(T @ sampled.q, sampled.gap, sampled.pressure, sampled.tangent,
+                   preload.iterations + sampled.iterations, sampled.residual, preload.seconds)
+    meta["sampling"] = {"candidates": int(mask.sum()), "points": int(len(sampled.sample.chosen)),
+                        "residual": sampled.sample.residual,
+                        "band_modes": sampled.sample.band,
+                        "preload_iterations": sampled.iterations}
+    return ReducedModel(T, sampled.omega2, sampled.q, sampled.W.T @ v, sampled.contacts,
+                        _sampled_pairs(pairs, contacts, sampled.keep, sampled.contacts), held,
+                        meta)
+
+
+def _sample(case, contacts, candidate, omega2, Cr, q0, preload):
+    """The sampled rule's points (sampling.py), with the reduced preload they hold. The points
+    of every sampled pair are chosen together, to the first one's tolerance and cap."""
+    solver = case.solver
+    name = next(n for n, s in contacts.slices.items() if candidate[s].any())
+    spec = case.contact[name]
+    band = int(np.sum(omega2 <= (2 * np.pi * solver.reduction.fmax) ** 2))
+    try:
+        return sample_contact(contacts, candidate, omega2, Cr, q0, preload.gap,
+                              preload.pressure, preload.tangent, band,
+                              spec.sampling_tolerance, spec.points,
+                              solver.newton.tolerance, solver.newton.max_iter)
+    except ReducedPreloadError as exc:
+        raise CaseError(case.path, f"contact.{name}.sampling_tolerance", str(exc)) from None
+
+
+def _sampled_pairs(pairs, rich, keep, contacts):
+    """The pairs with the rules of the points kept (sampled pairs: chosen points and weights)."""
+    out = []
+    for p in pairs:
+        s, new = rich.slices[p.name], contacts.slices[p.name]
+        local = keep[new] - s.start
+        if len(local) == s.stop - s.start:
+            out.append(p)
+            continue
+        out.append(replace(p, rule=subset_rule(p.rule, local, contacts.weights[new]),
+                           candidates=s.stop - s.start))
+    return out
