@@ -1,0 +1,540 @@
+"""Plain NumPy twins of the stepping kernels (transient.kernels), for the tests.
+
+Written from the kernels' docstrings, not from their loops: a Python loop over the steps, NumPy
+within a step, dense linear algebra where the kernels use triangular factors or the Woodbury
+identity. Each twin takes the kernel's positional arguments and has its in-place semantics: the
+state (q, v, a rows and state[3, 0] the time), acc (external work, dissipated energy), gmin and
+fprev are updated, the out_* rows filled, and (status, steps done) returned.
+
+The implicit twins iterate as their kernels' docstrings say (the fixed operator plus the
+exact corrections of the rows in active_rows, their Jacobian J_A solved densely), not by plain
+Newton: the iterates are then the same and the converged steps agree to round-off, not merely
+to the Newton tolerance.
+
+The system (stepping.py): M a + c v + K_lin q = F(t) + C^T [w (p(g) + k_t* (g - g0))],
+g = C q + g0, F(t) = patterns^T s(t); energies per output row: kinetic, strain (1/2 q^T K q with
+K = K_lin - C^T diag(w k_t*) C), contact (sum w Phi(g)), external work, dissipated.
+"""
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from transient.kernels.codes import NO_CONVERGENCE, NOT_FINITE, OK
+from transient.kernels.exponential import IMPLICIT_TOL
+from transient.kernels.woodbury import WOODBURY_REST
+
+# contact laws: the codes and parameter rows (4,) of kernels/laws.py
+EXPONENTIAL, LINEAR, BILATERAL = 0, 1, 2
+
+# signal kinds and the columns of their parameter rows (8,)
+CONSTANT, STEP, IMPULSE, SINE, CHIRP, TABLE = range(6)
+START, AMPLITUDE, DURATION, RISE, FREQUENCY, F1, PHASE = range(7)
+N_PARAMS = 8
+
+
+# ----------------------------------------------------------------------------- contact laws
+
+def exponential_params(p0, lam, p_lin):
+    """Row of the exponential law p0 exp(-lambda g), linear below the gap where p = p_lin."""
+    return np.array([p0, lam, -np.log(p_lin / p0) / lam, 0.0])
+
+
+def penalty_params(k):
+    """Row of the linear (unilateral) or bilateral penalty of stiffness k [Pa/m]."""
+    return np.array([k, 0.0, 0.0, 0.0])
+
+
+def pressure_potential(code, params, g):
+    """(p, k_t, Phi) at the gaps g (m,) of points with laws code (m,) and params (m, 4).
+
+    Exponential: p = p0 exp(-lambda g) for g >= g_lin, below g_lin the straight line with the
+    same value and slope; Phi the integral of p from g to infinity. Linear: p = k max(-g, 0),
+    Phi = 1/2 k min(g, 0)^2. Bilateral: p = -k g, Phi = 1/2 k g^2. k_t = -dp/dg.
+    """
+    g = np.asarray(g, dtype=float)
+    p = np.zeros_like(g)
+    kt = np.zeros_like(g)
+    phi = np.zeros_like(g)
+    ex = code == EXPONENTIAL
+    p0, lam, g_lin = params[ex, 0], params[ex, 1], params[ex, 2]
+    # the exponential taken at max(g, g_lin): its value and slope where the line starts
+    pe = p0 * np.exp(-lam * np.maximum(g[ex], g_lin))
+    d = np.maximum(g_lin - g[ex], 0.0)
+    p[ex] = pe + lam * pe * d
+    kt[ex] = lam * pe
+    phi[ex] = pe / lam + pe * d + 0.5 * lam * pe * d * d
+    k = params[:, 0]
+    closed = (code == LINEAR) & (g < 0.0)
+    tied = code == BILATERAL
+    pen = closed | tied
+    p[pen] = -k[pen] * g[pen]
+    kt[pen] = k[pen]
+    phi[pen] = 0.5 * k[pen] * g[pen] ** 2
+    return p, kt, phi
+
+
+# ----------------------------------------------------------------------------- signals
+
+def signal_values(t, codes, params, table_t, table_v, table_n):
+    """Values (J,) of the packed signals at time t.
+
+    Windows are half-open, start <= t < start + duration; every kind but constant and table is
+    0 before its start. Step: linear rise over RISE to AMPLITUDE. Impulse: half sine of length
+    DURATION. Sine: AMPLITUDE sin(2 pi FREQUENCY tau + PHASE), DURATION 0 meaning no end. Chirp:
+    phase 2 pi (f0 tau + (f1 - f0) tau^2 / (2 DURATION)). Table: 0 before its first time,
+    linear between, its last value after.
+    """
+    out = np.zeros(len(codes))
+    for j, code in enumerate(codes):
+        if code == CONSTANT:
+            out[j] = 1.0
+            continue
+        if code == TABLE:
+            n = table_n[j]
+            times, values = table_t[j, :n], table_v[j, :n]
+            out[j] = 0.0 if t < times[0] else np.interp(t, times, values)
+            continue
+        tau = t - params[j, START]
+        a, d = params[j, AMPLITUDE], params[j, DURATION]
+        if tau < 0.0:
+            out[j] = 0.0
+        elif code == STEP:
+            rise = params[j, RISE]
+            out[j] = a * min(tau / rise, 1.0) if rise > 0.0 else a
+        elif code == IMPULSE:
+            out[j] = a * np.sin(np.pi * tau / d) if tau < d else 0.0
+        elif code == SINE:
+            ended = d > 0.0 and tau >= d
+            out[j] = 0.0 if ended else a * np.sin(2 * np.pi * params[j, FREQUENCY] * tau
+                                                   + params[j, PHASE])
+        elif code == CHIRP:
+            f0, f1 = params[j, FREQUENCY], params[j, F1]
+            out[j] = a * np.sin(2 * np.pi * (f0 * tau + (f1 - f0) * tau ** 2 / (2 * d))) \
+                if tau < d else 0.0
+    return out
+
+
+def pack_signals(specs):
+    """(codes, params, table_t, table_v, table_n) of signals given as (code, {column: value})
+    pairs, a table as (TABLE, (times, values))."""
+    T = max([len(p[0]) for c, p in specs if c == TABLE], default=1)
+    codes = np.array([c for c, _ in specs], dtype=np.int64)
+    params = np.zeros((len(specs), N_PARAMS))
+    table_t = np.zeros((len(specs), T))
+    table_v = np.zeros((len(specs), T))
+    table_n = np.zeros(len(specs), dtype=np.int64)
+    for j, (code, p) in enumerate(specs):
+        if code == TABLE:
+            table_n[j] = len(p[0])
+            table_t[j, :table_n[j]], table_v[j, :table_n[j]] = p
+        else:
+            for column, value in p.items():
+                params[j, column] = value
+    return codes, params, table_t, table_v, table_n
+
+
+def external(t, patterns, sig):
+    """F(t) = patterns^T s(t)."""
+    return patterns.T @ signal_values(t, *sig)
+
+
+# ----------------------------------------------------------------------------- coefficients
+
+def exponential_coefficients(omega2, damp, dt):
+    """(n, 8) per mode of x'' + c x' + omega^2 x = F, F linear over the step:
+    [E11, E12, E21, E22, G0x, G0v, G1x, G1v] with
+    (x, v)(dt) = E (x, v)(0) + G0 F(0) + G1 (F(dt) - F(0)).
+
+    The force is carried as two more states, F itself and its ramp r = F(dt) - F(0) with
+    F' = r / dt, so one matrix exponential of the 4 x 4 system gives E, G0 and G1 at once.
+    """
+    n = len(omega2)
+    A = np.zeros((n, 4, 4))
+    A[:, 0, 1] = 1.0
+    A[:, 1, 0] = -omega2
+    A[:, 1, 1] = -damp
+    A[:, 1, 2] = 1.0
+    A[:, 2, 3] = 1.0 / dt
+    X = sla.expm(A * dt)
+    return np.stack([X[:, 0, 0], X[:, 0, 1], X[:, 1, 0], X[:, 1, 1],
+                     X[:, 0, 2], X[:, 1, 2], X[:, 0, 3], X[:, 1, 3]], axis=1)
+
+
+def propagate(coef, q0, v0, f0, f1):
+    """(q, v) at the end of a step from (q0, v0), forces f0 and f1 at its ends."""
+    df = f1 - f0
+    q = coef[:, 0] * q0 + coef[:, 1] * v0 + coef[:, 4] * f0 + coef[:, 6] * df
+    v = coef[:, 2] * q0 + coef[:, 3] * v0 + coef[:, 5] * f0 + coef[:, 7] * df
+    return q, v
+
+
+# ----------------------------------------------------------------------------- contact pass
+
+def _contact(s, g0, w, kt0, code, params):
+    """Per-point force w (p + k_t* s), gap and pressure, and (contact potential,
+    1/2 sum w k_t* s^2), for the motion s = C q of the rows."""
+    g = g0 + s
+    p, _, phi = pressure_potential(code, params, g)
+    return w * (p + kt0 * s), g, p, (np.sum(w * phi), 0.5 * np.sum(w * kt0 * s * s))
+
+
+def remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf):
+    """f = C^T [w (p(g) + k_t* (g - g0))]; fills gap and press. With more than one block,
+    fbuf[b] holds the part of f from rows blocks[b]:blocks[b + 1]. Returns (contact
+    potential, 1/2 sum w k_t* (g - g0)^2)."""
+    r, gap[:], press[:], energies = _contact(C @ q, g0, w, kt0, code, params)
+    if len(blocks) == 2:
+        f[:] = C.T @ r
+    else:
+        for b in range(len(blocks) - 1):
+            rows = slice(blocks[b], blocks[b + 1])
+            fbuf[b] = C[rows].T @ r[rows]
+        f[:] = fbuf.sum(axis=0)
+    return energies
+
+
+def csr(triplet, n_cols):
+    """scipy CSR matrix of an (indptr, indices, data) triplet."""
+    indptr, indices, data = triplet
+    return sp.csr_matrix((data, indices, indptr), shape=(len(indptr) - 1, n_cols))
+
+
+def remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press):
+    """remainder_dense for the rows of a CSR matrix C (no blocks)."""
+    C = csr((Cp, Ci, Cd), len(q))
+    r, gap[:], press[:], energies = _contact(C @ q, g0, w, kt0, code, params)
+    f[:] = C.T @ r
+    return energies
+
+
+# ----------------------------------------------------------------------------- common parts
+
+def _energies(acc, kinetic, strain, contact, work, dissipated):
+    """The output row of energies, after adding the step's work and dissipation to acc."""
+    acc[0] += work
+    acc[1] += dissipated
+    return np.array([kinetic, strain, contact, acc[0], acc[1]])
+
+
+def _modal_energies(acc, q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt):
+    """Energies after a modal step from (q0, v0) to (q, v): work and dissipation by the
+    trapezoid rule, kinetic and structural strain at the end."""
+    work = 0.5 * np.dot(fext0 + fext, q - q0)
+    dissipated = 0.5 * dt * np.dot(damp, v0 * v0 + v * v)
+    return _energies(acc, 0.5 * np.dot(v, v), 0.5 * np.dot(omega2, q * q) - lin, phi, work,
+                     dissipated)
+
+
+def _finite(*arrays):
+    return all(np.all(np.isfinite(x)) for x in arrays)
+
+
+def _store(outs, row, t, observed, gap, press, energy):
+    out_t, out_s, out_g, out_p, out_e = outs
+    out_t[row] = t
+    out_s[row] = observed
+    if out_g.shape[1] > 0:
+        out_g[row] = gap
+        out_p[row] = press
+    out_e[row] = energy
+
+
+def active_rows(code, params, gap, w, kt0, scale, Gd):
+    """(e, rows A) of the exact contact corrections: e_i = scale w_i (k_t,i - k_t*,i); A the
+    rows of largest |e_i| G_ii, taken until the sum over the others is at most WOODBURY_REST."""
+    _, kt, _ = pressure_potential(code, params, gap)
+    e = scale * w * (kt - kt0)
+    size = np.abs(e) * Gd
+    order = np.argsort(-size)
+    rest = size.sum() - np.concatenate([[0.0], np.cumsum(size[order])])
+    return e, order[:np.argmax(rest <= WOODBURY_REST)]
+
+
+def _newton_step(S, U, C, e, rows, r):
+    """J_A^-1 r for J_A = S + diag(U) C_A^T diag(e_A) C_A, S a dense (n, n) operator: what the
+    kernels obtain from S^-1 and the Woodbury identity."""
+    CA = C[rows]
+    return np.linalg.solve(S + U[:, None] * (CA.T @ (e[rows, None] * CA)), r)
+
+
+# ----------------------------------------------------------------------------- explicit
+
+def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0, code,
+                     params, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p, out_e):
+    """Velocity Verlet on the modal system, the diagonal damping taken implicitly at the end
+    of the step: v_{n+1} = (v_{n+1/2} + dt/2 f_{n+1}) / (1 + dt/2 c)."""
+    q, v, a = state[0], state[1], state[2]
+    t = state[3, 0]
+    m, n = C.shape
+    f, gap, press = np.empty(n), np.empty(m), np.empty(m)
+    fbuf = np.empty((len(blocks) - 1, n))
+    outs = (out_t, out_s, out_g, out_p, out_e)
+    fext_old = external(t, patterns, sig)
+    row = 0
+    for step in range(1, n_steps + 1):
+        power_old = np.dot(damp, v * v)
+        v_half = v + 0.5 * dt * a
+        dq = dt * v_half
+        q += dq
+        t += dt
+        fext = external(t, patterns, sig)
+        phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf)
+        gmin[:] = np.fmin(gmin, gap)
+        force = fext + f - omega2 * q
+        v[:] = (v_half + 0.5 * dt * force) / (1.0 + 0.5 * dt * damp)
+        a[:] = force - damp * v
+        energy = _energies(acc, 0.5 * np.dot(v, v), 0.5 * np.dot(omega2, q * q) - lin, phi,
+                           0.5 * np.dot(fext_old + fext, dq),
+                           0.5 * dt * (power_old + np.dot(damp, v * v)))
+        fext_old = fext
+        if not _finite(q, v, energy):
+            state[3, 0] = t
+            return NOT_FINITE, step
+        if step % every == 0:
+            _store(outs, row, t, S @ q, gap, press, energy)
+            row += 1
+    state[3, 0] = t
+    return OK, n_steps
+
+
+def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w, kt0, code,
+                  params, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_e):
+    """Central differences with a lumped mass: alpha M implicit at the end of the step, beta K
+    on the half-step velocity. The dissipation is the trapezoid of the damping power
+    v . (alpha M v + beta K v_half) at the steps' ends (v_half = v at the start)."""
+    q, v, a = state[0], state[1], state[2]
+    t = state[3, 0]
+    n, m = len(q), len(g0)
+    Km, Sm = csr(K, n), csr(S, n)
+    f, gap, press = np.empty(n), np.empty(m), np.empty(m)
+    outs = (out_t, out_s, out_g, out_p, out_e)
+    fext_old = external(t, patterns, sig)
+    power_old = np.dot(alpha * mass * v + beta * (Km @ v), v)
+    row = 0
+    for step in range(1, n_steps + 1):
+        v_half = v + 0.5 * dt * a
+        dq = dt * v_half
+        q += dq
+        t += dt
+        fext = external(t, patterns, sig)
+        phi, lin = remainder_sparse(*C, g0, w, kt0, code, params, q, f, gap, press)
+        gmin[:] = np.fmin(gmin, gap)
+        ku = Km @ q
+        kv = Km @ v_half
+        force = fext + f - ku - beta * kv
+        v[:] = (v_half + 0.5 * dt * force / mass) / (1.0 + 0.5 * dt * alpha)
+        a[:] = force / mass - alpha * v
+        power = np.dot(alpha * mass * v + beta * kv, v)     # v . the damping force
+        energy = _energies(acc, 0.5 * np.dot(mass * v, v), 0.5 * np.dot(q, ku) - lin, phi,
+                           0.5 * np.dot(fext_old + fext, dq), 0.5 * dt * (power_old + power))
+        power_old = power
+        fext_old = fext
+        if not _finite(q, v, energy):
+            state[3, 0] = t
+            return NOT_FINITE, step
+        if step % every == 0:
+            _store(outs, row, t, Sm @ q, gap, press, energy)
+            row += 1
+    state[3, 0] = t
+    return OK, n_steps
+
+
+# ----------------------------------------------------------------------------- exponential
+
+def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
+                        code, params, patterns, sig, S, blocks, corrections, propagate_last,
+                        fprev, out_t, out_s, out_g, out_p, out_e):
+    """Exact modal propagation under forces linear over the step. The end forces are first
+    extrapolated from the step's start and fprev (the previous step's start), then evaluated
+    1 + corrections times, each at the state propagated with the last ones; if
+    propagate_last, a final propagation with the last forces ends the step (the gaps,
+    pressures and contact energy stay those of the last evaluation). The start forces are
+    evaluated once per call, at the state given."""
+    q, v = state[0], state[1]
+    t = state[3, 0]
+    m, n = C.shape
+    rem, gap, press = np.empty(n), np.empty(m), np.empty(m)
+    fbuf = np.empty((len(blocks) - 1, n))
+    outs = (out_t, out_s, out_g, out_p, out_e)
+    fext0 = external(t, patterns, sig)
+    remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks, fbuf)
+    f0 = fext0 + rem
+    row = 0
+    for step in range(1, n_steps + 1):
+        q0, v0 = q.copy(), v.copy()
+        f1 = 2.0 * f0 - fprev
+        t += dt
+        fext = external(t, patterns, sig)
+        for _ in range(corrections + 1):
+            q[:], v[:] = propagate(coef, q0, v0, f0, f1)
+            phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
+                                       fbuf)
+            f1 = fext + rem
+        if propagate_last:
+            q[:], v[:] = propagate(coef, q0, v0, f0, f1)
+        energy = _modal_energies(acc, q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt)
+        fprev[:] = f0
+        f0, fext0 = f1, fext
+        if not _finite(q, v, energy):
+            state[3, 0] = t
+            return NOT_FINITE, step
+        if step % every == 0:
+            _store(outs, row, t, S @ q, gap, press, energy)
+            row += 1
+    state[3, 0] = t
+    return OK, n_steps
+
+
+def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
+                         code, params, patterns, sig, S, blocks, Z, G, max_iter, fprev,
+                         out_t, out_s, out_g, out_p, out_e):
+    """The exponential step with the end forces implicit: q = qb + D (fext + remainder(q)),
+    D = diag(G1x), solved by Newton from the extrapolated forces' end state, with
+    J = I + D C_A^T diag(e_A) C_A (e_i = w_i (k_t,i - k_t*,i), A as in active_rows with
+    G_ii = (C D C^T)_ii) solved densely: Z and G are taken for the signature only. Converged
+    when |r| <= IMPLICIT_TOL |q - q0|; q stays the last state evaluated, v is propagated with
+    the forces found there."""
+    q, v = state[0], state[1]
+    t = state[3, 0]
+    m, n = C.shape
+    rem, gap, press = np.empty(n), np.empty(m), np.empty(m)
+    fbuf = np.empty((len(blocks) - 1, n))
+    outs = (out_t, out_s, out_g, out_p, out_e)
+    D = coef[:, 6]
+    Gd = (C * C) @ D
+    fext0 = external(t, patterns, sig)
+    remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks, fbuf)
+    f0 = fext0 + rem
+    row = 0
+    for step in range(1, n_steps + 1):
+        q0, v0 = q.copy(), v.copy()
+        f1 = 2.0 * f0 - fprev
+        t += dt
+        fext = external(t, patterns, sig)
+        q[:] = propagate(coef, q0, v0, f0, f1)[0]
+        qb = q - D * f1
+        converged = False
+        for _ in range(max_iter):
+            phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
+                                       fbuf)
+            f1 = fext + rem
+            r = qb + D * f1 - q
+            scale = max(np.sum((q - q0) ** 2), 1e-20 * np.dot(q, q), 1e-300)
+            if np.dot(r, r) <= IMPLICIT_TOL ** 2 * scale:
+                converged = True
+                break
+            e, rows = active_rows(code, params, gap, w, kt0, 1.0, Gd)
+            q += _newton_step(np.eye(n), D, C, e, rows, r)
+        v[:] = propagate(coef, q0, v0, f0, f1)[1]
+        energy = _modal_energies(acc, q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt)
+        fprev[:] = f0
+        f0, fext0 = f1, fext
+        if not _finite(q, v, energy):
+            state[3, 0] = t
+            return NOT_FINITE, step
+        if not converged:
+            state[3, 0] = t
+            return NO_CONVERGENCE, step
+        if step % every == 0:
+            _store(outs, row, t, S @ q, gap, press, energy)
+            row += 1
+    state[3, 0] = t
+    return OK, n_steps
+
+
+# ----------------------------------------------------------------------------- Newmark
+
+def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, sig, observe,
+             tol, max_iter, outs):
+    """Average-acceleration Newmark on M a + cdamp v + K q = F + remainder(q), dense M, K and
+    cdamp, Newton on a with J = S + C_A^T diag(e_A) C_A (S = M + dt/2 cdamp + dt^2/4 K,
+    e_i = dt^2/4 w_i (k_t,i - k_t*,i), A as in active_rows with G_ii = (C S^-1 C^T)_ii).
+    Converged when |R| <= tol |(f, |K| |q|, M a, 2/dt M v)|. The dissipation is the trapezoid
+    of the damping power v . cdamp v; contact = (remainder, code, params, w, kt0) with
+    remainder(q) -> (force, gap, pressure, (phi, lin))."""
+    q, v, a = state[0], state[1], state[2]
+    t = state[3, 0]
+    remainder, code, params, w, kt0 = contact
+    h2 = 0.25 * dt * dt
+    v_scale = 2.0 / dt if dt > 0.0 else 0.0
+    Sop = M + 0.5 * dt * cdamp + h2 * K
+    Gd = np.sum(C.T * np.linalg.solve(Sop, C.T), axis=0)
+    fext_old = external(t, patterns, sig)
+    row = 0
+    for step in range(1, n_steps + 1):
+        q_old, v_old = q.copy(), v.copy()
+        qp = q + dt * v + h2 * a
+        vp = v + 0.5 * dt * a
+        t += dt
+        fext = external(t, patterns, sig)
+        converged = False
+        for _ in range(max_iter):
+            q[:] = qp + h2 * a
+            v[:] = vp + 0.5 * dt * a
+            rem, gap, press, (phi, lin) = remainder(q)
+            f = fext + rem
+            ku = K @ q
+            r = M @ a + cdamp @ v + ku - f
+            scale = (np.dot(f, f) + np.sum((np.abs(K) @ np.abs(q)) ** 2)
+                     + np.sum((M @ a) ** 2) + np.sum((v_scale * (M @ v)) ** 2))
+            if np.dot(r, r) <= tol * tol * max(scale, 1e-300):
+                converged = True
+                break
+            e, rows = active_rows(code, params, gap, w, kt0, h2, Gd)
+            a -= _newton_step(Sop, np.ones(len(q)), C, e, rows, r)
+        q[:] = qp + h2 * a
+        v[:] = vp + 0.5 * dt * a
+        energy = _energies(acc, 0.5 * np.dot(v, M @ v), 0.5 * np.dot(q, K @ q) - lin, phi,
+                           0.5 * np.dot(fext_old + fext, q - q_old),
+                           0.5 * dt * (np.dot(v_old, cdamp @ v_old) + np.dot(v, cdamp @ v)))
+        fext_old = fext
+        if not _finite(q, v, energy):
+            state[3, 0] = t
+            return NOT_FINITE, step
+        if not converged:
+            state[3, 0] = t
+            return NO_CONVERGENCE, step
+        if step % every == 0:
+            _store(outs, row, t, observe(q), gap, press, energy)
+            row += 1
+    state[3, 0] = t
+    return OK, n_steps
+
+
+def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0, code, params,
+                    patterns, sig, S, blocks, Z, G, tol, max_iter, out_t, out_s, out_g, out_p,
+                    out_e):
+    """Newmark on the modal system (M = I, diagonal damping and K_lin). Z and G are taken for
+    the signature only (see _newmark)."""
+    m, n = C.shape
+    fbuf = np.empty((len(blocks) - 1, n))
+
+    def remainder(q):
+        f, gap, press = np.empty(n), np.empty(m), np.empty(m)
+        energies = remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf)
+        return f, gap, press, energies
+
+    return _newmark(state, acc, n_steps, every, dt, np.eye(n), np.diag(omega2), np.diag(damp),
+                    C, (remainder, code, params, w, kt0), patterns, sig, lambda q: S @ q, tol,
+                    max_iter, (out_t, out_s, out_g, out_p, out_e))
+
+
+def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt0, code,
+                 params, patterns, sig, S, factor, Z, G, tol, max_iter, out_t, out_s, out_g,
+                 out_p, out_e):
+    """Newmark on the full model, K (K_lin), M, C and S CSR triplets, Rayleigh damping
+    alpha M + beta K. The iteration operator is formed and solved densely: factor, Z and G are
+    taken for the signature only."""
+    n, m = state.shape[1], len(g0)
+    Kd, Md = csr(K, n).toarray(), csr(M, n).toarray()
+    Cs, Sm = csr(C, n), csr(S, n)
+    cdamp = alpha * Md + beta * Kd
+
+    def remainder(q):
+        f, gap, press = np.empty(n), np.empty(m), np.empty(m)
+        energies = remainder_sparse(*C, g0, w, kt0, code, params, q, f, gap, press)
+        return f, gap, press, energies
+
+    return _newmark(state, acc, n_steps, every, dt, Md, Kd, cdamp, Cs.toarray(),
+                    (remainder, code, params, w, kt0), patterns, sig, lambda q: Sm @ q, tol,
+                    max_iter, (out_t, out_s, out_g, out_p, out_e))
