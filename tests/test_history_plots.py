@@ -8,8 +8,8 @@ from matplotlib.image import imread
 from transient.case.loading import load
 from transient.cli import main
 from transient.io.history import History
-from transient.plots.history import (amplitude_spectrum, contact_force, plane_frame,
-                                     pressure_panels, sample_step, transfer_function)
+from transient.plots.pressure import contact_force, plane_frame, pressure_panels
+from transient.plots.signals import amplitude_spectrum, sample_step, transfer_function
 from transient.run import run
 from transient.io.stored import open_history
 

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from transient.plots import compat as plots
+from transient.plots.views import gamma_triangles
 from transient.case.loading import load
 from transient.cli import main
 from transient.contact.pair import build_contact
@@ -87,7 +88,7 @@ def test_compatible_shapes_open_no_gap(pair):
 
 def test_gamma_triangulation_leaves_the_hole_open(pair):
     interface = pair.interface
-    tri = plots.gamma_triangles(interface, interface.fine)
+    tri = gamma_triangles(interface, interface.fine)
     q = interface.fine.points[:, :2]
     centroids = q[tri].mean(axis=1)
     # the hole (a polygon inscribed in the circle of radius 0.015 about the centre) stays

@@ -1,19 +1,24 @@
 """Pictures of a history (PNG): time histories, amplitude spectra, the transfer function between
 two sensors (the paper's figure 11) and contact pressure maps on Gamma (figure 10).
 
-The numbers drawn come from functions that draw nothing (`amplitude_spectrum`,
-`transfer_function`, `contact_force`, `plane_frame`, `pressure_panels`), so tests check them
-directly. Figures are matplotlib `Figure`s saved through the Agg canvas, with no pyplot state.
+This module holds the choice of the series to draw and the figures. The numbers drawn come from
+functions that draw nothing, so tests check them directly: `amplitude_spectrum` and
+`transfer_function` in `signals`, `contact_force`, `plane_frame` and `pressure_panels` in
+`pressure`. Figures are matplotlib `Figure`s saved through the Agg canvas, with no pyplot state.
 """
 import numpy as np
 
+from .pressure import plane_frame, pressure_panels
+from .signals import (MIN_SEGMENT, amplitude_spectrum, default_segment, sample_step,
+                      transfer_function)
+
+__all__ = ["MIN_SEGMENT", "select_series", "one_series", "history_figure", "spectrum_figure",
+           "frf_figure", "pressure_panels", "pressure_figure"]
+
 UNITS = {"sensors": "m", "energy": "J"}      # unit of the series of each group
-UNIFORM = 1e-6          # relative spread of the time differences still taken as one step
-MIN_SEGMENT = 16        # fewest samples of a Welch segment for a transfer function
 MIN_DB_SPAN = 20.0      # smallest range of the magnitude axis of a transfer function [dB]
 CONTOUR_POINTS = 100    # from this many contact points a map is filled contours, not markers
 LONG_EDGE = 4.0         # triangles with an edge this many times the median edge are not drawn
-FORCE_CHUNK = 4096      # rows of pressure read at a time for the total force
 CMAP = "viridis"        # sequential: pressure has one sign
 MARKER_AREA = 0.5       # marker area / point weight: markers of neighbours do not overlap
 
@@ -60,136 +65,6 @@ def one_series(stored, name, key):
         raise stored.error(key, f"no scalar series '{name}' (series: "
                            f"{', '.join(scalars) or 'none'})")
     return name
-
-
-def sample_step(stored, time):
-    """The sample step of the rows [s]: their time difference, checked to be uniform."""
-    if len(time) < 2:
-        raise stored.error("time", f"{len(time)} row(s): a spectrum needs a time series")
-    dt = np.diff(time)
-    step = float(np.median(dt))
-    if step <= 0 or np.max(np.abs(dt - step)) > UNIFORM * step:
-        raise stored.error("time", f"the rows are not evenly spaced (steps from {dt.min():.6g} "
-                           f"to {dt.max():.6g} s): spectra need a uniform sample step")
-    return step
-
-
-def amplitude_spectrum(x, dt):
-    """One-sided amplitude spectrum of a signal through a Hann window.
-
-    The mean is removed first: a static offset (the preload) would otherwise leak into the
-    lowest bins. A sine of amplitude a on a bin frequency reads a.
-
-    Parameters
-    ----------
-    x : (n,) array
-        Samples, any unit.
-    dt : float
-        Sample step [s].
-
-    Returns
-    -------
-    f : (n // 2 + 1,) array
-        Frequencies [Hz].
-    amplitude : (n // 2 + 1,) array
-        Amplitudes, the unit of x.
-    """
-    from scipy.signal import get_window
-    x = np.asarray(x, dtype=float)
-    w = get_window("hann", len(x))
-    amplitude = 2.0 * np.abs(np.fft.rfft((x - x.mean()) * w)) / w.sum()
-    amplitude[0] /= 2.0
-    if len(x) % 2 == 0:
-        amplitude[-1] /= 2.0
-    return np.fft.rfftfreq(len(x), dt), amplitude
-
-
-def default_segment(n):
-    """Welch segment length for n samples: the largest power of two up to n / 4 (so about seven
-    half-overlapping segments are averaged), at least MIN_SEGMENT."""
-    return max(MIN_SEGMENT, 2 ** int(np.floor(np.log2(max(n // 4, 1)))))
-
-
-def transfer_function(x, y, dt, segment):
-    """H1 estimate of the transfer function from x to y and its coherence (Welch averages).
-
-    H1 = P_xy / P_xx, coherence |P_xy|^2 / (P_xx P_yy), with Hann segments overlapping by half,
-    each with its mean removed.
-
-    Parameters
-    ----------
-    x, y : (n,) arrays
-        Input and output samples.
-    dt : float
-        Sample step [s].
-    segment : int
-        Samples per segment, at most n.
-
-    Returns
-    -------
-    f : array
-        Frequencies [Hz].
-    H : complex array
-        The unit of y per unit of x; NaN where x has no power.
-    coherence : array
-        Between 0 and 1; NaN where x or y has no power.
-    """
-    from scipy.signal import csd, welch
-    kw = {"fs": 1.0 / dt, "window": "hann", "nperseg": segment, "detrend": "constant"}
-    f, pxx = welch(x, **kw)
-    _, pyy = welch(y, **kw)
-    _, pxy = csd(x, y, **kw)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        H = np.where(pxx > 0, pxy / pxx, np.nan)
-        coherence = np.where((pxx > 0) & (pyy > 0), np.abs(pxy) ** 2 / (pxx * pyy), np.nan)
-    return f, H, coherence
-
-
-def contact_force(stored, pair):
-    """Total normal contact force sum_i w_i p_i [N] of a pair at every row."""
-    w = stored.geometry(f"contact/{pair}/weights")
-    force = np.zeros(stored.rows)
-    with stored.open() as f:
-        ds = f[f"contact/{pair}/pressure"]
-        for start in range(0, stored.rows, FORCE_CHUNK):
-            stop = min(start + FORCE_CHUNK, stored.rows)
-            force[start:stop] = ds[start:stop] @ w
-    return force
-
-
-def plane_frame(points, normals):
-    """Centre and in-plane axes of the best-fit plane of contact points, seen from surface 1.
-
-    The plane is the SVD's (its normal the direction of least spread), its normal n oriented
-    as the mean stored contact normal (surface 2 towards surface 1); with fewer than three
-    points off a line, the plane normal to the mean stored normal. The first axis is the global
-    axis most nearly in the plane, projected on it, so that the maps of different rules, runs
-    and meshes are drawn the same way round.
-
-    Parameters
-    ----------
-    points : (m, 3) array [m]
-    normals : (m, 3) array
-        Contact normals at the points.
-
-    Returns
-    -------
-    centre : (3,) array [m]
-    axes : (2, 3) array
-        In-plane unit vectors e1, e2 with e1 x e2 = n.
-    """
-    centre = points.mean(axis=0)
-    n_mean = normals.mean(axis=0)
-    _, s, vt = np.linalg.svd(points - centre, full_matrices=True)
-    if len(s) >= 2 and s[1] > 1e-9 * s[0]:
-        n = vt[2] if vt[2] @ n_mean >= 0 else -vt[2]
-    else:
-        n = n_mean / np.linalg.norm(n_mean)
-    # rounded: of two axes both in the plane up to round-off, x before y before z
-    e1 = np.eye(3)[np.argmin(np.round(np.abs(n), 9))]
-    e1 = e1 - (e1 @ n) * n
-    e1 /= np.linalg.norm(e1)
-    return centre, np.array([e1, np.cross(n, e1)])
 
 
 def _figure(width, height):
@@ -307,73 +182,6 @@ def frf_figure(stored, source, response, path, segment=None, fmax=None):
 def _unit_ratio(source, response):
     units = UNITS.get(source.split("/")[0], "-"), UNITS.get(response.split("/")[0], "-")
     return "" if units[0] == units[1] else f" {units[1]}/{units[0]}"
-
-
-def contact_pair(stored, pair):
-    """The pair to map (default the first stored), checked to have its pressures and points."""
-    stored_pairs = [name.split("/")[1] for name in stored.series
-                    if name.startswith("contact/") and name.endswith("/pressure")]
-    if not stored_pairs:
-        raise stored.error("contact", "no contact pressures stored: run with "
-                           "output.contact = true")
-    pair = pair or stored_pairs[0]
-    if pair not in stored_pairs:
-        raise stored.error("--pair", f"no contact pair '{pair}' stored (pairs: "
-                           f"{', '.join(stored_pairs)})")
-    if stored.geometry(f"contact/{pair}/points") is None:
-        raise stored.error(f"geometry/contact/{pair}/points", "no contact point positions: "
-                           "run with output.contact = true (this version stores them)")
-    return pair
-
-
-def rule_text(description):
-    """'fine rule', 'centre rule, regularized (eps = 1e-08)'... from a history's pairs entry."""
-    text = f"{description.get('rule', '?')} rule"
-    if description.get("regularized"):
-        eps = description.get("eps")
-        text += ", regularized" + (f" (eps = {eps:.2g})" if eps is not None else "")
-    return text
-
-
-def pressure_panels(histories, pair=None, time=None, labels=None):
-    """The data of the pressure maps: one panel per history, at one time.
-
-    Parameters
-    ----------
-    histories : list of stored.Stored
-    pair : str, optional
-        Contact pair (default the first of the first history).
-    time : float, optional
-        Time [s]: each panel shows its stored row nearest to it. Default: the time of the
-        largest total contact force of the first history.
-    labels : list of str, optional
-        Panel names (default the file names).
-
-    Returns
-    -------
-    list of dict
-        Each with points (m, 3) [m], normals (m, 3), weights (m,) [m^2], pressure (m,) [Pa],
-        time [s] and force [N] (the total) of the row shown, pair (its name), rule (a text
-        from the history's `pairs`) and label.
-    """
-    pair = contact_pair(histories[0], pair)
-    panels = []
-    for k, stored in enumerate(histories):
-        contact_pair(stored, pair)
-        t = stored.time()
-        force = contact_force(stored, pair)
-        if k == 0 and time is None:
-            time = float(t[np.argmax(force)])
-        row = int(np.argmin(np.abs(t - time)))
-        with stored.open() as f:
-            pressure = f[f"contact/{pair}/pressure"][row]
-        geometry = {key: stored.geometry(f"contact/{pair}/{key}")
-                    for key in ("points", "normals", "weights")}
-        panels.append({**geometry, "pressure": pressure, "time": float(t[row]),
-                       "force": float(force[row]), "pair": pair,
-                       "rule": rule_text(stored.pairs().get(pair, {})),
-                       "label": labels[k] if labels else stored.path.stem})
-    return panels
 
 
 def pressure_figure(panels, path):
