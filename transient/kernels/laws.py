@@ -12,7 +12,7 @@ bilateral: 1/2 k g^2).
 import numpy as np
 
 from ..jit import njit
-from .codes import BILATERAL, EXPONENTIAL, LINEAR
+from .codes import EXPONENTIAL, LINEAR
 
 
 @njit

@@ -16,8 +16,9 @@ import numpy as np
 
 from ..jit import njit_fast
 from .sparse import csr_abs_matvec, csr_matvec, factor_solve
-from .stepping import (NO_CONVERGENCE, NOT_FINITE, OK, _energies, _external, _finite, _store,
-                       _store_sparse, modal_step_energies, remainder_dense, remainder_sparse)
+from .codes import NO_CONVERGENCE, NOT_FINITE, OK
+from .stepping import (_energies, _external, _finite, _store, _store_sparse, modal_step_energies,
+                       remainder_dense, remainder_sparse)
 from .woodbury import active_rows, woodbury, woodbury_dense
 
 
