@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from transient.case.loading import load
-from transient.run import choose_dt, prepare, simulate
+from transient.stages import choose_dt, prepare, simulate
 
 from test_bench import CASES, SMALL
 

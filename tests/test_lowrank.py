@@ -47,7 +47,8 @@ def test_rows_of_low_rank_run_on_their_row_space():
     x = cs.solver(d)(b)
     direct = (K + 4.0 * M + C.T @ sp.diags(d) @ C).tocsc()
     assert np.allclose(x, spla.spsolve(direct, b), rtol=1e-9, atol=1e-12)
-    cols_, V, Rm, Z, R = cs.solver(d).on_columns
+    known = cs.solver(d).row_space
+    cols_, V, Rm, Z, R = known.cols, known.V, known.Rm, known.Z, known.R
     assert np.allclose(Rm @ V.T, dense[:, cols_])
     B = np.zeros((n, rho))
     B[cols_] = V

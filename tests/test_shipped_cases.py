@@ -98,7 +98,7 @@ def test_pad_disc_schemes_agree_below_5khz():
     # the exponential scheme at 8 times that step, with the corrector of pad_disc and with the
     # one-pass corrector of pad_disc_long
     from scipy.signal import butter, sosfiltfilt
-    from transient.run import choose_dt, prepare, simulate
+    from transient.stages import choose_dt, prepare, simulate
     long = load(CASES / "pad_disc_long.toml")
     base = ["loads.tap.signal.duration=4e-4", "output.contact=false"]
     cases = {scheme: load(CASES / "pad_disc.toml", base + [f"solver.scheme={scheme}"])

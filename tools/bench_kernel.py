@@ -45,14 +45,18 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
+import scipy.sparse as sp
 from scipy.integrate import solve_ivp
 
-from transient.kernels import newmark, stepping
-from transient.case.specs import LawSpec
-from transient.contact.laws import law_params
-from transient.dynamics.schemes import exponential_coefficients
-from transient.dynamics.chunks import threaded_blocks
 from transient.case.signals import compile_signals
+from transient.case.specs import LawSpec, NewtonSpec
+from transient.contact.contactset import ContactSet
+from transient.contact.laws import law_params
+from transient.dynamics import schemes
+from transient.dynamics.chunks import threaded_blocks
+from transient.dynamics.state import Rows, State
+from transient.dynamics.system import ReducedSystem
+from transient.kernels.codes import OK
 
 LAW = LawSpec("exponential", p0=1e4, lam=5e5, p_lin=1e9)
 PRELOAD = 1e6          # [Pa]
@@ -83,7 +87,7 @@ class System:
     P: np.ndarray          # (1, n) the preload's load pattern, on a constant signal
     sig: tuple
     S: np.ndarray          # (SENSORS, n) rows of C: outputs are gap changes
-    state: np.ndarray      # (5, n) initial state, as run.Problem.state
+    state: np.ndarray      # (5, n) initial state, in the layout of dynamics.state.State
 
 
 def contact_system(freqs, m, swing, seed):
@@ -93,7 +97,7 @@ def contact_system(freqs, m, swing, seed):
     n = len(freqs)
     omega = 2 * np.pi * np.asarray(freqs, float)
     code, law = law_params(LAW, 0.0)
-    lam = LAW["lambda"]
+    lam = LAW.lam
     w = np.full(m, AREA / m)
     kt0 = np.full(m, lam * PRELOAD)
     # Marchenko-Pastur: the Gram matrix of the Gaussian rows stays below (1 + sqrt(n/m))^2
@@ -101,7 +105,7 @@ def contact_system(freqs, m, swing, seed):
     C = np.ascontiguousarray(rng.standard_normal((m, n)) * scale)
     v0 = rng.standard_normal(n) * np.sqrt(omega[0] / omega)
     v0 *= swing / lam / np.sqrt(np.mean(((C * (v0 / omega)) ** 2).sum(axis=1)))
-    s = System(omega ** 2, 2 * ZETA * omega, C, np.full(m, -np.log(PRELOAD / LAW["p0"]) / lam),
+    s = System(omega ** 2, 2 * ZETA * omega, C, np.full(m, -np.log(PRELOAD / LAW.p0) / lam),
                w, kt0, np.full(m, code, np.int64), np.tile(law, (m, 1)),
                np.ascontiguousarray(-(C.T @ (w * PRELOAD))[None, :]),
                compile_signals([{"kind": "constant"}]),
@@ -124,35 +128,35 @@ def remainder(s, q):
     return s.C.T @ (s.w * (p + s.kt0 * d))
 
 
+def reduced(s):
+    """The synthetic system as the dynamics stage holds a reduced one."""
+    contacts = ContactSet(sp.csr_matrix(s.C), s.g0, s.w, s.code, s.params,
+                          {"bench": slice(0, len(s.g0))})
+    return ReducedSystem(contacts, s.kt0, s.P, s.sig, s.S, (), 0, None, omega2=s.omega2,
+                         damp=s.damp, C=s.C)
+
+
 def stepper(s, scheme, dt, blocks, corrections=0, propagate=False):
     """run(n_steps, every) integrating from the initial state -> (status, steps done, sensor
     outputs, kernel seconds); scheme: explicit, newmark or exponential (with its corrections
-    and corrector, as solver.corrections and solver.corrector = propagated)."""
-    common = (s.C, s.g0, s.w, s.kt0, s.code, s.params, s.P, s.sig, s.S, blocks)
+    and corrector, as solver.corrections and solver.corrector = propagated). The steppers are
+    those of `transient run` (dynamics.schemes)."""
+    system = reduced(s)
     if scheme == "explicit":
-        kernel, head = stepping.explicit_reduced, (s.omega2, s.damp)
+        step = schemes.explicit(system, dt, blocks)
     elif scheme == "newmark":
-        # as run.scheme_kernel: the diagonal iteration operator, Z = S^-1 C^T and G = C Z
-        op = 1.0 + 0.5 * dt * s.damp + 0.25 * dt * dt * s.omega2
-        Z = np.ascontiguousarray(s.C.T / op[:, None])
-        kernel, head = newmark.newmark_reduced, (s.damp, s.omega2)
-        common += (Z, s.C @ Z, NEWTON_TOL, MAX_ITER)
+        step = schemes.implicit(system, dt, NewtonSpec(NEWTON_TOL, MAX_ITER), blocks=blocks)
     else:
-        kernel = stepping.exponential_reduced
-        head = (exponential_coefficients(s.omega2, s.damp, dt), s.damp, s.omega2)
+        step = schemes.exponential(system, dt, corrections,
+                                   "propagated" if propagate else "evaluated", None, blocks)
 
     def run(n_steps, every):
-        state = s.state.copy()
-        rows = n_steps // every
-        out = (np.zeros(rows), np.zeros((rows, len(s.S))), np.zeros((rows, 0)),
-               np.zeros((rows, 0)), np.zeros((rows, 5)))
-        # the arguments a call updates: explicit's smallest gaps, exponential's previous forces
-        tail = {"explicit": (s.g0.copy(),), "newmark": (),
-                "exponential": (corrections, propagate, state[4])}[scheme]
-        args = head + common + tail
+        # the smallest gaps (explicit) and the previous forces (exponential) start afresh
+        state = State(s.state.copy(), np.zeros(2), s.g0.copy())
+        out = Rows.empty(n_steps // every, len(s.S), 0)
         t0 = time.perf_counter()
-        status, done = kernel(state, np.zeros(2), n_steps, every, dt, *args, *out)
-        return status, done, out[1], time.perf_counter() - t0
+        status, done = step(state, n_steps, every, out)
+        return status, done, out.sensors, time.perf_counter() - t0
     return run
 
 
@@ -184,7 +188,7 @@ def kernel_step(run, threads):
     def timer(steps):
         with numba_threads(threads):
             status, done, _, seconds = run(steps, steps)
-        if status != stepping.OK or done != steps:
+        if status != OK or done != steps:
             raise RuntimeError(f"kernel stopped with status {status} after {done} steps")
         return seconds / steps
     return timer
@@ -358,7 +362,7 @@ def accuracy(freqs=ACCURACY_FREQS, m=200, t_end=0.02, dt_out=1e-4, ref_k=200,
                 plan(s, dt_out, N, rtols, exp_ks, newmark_ks, explicit_factors)]
     return {"n": len(freqs), "m": m, "t_end": N * dt_out, "dt_out": dt_out,
             "reference": {"dt": dt_out / (2 * ref_k), "self_error": rel_error(coarse, ref),
-                          "swing_lambda": float(LAW["lambda"] * np.abs(ref).max())},
+                          "swing_lambda": float(LAW.lam * np.abs(ref).max())},
             "runs": runs, "time_to": {f"{t:g}": time_to(runs, t) for t in THRESHOLDS},
             "load_average": os.getloadavg()[0], "openblas_num_threads": BLAS_THREADS}
 

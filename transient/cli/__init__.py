@@ -1,4 +1,5 @@
-"""Command line: `transient SUBCOMMAND ...` (parser.py builds the arguments, commands.py runs them)."""
+"""Command line: `transient SUBCOMMAND ...`; parser.py builds the arguments, commands.py and
+plotting.py run them."""
 from .commands import main
 
 __all__ = ["main"]

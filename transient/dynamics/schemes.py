@@ -9,11 +9,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
-import scipy.sparse as sp
 
 from ..errors import CaseError
-from ..kernels import newmark, stepping
-from ..solve.linsolve import FactorizationError, factorize, triangular_factors
+from ..kernels import exponential as exponential_kernels, newmark, stepping
+from .state import Rows
+from ..solve.linsolve import (FactorizationError, csr_triplet, factorize,
+                              triangular_factors)
 
 MAX_WOODBURY_BYTES = 2e9   # the implicit schemes keep S^-1 C^T (or D C^T) dense
 
@@ -41,11 +42,6 @@ def _contact(system):
         system.contacts.code, system.contacts.params
 
 
-def _csr(A):
-    A = sp.csr_matrix(A)
-    return (A.indptr.astype(np.int64), A.indices.astype(np.int64), A.data.astype(np.float64))
-
-
 def explicit(system, dt, blocks=None):
     """Central differences (velocity Verlet); the state's gmin follows the smallest gaps."""
     if system.reduced:
@@ -57,8 +53,9 @@ def explicit(system, dt, blocks=None):
             return stepping.explicit_reduced(state.array, state.acc, n_steps, every, dt, *args,
                                              blocks, state.gmin, *rows.arrays)
     else:
-        args = (_csr(system.K), system.mass, system.alpha, system.beta, _csr(system.C),
-                *_contact(system), system.patterns, system.signals, _csr(system.sensors))
+        args = (csr_triplet(system.K), system.mass, system.alpha, system.beta,
+                csr_triplet(system.C),
+                *_contact(system), system.patterns, system.signals, csr_triplet(system.sensors))
 
         def advance(state, n_steps, every, rows, blocks):
             return stepping.explicit_full(state.array, state.acc, n_steps, every, dt, *args,
@@ -67,7 +64,7 @@ def explicit(system, dt, blocks=None):
 
 
 def implicit(system, dt, newton, linear_solver="auto", blocks=None):
-    """Newmark average acceleration, Newton with the exact contact tangent (newton: NewtonSpec).
+    """Newmark average acceleration, Newton with the exact contact tangent (NewtonSpec).
     The reduced iteration operator is diagonal; the full one is factorized here."""
     if system.reduced:
         blocks = single_block(system.n_points) if blocks is None else blocks
@@ -85,8 +82,9 @@ def implicit(system, dt, newton, linear_solver="auto", blocks=None):
         t0 = time.perf_counter()
         factors, Z, G, meta = _newmark_operator(system, dt, linear_solver)
         stages = {"iteration_operator": time.perf_counter() - t0}
-        args = (_csr(system.K), _csr(system.M), system.alpha, system.beta, _csr(system.C),
-                *_contact(system), system.patterns, system.signals, _csr(system.sensors),
+        args = (csr_triplet(system.K), csr_triplet(system.M), system.alpha, system.beta,
+                csr_triplet(system.C),
+                *_contact(system), system.patterns, system.signals, csr_triplet(system.sensors),
                 factors, Z, G, newton.tolerance, newton.max_iter)
 
         def advance(state, n_steps, every, rows, blocks):
@@ -111,7 +109,7 @@ def _newmark_operator(system, dt, linear_solver):
     except FactorizationError as exc:
         raise CaseError("", "solver", f"Newmark's iteration operator: {exc}") from None
     factors = (p_in, L, U, p_out)
-    Z = newmark.factor_columns(factors, _csr(system.C), n)
+    Z = newmark.factor_columns(factors, csr_triplet(system.C), n)
     meta = {"iteration_operator": {"backend": backend,
                                    "factor_nonzeros": int(len(L[2]) + len(U[2]))}}
     return factors, Z, np.ascontiguousarray(system.C @ Z), meta
@@ -137,10 +135,10 @@ def exponential(system, dt, corrections, corrector, newton, blocks=None):
         # the end state moves by D = diag(G1x) per unit end force: Z = D C^T, G = C Z
         Z = np.ascontiguousarray(coef[:, 6:7] * system.C.T)
         tail = (Z, system.C @ Z, newton.max_iter)
-        kernel = stepping.exponential_implicit
+        kernel = exponential_kernels.exponential_implicit
     else:
         tail = (corrections, corrector == "propagated")
-        kernel = stepping.exponential_reduced
+        kernel = exponential_kernels.exponential_reduced
 
     def advance(state, n_steps, every, rows, blocks):
         return kernel(state.array, state.acc, n_steps, every, dt, *head, blocks, *tail,
@@ -149,7 +147,7 @@ def exponential(system, dt, corrections, corrector, newton, blocks=None):
 
 
 def stepper(system, solver, dt, blocks=None):
-    """The Stepper of a solver spec's scheme at step dt."""
+    """The Stepper of a solver spec's scheme (one of SCHEMES) at step dt."""
     if solver.scheme == "explicit":
         return explicit(system, dt, blocks)
     if solver.scheme == "implicit":
@@ -174,13 +172,12 @@ def exponential_coefficients(omega2, damp, dt):
     return out
 
 
-def initial_acceleration(system, state, M=None):
-    """a(0), the forces at t = 0 and the initial row (energies included), from the forces at
-    the initial state: an explicit step of length 0. M: a consistent mass of the full model
-    to redo a(0) with (the explicit step divides by the lumped one)."""
-    from .state import Rows
+def initial_acceleration(system, state, store_contact, M=None):
+    """a(0), the forces at t = 0 and the initial row (energies included, contact if stored),
+    from the forces at the initial state: an explicit step of length 0. M: a consistent mass
+    of the full model to redo a(0) with (the explicit step divides by the lumped one)."""
     trial = state.copy()
-    rows = Rows.empty(1, system.sensors.shape[0], system.n_points)
+    rows = Rows.empty(1, system.sensors.shape[0], system.n_points if store_contact else 0)
     explicit(system, 0.0)(trial, 1, 1, rows)
     state.a[:] = trial.a
     if system.reduced:
@@ -190,3 +187,6 @@ def initial_acceleration(system, state, M=None):
         force = system.mass * (state.a + system.alpha * state.v)
         state.a[:] = factorize(M)(force) - system.alpha * state.v
     return rows
+
+
+SCHEMES = {"explicit": explicit, "implicit": implicit, "exponential": exponential}

@@ -120,9 +120,9 @@ def _field_series(stored):
     if meta.get("reduced"):
         T = stored.geometry("field/basis")
         if T is None:
-            # a history from before the basis was stored: rebuild it (as long as the setup)
-            from ..run import prepare
-            T = prepare(case).T
+            # a rebuilt basis would repeat the setup, and need not be the one integrated
+            raise stored.error("geometry/field/basis", "the history keeps no basis of its "
+                               "reduced model (written by an older version): run again")
         T = np.asarray(T, dtype=float)
         columns = T.shape[1]
 

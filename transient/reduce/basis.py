@@ -125,13 +125,12 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
     basis E V of the rows' space it already solved for (Cc = Rm V^T; rho < k columns for a
     regularized rule)."""
     n, k = C.shape[1], len(cols)
-    known = getattr(solve, "on_columns", None)
-    if known is not None and np.array_equal(known[0], cols) and len(known[2]) == C.shape[0]:
+    known = getattr(solve, "row_space", None)
+    if known is not None and np.array_equal(known.cols, cols) and len(known.Rm) == C.shape[0]:
         # the solver, built on these contact rows (lowrank.ContactSolver), has K^-1 E V = Z R
         # already, V a basis of the rows' space, and the rows in it, Cc = Rm: no solves here,
         # no n x k array
-        _, V, Cc, Z, R = known
-        R = R()
+        V, Cc, Z, R = known.V, known.Rm, known.Z, known.R()
         H = (V.T @ Z[cols]) @ R
 
         def response(Y):

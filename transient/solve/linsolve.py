@@ -156,18 +156,21 @@ def triangular_factors(A, backend="auto"):
             raise FactorizationError(f"matrix not positive definite: {exc}") from None
         L = factor.L().tocsr()
         P = factor.P()
-        return (P.astype(np.int64), _triplet(L), _triplet(L.T), np.argsort(P).astype(np.int64),
+        return (P.astype(np.int64), csr_triplet(L), csr_triplet(L.T),
+                np.argsort(P).astype(np.int64),
                 "cholmod")
     try:
         lu = spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                        options=dict(SymmetricMode=True))
     except RuntimeError as exc:
         raise FactorizationError(f"SuperLU failed: {exc}") from None
-    return (np.argsort(lu.perm_r).astype(np.int64), _triplet(lu.L), _triplet(lu.U),
+    return (np.argsort(lu.perm_r).astype(np.int64), csr_triplet(lu.L), csr_triplet(lu.U),
             lu.perm_c.astype(np.int64), "superlu")
 
 
-def _triplet(A):
+def csr_triplet(A):
+    """(indptr, indices, data) of A in CSR with sorted indices: what the kernels take."""
     A = sp.csr_matrix(A)
-    A.sort_indices()
+    if not A.has_sorted_indices:
+        A = A.sorted_indices()
     return A.indptr.astype(np.int64), A.indices.astype(np.int64), A.data.astype(np.float64)

@@ -8,6 +8,8 @@ identity needs only A0 = K - sigma M factorized once, Z = A0^-1 C^T (m solves) a
 
 so a new tangent D costs an m x m factorization, and a solve one sparse solve plus O(n m).
 """
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
@@ -17,6 +19,29 @@ from .linsolve import factorize
 MAX_BYTES = 1.5e9     # Z = A0^-1 C^T dense; beyond this, factorize A0 + C^T D C directly
 BLOCK = 256           # right-hand sides per solve when forming Z (bounds the solver's copies)
 ROW_SPACE_TOL = 1e-12
+
+
+@dataclass(frozen=True)
+class RowSpace:
+    """What a tangent solve on a rich rule's row space already holds: the dofs the rows touch
+    (cols), an orthonormal basis V of the rows' space there, the rows in it (Rm, C E = Rm V^T),
+    Z = A0^-1 E V, and R() such that the tangent's responses to the loads E V are Z R."""
+    cols: np.ndarray
+    V: np.ndarray
+    Rm: np.ndarray
+    Z: np.ndarray
+    R: object
+
+
+@dataclass(frozen=True)
+class TangentSolve:
+    """x = (A0 + C^T diag(d) C)^-1 b for b (n,) or (n, k), by calling it."""
+    solve: object
+    backend: str
+    row_space: RowSpace = None     # set when Woodbury ran on the rows' space
+
+    def __call__(self, b):
+        return self.solve(b)
 
 
 class ContactSolver:
@@ -63,10 +88,11 @@ class ContactSolver:
         """solve(b) for (A0 + C^T diag(d) C) x = b; b (n,) or (n, k)."""
         d = np.asarray(d, float)
         if self.C.shape[0] == 0 or not np.any(d):
-            return self.solve0
+            return TangentSolve(self.solve0, getattr(self.solve0, "backend", "?"))
         if not self.lowrank:
             A = (self.A0 + self.C.T @ sp.diags(d) @ self.C).tocsr()
-            return factorize(A, self.backend, definite=False)
+            solve = factorize(A, self.backend, definite=False)
+            return TangentSolve(solve, getattr(solve, "backend", "?"))
         Z, solve0 = self.Z, self.solve0
         if self.by_columns:
             core = self.Rm.T @ (d[:, None] * self.Rm)
@@ -79,8 +105,8 @@ class ContactSolver:
             # the responses to the loads B = E V without solving again:
             # (A0 + B core B^T)^-1 B = Z R, R = I - (I + core G)^-1 core G; with the solver's
             # rows in that basis, C = Rm B^T
-            solve.on_columns = (cols, V, self.Rm, Z, lambda: np.eye(len(core))
-                                - sla.lu_solve(lu, core @ self.G))
+            known = RowSpace(cols, V, self.Rm, Z,
+                             lambda: np.eye(len(core)) - sla.lu_solve(lu, core @ self.G))
         else:
             lu = sla.lu_factor(np.eye(len(d)) + d[:, None] * self.G)
             C = self.C
@@ -89,8 +115,8 @@ class ContactSolver:
                 y = solve0(b)
                 Cy = C @ y
                 return y - Z @ sla.lu_solve(lu, d[:, None] * Cy if Cy.ndim == 2 else d * Cy)
-        solve.backend = getattr(self.solve0, "backend", "?") + "+woodbury"
-        return solve
+            known = None
+        return TangentSolve(solve, getattr(self.solve0, "backend", "?") + "+woodbury", known)
 
 
 def row_space(Cc, tol=ROW_SPACE_TOL):

@@ -27,7 +27,7 @@ import scipy.sparse.linalg as spla
 from ..case.checks import check_transient
 from ..case.loading import load
 from ..errors import CaseError
-from ..run import choose_dt, prepare, simulate
+from ..stages import choose_dt, prepare, simulate
 
 N_FREQUENCIES = 30
 COLUMNS = ("rule", "label", "regularized", "eps", "points", "kept", "reduced_dofs", "steps",

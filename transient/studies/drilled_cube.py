@@ -30,7 +30,10 @@ def _reference_overrides(case):
 
 
 def _literal(value):
-    return f'"{value}"' if isinstance(value, str) else repr(value)
+    """A TOML literal of a spec value (strings quoted, tuples as arrays)."""
+    if isinstance(value, str):
+        return f'"{value}"'
+    return repr(list(value)) if isinstance(value, tuple) else repr(value)
 
 
 def fine_side_displacement(case_path, overrides=()):

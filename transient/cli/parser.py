@@ -1,0 +1,125 @@
+"""The command line's arguments: one subparser per command, `plot` with one per picture."""
+import argparse
+
+from .. import __version__
+
+
+def _case_args(p):
+    p.add_argument("case", help="case file (TOML)")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a case value with a TOML literal, e.g. "
+                   "parts.upper.mesh.divisions=[3,3,3] (repeatable)")
+
+
+def build_parser():
+    parser = argparse.ArgumentParser(prog="transient", description="Long transient vibrations "
+                                     "of elastic solids in contact across non-conforming meshes.")
+    parser.add_argument("--version", action="version", version=f"transient {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("modes", help="normal modes of the case's model")
+    _case_args(p)
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p = sub.add_parser("run", help="transient: preload, then time integration to solver.t_end, "
+                       "streamed to an HDF5 history")
+    _case_args(p)
+    p.add_argument("-o", "--output", help="HDF5 file (default: output.file, or the case's "
+                   "name with .h5)")
+    p.add_argument("--resume", action="store_true", help="continue the run stored in the "
+                   "output file from its last checkpoint (after an abort, or to a later t_end)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--json", action="store_true", help="print a JSON summary")
+    p = sub.add_parser("info", help="summary of an HDF5 history")
+    p.add_argument("file", help="HDF5 file written by transient run")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p = sub.add_parser("compat", help="compatibility of a contact interface: fine rule, "
+                       "singular values of the gap energy, C(eps)")
+    _case_args(p)
+    p.add_argument("--pair", help="contact pair to report (default: the first)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p = sub.add_parser("bench", help="error against run time for a sweep of contact rules: "
+                       "fine (reference), fine regularized at each eps, centre, centre "
+                       "regularized, greedy at several m, sampled at several tolerances")
+    _case_args(p)
+    p.add_argument("--pair", help="contact pair to sweep (default: the first)")
+    p.add_argument("--eps", default="1e-6,1e-4,1e-3,1e-2", help="eps of the regularized fine "
+                   "rule, comma separated (default 1e-6,1e-4,1e-3,1e-2)")
+    p.add_argument("--points", help="greedy m, comma separated, 0 the rank of the kept shapes "
+                   "(default: the greedy rule's own count r, then r/2, r/4, 4r, 10r below "
+                   "the fine rule's count)")
+    p.add_argument("--tolerances", default="3e-2,1e-2,3e-3", help="sampling tolerances of "
+                   "the sampled rule, regularized at the case's eps, comma separated (default "
+                   "3e-2,1e-2,3e-3; empty for none)")
+    p.add_argument("--t-end", type=float, help="simulated time [s] (default: the case's)")
+    p.add_argument("--out", metavar="DIR", help="directory of bench.csv, bench.json and "
+                   "bench.png (default: <case name>_bench next to the case)")
+    p.add_argument("--json", action="store_true", help="print the rows as JSON")
+    _plot_parser(sub)
+    p = sub.add_parser("export", help="a history as time series for ParaView: the contact "
+                       "points of each pair (gap, pressure) and, if output.field was stored, "
+                       "the displacement on the mesh")
+    p.add_argument("file", help="HDF5 file written by transient run")
+    p.add_argument("--out", metavar="DIR", help="directory of the files (default: next to the "
+                   "history, <name>_export)")
+    p.add_argument("--format", choices=("xdmf", "vtu"), default="xdmf", help="xdmf: one "
+                   ".xdmf (+ .h5) per series; vtu: one .vtu per row and a .pvd collection "
+                   "(default xdmf)")
+    p.add_argument("--every", type=int, default=1, metavar="K", help="export one stored row "
+                   "in K, and the last one (default 1)")
+    p.epilog = ("The displacement field rebuilds the model's mesh from the case text kept in "
+                "the history; a reduced run stores its basis with the state (output.field).")
+    return parser
+
+
+def _plot_parser(sub):
+    """`transient plot KIND ...`: one sub-subcommand per kind of picture."""
+    kinds = sub.add_parser("plot", help="pictures (PNG) of a case or a history").add_subparsers(
+        dest="kind", required=True)
+    p = kinds.add_parser("compat", help="compatibility of each contact pair: shapes, singular "
+                         "values and C(eps), raw and regularized gap observation")
+    _case_args(p)
+    p.add_argument("--out", required=True, metavar="DIR", help="directory of the PNG files")
+    p.add_argument("--pair", metavar="NAME", help="only this contact pair")
+    p.add_argument("--shapes", metavar="I,J,...", help="shape numbers to draw, from 1 by "
+                   "increasing incompatibility (default: the first, the last kept, two beyond)")
+    series = ("scalar series to draw: full names (sensors/tip, energy/kinetic) or groups "
+              "(sensors, energy); default: every sensor")
+    p = kinds.add_parser("history", help="time histories of a history's sensors (or energy "
+                         "terms), time in ms")
+    _history_args(p, "history")
+    p.add_argument("--series", nargs="+", metavar="NAME", help=series)
+    p = kinds.add_parser("spectrum", help="amplitude spectra (Hann window, one-sided, log "
+                         "amplitude) of a history's sensors, frequency in kHz")
+    _history_args(p, "spectrum")
+    p.add_argument("--series", nargs="+", metavar="NAME", help=series)
+    p.add_argument("--fmax", type=float, metavar="HZ", help="highest frequency drawn [Hz] "
+                   "(default: half the sample rate)")
+    p = kinds.add_parser("frf", help="transfer function between two series of a history: "
+                         "H1 = Pxy / Pxx from Welch averages, magnitude, phase and coherence")
+    _history_args(p, "frf")
+    p.add_argument("--input", required=True, metavar="NAME", help="input series, e.g. "
+                   "sensors/tip")
+    p.add_argument("--output", required=True, metavar="NAME", help="output series, e.g. "
+                   "sensors/tail")
+    p.add_argument("--segment", type=int, metavar="SAMPLES", help="samples per Welch segment "
+                   "(default: the largest power of two up to a quarter of the rows)")
+    p.add_argument("--fmax", type=float, metavar="HZ", help="highest frequency drawn [Hz] "
+                   "(default: half the sample rate)")
+    p = kinds.add_parser("pressure", help="contact pressure maps on Gamma, one panel per "
+                         "history side by side with one colour scale (e.g. fine, centre and "
+                         "regularized rules)")
+    p.add_argument("file", nargs="+", help="HDF5 files written by transient run with "
+                   "output.contact = true")
+    p.add_argument("--pair", metavar="NAME", help="contact pair (default: the first stored)")
+    p.add_argument("--time", type=float, metavar="T", help="time [s]: each panel shows its "
+                   "stored row nearest to it (default: the time of the largest total contact "
+                   "force in the first file)")
+    p.add_argument("--labels", nargs="+", metavar="TEXT", help="one title per file (default: "
+                   "the file names)")
+    p.add_argument("-o", "--png", metavar="PNG", help="picture to write (default: next to "
+                   "the first file, <name>_pressure.png)")
+
+
+def _history_args(p, kind):
+    p.add_argument("file", help="HDF5 file written by transient run")
+    p.add_argument("-o", "--png", metavar="PNG", help="picture to write (default: next to "
+                   f"the history, <name>_{kind}.png)")
