@@ -1,12 +1,24 @@
 """The compile lock: exclusive across processes, reentrant within one, taken only to compile."""
+import os
 import subprocess
 import sys
-import time
 
 from transient import jit
 
-CHILD = ("import time; from transient.jit import compile_lock; t = time.perf_counter(); "
-         "lock = compile_lock(); lock.__enter__(); print(time.perf_counter() - t)")
+# the child says where it is at each step, so the test waits on what it says, not on time
+CHILD = """
+import fcntl
+from transient import jit
+print("ready", flush=True)
+with open(jit.lock_path(), "a") as f:
+    try:
+        fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        print("free", flush=True)
+    except BlockingIOError:
+        print("busy", flush=True)
+with jit.compile_lock():
+    print("acquired", flush=True)
+"""
 
 
 def test_lock_is_exclusive_across_processes_and_reentrant(tmp_path, monkeypatch):
@@ -14,10 +26,12 @@ def test_lock_is_exclusive_across_processes_and_reentrant(tmp_path, monkeypatch)
     with jit.compile_lock():
         with jit.compile_lock():              # a kernel compiling the kernels it calls
             child = subprocess.Popen([sys.executable, "-c", CHILD], stdout=subprocess.PIPE,
-                                     text=True, env={**__import__("os").environ})
-            time.sleep(1.0)
-    waited = float(child.communicate(timeout=60)[0])
-    assert waited > 0.5
+                                     text=True, env=dict(os.environ))
+            assert child.stdout.readline().strip() == "ready"
+            assert child.stdout.readline().strip() == "busy"
+    # released by the outer block only: the child, blocked until now, takes it
+    assert child.stdout.readline().strip() == "acquired"
+    assert child.wait(timeout=60) == 0
     assert (tmp_path / ".compile.lock").exists()
 
 

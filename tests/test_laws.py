@@ -3,8 +3,8 @@ and p = -dPhi/dg, k_t = -dp/dg, continuous through the linear continuation."""
 import numpy as np
 import pytest
 
-from transient.kernels.laws import (BILATERAL, EXPONENTIAL, LINEAR, potential, pressure,
-                                    pressure_potential)
+from transient.kernels.codes import BILATERAL, EXPONENTIAL, LINEAR
+from transient.kernels.laws import potential, pressure, pressure_potential
 
 PARAMS = {EXPONENTIAL: np.array([1e4, 5e5, -np.log(1e9 / 1e4) / 5e5, 0.0]),
           LINEAR: np.array([5e11, 0, 0, 0.0]), BILATERAL: np.array([5e11, 0, 0, 0.0])}
