@@ -301,7 +301,7 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
                   params, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_e):
     """Central differences with a lumped mass: alpha M implicit at the end of the step, beta K
     on the half-step velocity. The dissipation is the trapezoid of the damping power
-    v . (alpha M v + beta K v_half) at the steps' ends (v_half = v at the start)."""
+    v . (alpha M v + beta K v_half) at the steps' ends, carried between calls in acc[2]."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
     n, m = len(q), len(g0)
@@ -309,7 +309,7 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
     f, gap, press = np.empty(n), np.empty(m), np.empty(m)
     outs = (out_t, out_s, out_g, out_p, out_e)
     fext_old = external(t, patterns, sig)
-    power_old = np.dot(alpha * mass * v + beta * (Km @ v), v)
+    power_old = acc[2]                  # the damping power the last call ended with
     row = 0
     for step in range(1, n_steps + 1):
         v_half = v + 0.5 * dt * a
@@ -327,7 +327,7 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
         power = np.dot(alpha * mass * v + beta * kv, v)     # v . the damping force
         energy = _energies(acc, 0.5 * np.dot(mass * v, v), 0.5 * np.dot(q, ku) - lin, phi,
                            0.5 * np.dot(fext_old + fext, dq), 0.5 * dt * (power_old + power))
-        power_old = power
+        power_old = acc[2] = power
         fext_old = fext
         if not _finite(q, v, energy):
             state[3, 0] = t
@@ -341,15 +341,23 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
 
 # ----------------------------------------------------------------------------- exponential
 
+def _finish(state, t, f0, fstart, omega2, damp):
+    """The exponential twins' end of a call: the time, the start forces handed on, and the
+    acceleration they give."""
+    state[3, 0] = t
+    fstart[:] = f0
+    state[2] = f0 - omega2 * state[0] - damp * state[1]
+
+
 def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
                         code, params, patterns, sig, S, blocks, corrections, propagate_last,
-                        fprev, out_t, out_s, out_g, out_p, out_e):
+                        fprev, fstart, out_t, out_s, out_g, out_p, out_e):
     """Exact modal propagation under forces linear over the step. The end forces are first
     extrapolated from the step's start and fprev (the previous step's start), then evaluated
     1 + corrections times, each at the state propagated with the last ones; if
     propagate_last, a final propagation with the last forces ends the step (the gaps,
-    pressures and contact energy stay those of the last evaluation). The start forces are
-    evaluated once per call, at the state given."""
+    pressures and contact energy stay those of the last evaluation). The start forces come
+    in fstart and go out there for the next call; the acceleration left is theirs."""
     q, v = state[0], state[1]
     t = state[3, 0]
     m, n = C.shape
@@ -357,8 +365,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     fbuf = np.empty((len(blocks) - 1, n))
     outs = (out_t, out_s, out_g, out_p, out_e)
     fext0 = external(t, patterns, sig)
-    remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks, fbuf)
-    f0 = fext0 + rem
+    f0 = fstart.copy()
     row = 0
     for step in range(1, n_steps + 1):
         q0, v0 = q.copy(), v.copy()
@@ -376,17 +383,17 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
         fprev[:] = f0
         f0, fext0 = f1, fext
         if not _finite(q, v, energy):
-            state[3, 0] = t
+            _finish(state, t, f0, fstart, omega2, damp)
             return NOT_FINITE, step
         if step % every == 0:
             _store(outs, row, t, S @ q, gap, press, energy)
             row += 1
-    state[3, 0] = t
+    _finish(state, t, f0, fstart, omega2, damp)
     return OK, n_steps
 
 
 def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
-                         code, params, patterns, sig, S, blocks, Z, G, max_iter, fprev,
+                         code, params, patterns, sig, S, blocks, Z, G, max_iter, fprev, fstart,
                          out_t, out_s, out_g, out_p, out_e):
     """The exponential step with the end forces implicit: q = qb + D (fext + remainder(q)),
     D = diag(G1x), solved by Newton from the extrapolated forces' end state, with
@@ -403,8 +410,7 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
     D = coef[:, 6]
     Gd = (C * C) @ D
     fext0 = external(t, patterns, sig)
-    remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks, fbuf)
-    f0 = fext0 + rem
+    f0 = fstart.copy()
     row = 0
     for step in range(1, n_steps + 1):
         q0, v0 = q.copy(), v.copy()
@@ -430,15 +436,15 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
         fprev[:] = f0
         f0, fext0 = f1, fext
         if not _finite(q, v, energy):
-            state[3, 0] = t
+            _finish(state, t, f0, fstart, omega2, damp)
             return NOT_FINITE, step
         if not converged:
-            state[3, 0] = t
+            _finish(state, t, f0, fstart, omega2, damp)
             return NO_CONVERGENCE, step
         if step % every == 0:
             _store(outs, row, t, S @ q, gap, press, energy)
             row += 1
-    state[3, 0] = t
+    _finish(state, t, f0, fstart, omega2, damp)
     return OK, n_steps
 
 

@@ -87,7 +87,7 @@ class System:
     P: np.ndarray          # (1, n) the preload's load pattern, on a constant signal
     sig: tuple
     S: np.ndarray          # (SENSORS, n) rows of C: outputs are gap changes
-    state: np.ndarray      # (5, n) initial state, in the layout of dynamics.state.State
+    state: np.ndarray      # (6, n) initial state, in the layout of dynamics.state.State
 
 
 def contact_system(freqs, m, swing, seed):
@@ -110,11 +110,11 @@ def contact_system(freqs, m, swing, seed):
                np.ascontiguousarray(-(C.T @ (w * PRELOAD))[None, :]),
                compile_signals([{"kind": "constant"}]),
                np.ascontiguousarray(C[np.linspace(0, m - 1, SENSORS).astype(int)]), None)
-    s.state = np.zeros((5, n))
+    s.state = np.zeros((6, n))
     s.state[1] = v0
     forces = s.P[0] + remainder(s, s.state[0])
     s.state[2] = forces - s.damp * v0
-    s.state[4] = forces
+    s.state[4] = s.state[5] = forces
     return s
 
 
@@ -152,7 +152,7 @@ def stepper(s, scheme, dt, blocks, corrections=0, propagate=False):
 
     def run(n_steps, every):
         # the smallest gaps (explicit) and the previous forces (exponential) start afresh
-        state = State(s.state.copy(), np.zeros(2), s.g0.copy())
+        state = State(s.state.copy(), np.zeros(3), s.g0.copy())
         out = Rows.empty(n_steps // every, len(s.S), 0)
         t0 = time.perf_counter()
         status, done = step(state, n_steps, every, out)

@@ -142,7 +142,7 @@ def exponential(system, dt, corrections, corrector, newton, blocks=None):
 
     def advance(state, n_steps, every, rows, blocks):
         return kernel(state.array, state.acc, n_steps, every, dt, *head, blocks, *tail,
-                      state.forces, *rows.arrays)
+                      state.forces, state.start, *rows.arrays)
     return Stepper("exponential", dt, advance, blocks)
 
 
@@ -180,9 +180,11 @@ def initial_acceleration(system, state, store_contact, M=None):
     rows = Rows.empty(1, system.sensors.shape[0], system.n_points if store_contact else 0)
     explicit(system, 0.0)(trial, 1, 1, rows)
     state.a[:] = trial.a
+    state.acc[2] = trial.acc[2]          # explicit_full's damping power at t = 0
     if system.reduced:
         # the forces at t = 0: the first extrapolation then takes them constant
         state.forces[:] = trial.a + system.omega2 * trial.q + system.damp * trial.v
+        state.start[:] = state.forces
     elif M is not None:
         force = system.mass * (state.a + system.alpha * state.v)
         state.a[:] = factorize(M)(force) - system.alpha * state.v

@@ -1,8 +1,9 @@
 """What the kernels update in place, under names: the integrated state and a chunk's output rows.
 
-The kernels take the state as one (5, n) array (q, v, a, the time in [3, 0], and the forces at
-the start of the previous step in [4], which the exponential predictor extrapolates from) and
-the outputs as five arrays; only this module and the scheme factories know that layout.
+The kernels take the state as one (6, n) array (q, v, a, the time in [3, 0], and the forces at
+the start of the previous step in [4] and of the next step in [5], which the exponential
+scheme carries between chunks) and the outputs as five arrays; only this module and the scheme
+factories know that layout.
 """
 from dataclasses import dataclass
 
@@ -10,27 +11,29 @@ import numpy as np
 
 from ..kernels.codes import ENERGY_TERMS
 
-Q, V, A, TIME, FORCES = range(5)
+Q, V, A, TIME, FORCES, START = range(6)
 
 
 class State:
     """The state of a system between chunks: displacement, velocity, acceleration and time,
-    the previous forces, the external work and dissipated energy so far, and the smallest gap
-    each contact point has reached (the critical step is rechecked against it)."""
+    the forces at the start of the previous and of the next step, the external work and
+    dissipated energy so far (and a damping power carried by explicit_full), and the smallest
+    gap each contact point has reached (the critical step is rechecked against it)."""
 
     def __init__(self, array, acc, gmin):
-        self.array = array          # (5, n), the kernels' layout
-        self.acc = acc              # (2,) external work, dissipated energy [J]
+        self.array = array          # (6, n), the kernels' layout
+        self.acc = acc              # (3,) external work, dissipated energy [J], power [W]
         self.gmin = gmin            # (m,) [m]
 
     @classmethod
     def zeros(cls, n, m):
-        return cls(np.zeros((5, n)), np.zeros(2), np.zeros(m))
+        return cls(np.zeros((6, n)), np.zeros(3), np.zeros(m))
 
     q = property(lambda self: self.array[Q])
     v = property(lambda self: self.array[V])
     a = property(lambda self: self.array[A])
     forces = property(lambda self: self.array[FORCES])
+    start = property(lambda self: self.array[START])
 
     @property
     def time(self):

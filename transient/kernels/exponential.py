@@ -23,9 +23,20 @@ def _propagate(coef, q0, v0, f0, f1, q, v):
 
 
 @njit_fast
+def _finish(state, t, f0, fstart, omega2, damp):
+    """A chunk's end: the time, the forces at the start of the next step (carried, so that a
+    run cut into chunks is the same run), and the acceleration they give."""
+    state[3, 0] = t
+    q, v, a = state[0], state[1], state[2]
+    for k in range(q.shape[0]):
+        fstart[k] = f0[k]
+        a[k] = f0[k] - omega2[k] * q[k] - damp[k] * v[k]
+
+
+@njit_fast
 def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
                         code, params, patterns, sig, S, blocks, corrections, propagate, fprev,
-                        out_t, out_s, out_g, out_p, out_e):
+                        fstart, out_t, out_s, out_g, out_p, out_e):
     """Exponential integrator on the reduced system: each mode's linear part (K_lin, damping)
     is propagated exactly over a step, the forces F = patterns s(t) + remainder(q) taken linear
     in time between the step's ends (first-order hold).
@@ -34,7 +45,8 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     to F0 and to the ramp F1 - F0, [G0x, G0v, G1x, G1v], in columns 4-7
     (dynamics.schemes.exponential_coefficients).
     A predictor extrapolates F linearly from the previous step (fprev (n,): F at the start of
-    the previous step, carried between chunks); F at the end point is evaluated at the
+    the previous step, and fstart (n,): F at the start of the next one, both carried between
+    chunks, so that where a run is cut changes nothing); F at the end point is evaluated at the
     predicted state, then `corrections` times more at the state propagated with it (one
     contact pass per evaluation). The step ends at the last state evaluated, or, if
     `propagate`, at a last propagation from the forces evaluated there (PEC for corrections = 0:
@@ -42,7 +54,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     explicit force update is not: 11% energy drift on the bar impact, against 0.2% for PECE).
     With propagate, the gaps, pressures and contact energy stored are those of the last
     evaluation, a local error away from the final state. state, acc and outputs as in
-    explicit_reduced."""
+    explicit_reduced; the acceleration left in the state is that of the forces carried."""
     q, v = state[0], state[1]
     t = state[3, 0]
     n = q.shape[0]
@@ -60,9 +72,8 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     energy = np.empty(5)
     fext0 = np.empty(n)
     _external(t, patterns, sig, svals, fext0)
-    phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks, fbuf)
     for k in range(n):
-        f0[k] = fext0[k] + rem[k]
+        f0[k] = fstart[k]
     row = 0
     for step in range(1, n_steps + 1):
         for k in range(n):
@@ -86,18 +97,18 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
             f0[k] = f1[k]
             fext0[k] = fext[k]
         if not (_finite(q) and _finite(v) and _finite(energy)):
-            state[3, 0] = t
+            _finish(state, t, f0, fstart, omega2, damp)
             return NOT_FINITE, step
         if step % every == 0:
             _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
             row += 1
-    state[3, 0] = t
+    _finish(state, t, f0, fstart, omega2, damp)
     return OK, n_steps
 
 
 @njit_fast
 def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
-                         code, params, patterns, sig, S, blocks, Z, G, max_iter, fprev,
+                         code, params, patterns, sig, S, blocks, Z, G, max_iter, fprev, fstart,
                          out_t, out_s, out_g, out_p, out_e):
     """The exponential integrator with the forces at the step's end taken implicitly.
 
@@ -136,9 +147,8 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
     fbuf = np.empty((blocks.shape[0] - 1, n))
     energy = np.empty(5)
     _external(t, patterns, sig, svals, fext0)
-    phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks, fbuf)
     for k in range(n):
-        f0[k] = fext0[k] + rem[k]
+        f0[k] = fstart[k]
     row = 0
     for step in range(1, n_steps + 1):
         for k in range(n):
@@ -182,13 +192,13 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
             f0[k] = f1[k]
             fext0[k] = fext[k]
         if not (_finite(q) and _finite(v) and _finite(energy)):
-            state[3, 0] = t
+            _finish(state, t, f0, fstart, omega2, damp)
             return NOT_FINITE, step
         if not converged:
-            state[3, 0] = t
+            _finish(state, t, f0, fstart, omega2, damp)
             return NO_CONVERGENCE, step
         if step % every == 0:
             _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
             row += 1
-    state[3, 0] = t
+    _finish(state, t, f0, fstart, omega2, damp)
     return OK, n_steps

@@ -144,8 +144,9 @@ def _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e):
 def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0, code,
                      params, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p, out_e):
     """Central differences (velocity Verlet) on the reduced system, diagonal damping taken
-    implicitly in the half step. state (4, n): q, v, a, and state[3, 0] the time.
-    acc (2,): external work and dissipated energy so far; gmin (m,): smallest gap of each
+    implicitly in the half step. state (6, n): q, v, a, state[3, 0] the time, and the forces
+    the exponential kernels carry (dynamics.state). acc (3,): external work and dissipated
+    energy so far, and a damping power explicit_full carries; gmin (m,): smallest gap of each
     point so far (the critical step is rechecked against it). Returns (status, steps done)."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
@@ -227,7 +228,7 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
     """Central differences on the free dofs of the full model: K = (indptr, indices, data) of
     K_lin (CSR), lumped mass (n,), Rayleigh damping alpha M (implicit in the half step) and
     beta K (on the half-step velocity); C and S dense-free CSR triplets. Same state and outputs
-    as explicit_reduced."""
+    as explicit_reduced; acc[2] carries the damping power at the end of the last step."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
     n = q.shape[0]
@@ -245,10 +246,9 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
     press = np.empty(m)
     energy = np.empty(5)
     _external(t, patterns, sig, svals, fext_old)
-    csr_matvec(Kp, Ki, Kd, v, kv)
-    power_old = 0.0
-    for k in range(n):
-        power_old += alpha * mass[k] * v[k] * v[k] + beta * v[k] * kv[k]
+    # the damping power at the end of the last step, carried (it takes K at the half-step
+    # velocity, which a chunk's start does not have)
+    power_old = acc[2]
     row = 0
     for step in range(1, n_steps + 1):
         for k in range(n):
@@ -283,6 +283,7 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
                 power += beta * vn * kv[k]
         _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
         power_old = power
+        acc[2] = power
         if not (_finite(q) and _finite(v) and _finite(energy)):
             state[3, 0] = t
             return NOT_FINITE, step
