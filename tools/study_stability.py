@@ -285,7 +285,8 @@ def inspect(path):
 
         def visit(name, obj):
             if isinstance(obj, h5py.Dataset) and not name.startswith(("checkpoint/",
-                                                                       "geometry/")):
+                                                                       "geometry/",
+                                                                       "system/")):
                 if obj.shape[0] != rows:
                     ragged.append(f"{name}: {obj.shape[0]} rows, attribute rows = {rows}")
         f.visititems(visit)

@@ -14,10 +14,12 @@ import numpy as np
 
 from . import __version__
 from .case.checks import check_transient
-from .dynamics.chunks import buffer, chunks, fastest_blocks
+from .dynamics.chunks import buffer, chunks, fastest_threads, threaded_blocks
 from .dynamics.energy import Balance
-from .errors import CaseError, RunAborted
-from .io.history import CASE_TEXT, History, load_checkpoint, stored_dt
+from .errors import RunAborted
+from .io.history import CASE_TEXT, History
+from .io.lock import writing
+from .io.resume import resumed
 from .io.series import layout, series
 from .kernels.codes import NO_CONVERGENCE, NOT_FINITE
 from .stages import choose_dt, prepare, stepper
@@ -37,47 +39,83 @@ class RunResult:
     meta: dict = None         # what prepare reports: contact points of each pair, reduced dofs
 
 
-def run(case, path, resume=False, progress=None):
-    """Integrate a case to solver.t_end, streaming to the HDF5 file at path.
+@dataclass
+class _Start:
+    """Where the run loop starts: a new run after its setup, or a resumed one."""
+    system: object
+    state: object
+    step: int
+    dt: float
+    scheme: object
+    history: History
+    balance: Balance
+    stages: dict
+    meta: dict
 
-    Returns a RunResult; a run that stops early (NaN, energy drift, Ctrl-C) keeps every chunk
-    in the file, marked `aborted: <reason>`, and its status says so.
+
+def run(case, path, resume=False, progress=None, key="output.file"):
+    """Integrate a case to solver.t_end, streaming to the HDF5 file at path (named by key in
+    errors: '-o' or output.file).
+
+    The output is checked and held (io.lock) before the first stage; a resumed run continues
+    the system stored in the history. Returns a RunResult; a run that stops early (NaN,
+    energy drift, Ctrl-C) keeps every chunk in the file, marked `aborted: <reason>`.
     """
     check_transient(case)
-    solver, output = case.solver, case.output
     t_start = time.perf_counter()
+    with writing(path, key, resume):
+        start = _resume(case, path) if resume else _new(case, path)
+        return _loop(case, path, start, progress, t_start)
+
+
+def _new(case, path):
     setup = prepare(case)
-    system, stages = setup.system, dict(setup.stages)
-    try:
-        saved = load_checkpoint(path) if resume else None
-        dt = choose_dt(case, setup, stored_dt(path) if resume else None)
-    except (ValueError, KeyError, OSError) as exc:
-        raise CaseError(path, "", f"--resume: {exc}") from None
+    system, output = setup.system, case.output
+    dt = choose_dt(case, setup)
+    n_total = int(round(case.solver.t_end / dt))
+    scheme = stepper(case, system, dt)
+    if system.reduced:
+        scheme = _threaded(replace(scheme, blocks=threaded_blocks(system.n_points)), system,
+                           setup.state)
+    stages = {**setup.stages, **scheme.stages}
+    meta = {CASE_TEXT: case.text, "case_path": str(Path(case.path).resolve()),
+            "overrides": list(case.overrides), "version": __version__, "dt": dt,
+            "dt_critical": system.critical.dt, "scheme": case.solver.scheme,
+            "reduced": system.reduced, "steps_planned": n_total, "every": output.every,
+            "stages": stages, **setup.meta, **scheme.meta}
+    history = History.create(path, meta, layout(system, output), overwrite=True,
+                             expected_rows=n_total // output.every + 1,
+                             geometry=setup.geometry, system=system)
+    history.append(series(system, output, setup.rows0))
+    return _Start(system, setup.state.copy(), 0, dt, scheme, history,
+                  Balance(setup.rows0.energy[0]), stages, setup.meta)
+
+
+def _resume(case, path):
+    t0 = time.perf_counter()
+    r = resumed(path, case)
+    scheme = stepper(case, r.system, r.dt, np.asarray(r.blocks, np.int64) if r.system.reduced
+                     else None)
+    if r.system.reduced:
+        scheme = _threaded(scheme, r.system, r.state)
+    history = History.open_for_resume(path)
+    stages = {"resume": time.perf_counter() - t0, **scheme.stages}
+    return _Start(r.system, r.state, r.step, r.dt, scheme, history, Balance.restore(r.balance),
+                  stages, r.meta)
+
+
+def _threaded(scheme, system, state):
+    return replace(scheme, threads=fastest_threads(scheme, state, system.sensors.shape[0],
+                                                   system.n_points))
+
+
+def _loop(case, path, start, progress, t_start):
+    solver, output, system, state = case.solver, case.output, start.system, start.state
+    history, balance, scheme, dt = start.history, start.balance, start.scheme, start.dt
     every = output.every
     chunk = max(every, solver.chunk // every * every)
     n_total = int(round(solver.t_end / dt))
-    state = setup.state.copy()
-    scheme = stepper(case, setup, dt)
-    if system.reduced:
-        blocks = saved["blocks"] if resume else fastest_blocks(
-            scheme, state, system.sensors.shape[0], system.n_points)
-        scheme = replace(scheme, blocks=np.asarray(blocks, np.int64))
-    stages.update(scheme.stages)
-    meta = {CASE_TEXT: case.text, "case_path": str(Path(case.path).resolve()),
-            "overrides": list(case.overrides), "version": __version__, "dt": dt,
-            "dt_critical": system.critical.dt, "scheme": solver.scheme,
-            "reduced": system.reduced, "steps_planned": n_total, "every": every,
-            "stages": stages, **setup.meta, **scheme.meta}
-    step = 0
-    if resume:
-        history = History.open_for_resume(path)
-        state.restore(saved)
-        step = int(saved["step"][0])
-    else:
-        history = History.create(path, meta, layout(system, output), overwrite=True,
-                                 expected_rows=n_total // every + 1, geometry=setup.geometry)
-        history.append(series(system, output, setup.rows0))
-    balance = Balance(setup.rows0.energy[0])
+    step, t_stored = start.step, state.time
     status, t_kernel = "complete", 0.0
     bar = _progress_bar(progress, n_total, step)
     out = buffer(system, chunk // every, output.contact)
@@ -85,16 +123,17 @@ def run(case, path, resume=False, progress=None):
         try:
             for c in chunks(scheme, state, n_total, chunk, every, out, step):
                 t_kernel += c.seconds
-                step = c.step
                 if len(c.rows.time):
                     history.append(series(system, output, c.rows))
                     balance.update(c.rows.energy)
+                    t_stored = float(c.rows.time[-1])
+                step = c.step
                 if c.status == NOT_FINITE:
                     raise RunAborted(f"state not finite after t = {state.time:.6g} s (the "
                                      "last finite row kept)")
                 history.checkpoint({**state.arrays(), "step": np.array([step]),
                                     "blocks": scheme.blocks if system.reduced
-                                    else np.zeros(0)})
+                                    else np.zeros(0), "balance": balance.arrays()})
                 bar.update(c.done)
                 _check(case, system, state, dt, balance, c.status)
         except RunAborted as exc:
@@ -103,10 +142,11 @@ def run(case, path, resume=False, progress=None):
             status = "aborted: interrupted"
         finally:
             bar.close()
-        timings = _timings(stages, t_kernel, t_start)
+        timings = _timings(start.stages, t_kernel, t_start)
         history.finish(status, timings)
-    return RunResult(str(path), status, step, state.time, dt, system.critical.dt, stages,
-                     timings, balance.drift, setup.meta)
+    # what the history holds: its last row, and the steps its checkpoint reached
+    return RunResult(str(path), status, step, t_stored, dt, system.critical.dt, start.stages,
+                     timings, balance.drift, start.meta)
 
 
 def _check(case, system, state, dt, balance, status):

@@ -158,9 +158,10 @@ def choose_dt(case, setup, stored=None):
     return dt
 
 
-def stepper(case, setup, dt, blocks=None):
+def stepper(case, system, dt, blocks=None):
+    """The case's scheme on a system at step dt; its refusals name the case file."""
     try:
-        return schemes.stepper(setup.system, case.solver, dt, blocks)
+        return schemes.stepper(system, case.solver, dt, blocks)
     except CaseError as exc:
         raise CaseError(case.path, exc.key, exc.message) from None
 
@@ -176,7 +177,7 @@ def simulate(case, setup, dt, n_steps, every=1):
     state = setup.state.copy()
     out = buffer(setup.system, n_steps // every, case.output.contact)
     t0 = time.perf_counter()
-    status, done = stepper(case, setup, dt)(state, n_steps, every, out)
+    status, done = stepper(case, setup.system, dt)(state, n_steps, every, out)
     seconds = time.perf_counter() - t0
     rows = [np.concatenate([first[:1], x[:done // every]])
             for first, x in zip(setup.rows0.arrays, out.arrays)]

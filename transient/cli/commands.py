@@ -137,10 +137,9 @@ def cmd_run(args):
     case = load(args.case, args.overrides)
     path = Path(args.output) if args.output else case.directory / (
         case.output.file or Path(case.path).with_suffix(".h5").name)
-    if args.resume and not path.exists():
-        raise CaseError(path, "", "--resume: no history file to resume")
     quiet = args.quiet or args.json or os.environ.get("CI") or not sys.stderr.isatty()
-    result = run(case, path, resume=args.resume, progress=not quiet)
+    result = run(case, path, resume=args.resume, progress=not quiet,
+                 key="-o" if args.output else "output.file")
     if args.json:
         print(json.dumps({"file": result.path, "status": result.status, "steps": result.steps,
                           "t_end": result.t_end, "dt": result.dt,

@@ -11,7 +11,6 @@ import numba
 import numpy as np
 
 from ..kernels.codes import NOT_FINITE, OK
-from .schemes import single_block
 from .state import Rows
 
 
@@ -55,29 +54,25 @@ def chunks(stepper, state, n_total, chunk, every, out, step=0):
 
 
 def threaded_blocks(m):
-    """Row blocks of the contact pass, one per Numba thread."""
+    """Row blocks of the contact pass, one per Numba thread (a single one below 128 points)."""
     nb = max(1, min(numba.get_num_threads(), m // 64 or 1))
     return np.linspace(0, m, nb + 1).astype(np.int64)
 
 
-def fastest_blocks(stepper, state, n_sensors, m, steps=20):
-    """Row blocks of the contact pass: one per thread or a single one, whichever runs faster
-    here and now (threads stall when the machine's cores are busy). The choice fixes the
-    summation order, so a resumed run reuses it."""
-    candidates = [single_block(m)]
-    threaded = threaded_blocks(m)
-    if len(threaded) > 2:
-        candidates.append(threaded)
-    if len(candidates) == 1:
-        return candidates[0]
-    times = []
-    for blocks in candidates:
-        trial = replace(stepper, blocks=blocks)
+def fastest_threads(stepper, state, n_sensors, m, steps=20):
+    """The Numba thread count that runs the stepper's blocks fastest here and now: one, or
+    all (threads stall when the machine's cores are busy). Both run the same blocks, so the
+    choice changes the speed only, never the numbers."""
+    if len(stepper.blocks) <= 2:
+        return 1
+    times = {}
+    for threads in (1, numba.get_num_threads()):
+        trial = replace(stepper, threads=threads)
         best = np.inf
         for _ in range(2):       # the first call may compile
             out = Rows.empty(steps, n_sensors, m)
             t0 = time.perf_counter()
             trial(state.copy(), steps, 1, out)
             best = min(best, time.perf_counter() - t0)
-        times.append(best)
-    return candidates[int(np.argmin(times))]
+        times[threads] = best
+    return min(times, key=times.get)

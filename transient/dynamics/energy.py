@@ -26,10 +26,20 @@ def mechanical(energy):
 class Balance:
     """The drift of a run so far, updated chunk by chunk from its first row's energies."""
 
-    def __init__(self, initial, peak=0.0, drift=0.0):
+    def __init__(self, initial):
         self.e0 = float(total(initial))
-        self.peak = max(float(mechanical(initial)), peak, 1e-300)
-        self.drift = drift
+        self.peak = max(float(mechanical(initial)), 1e-300)
+        self.drift = 0.0
+
+    def arrays(self):
+        """(E(0), peak, drift), as a checkpoint keeps them."""
+        return np.array([self.e0, self.peak, self.drift])
+
+    @classmethod
+    def restore(cls, saved):
+        balance = cls.__new__(cls)
+        balance.e0, balance.peak, balance.drift = (float(x) for x in saved)
+        return balance
 
     def update(self, energy):
         """Add the rows (r, 5) of a chunk; returns the drift so far."""

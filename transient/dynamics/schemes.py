@@ -7,6 +7,7 @@ A Stepper advances a State by a chunk of steps into output Rows, in place, and r
 import time
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 import scipy.linalg as sla
 
@@ -27,10 +28,18 @@ class Stepper:
     blocks: np.ndarray = None    # row blocks of the reduced contact pass (summation order)
     stages: dict = field(default_factory=dict)   # setup it timed, name -> seconds
     meta: dict = field(default_factory=dict)
+    threads: int = 0             # Numba threads running the blocks (0: as set); no arithmetic
 
     def __call__(self, state, n_steps, every, rows):
         """Advance state by n_steps, storing one row in `every` into rows."""
-        return self.advance(state, n_steps, every, rows, self.blocks)
+        if not self.threads:
+            return self.advance(state, n_steps, every, rows, self.blocks)
+        before = numba.get_num_threads()
+        numba.set_num_threads(self.threads)
+        try:
+            return self.advance(state, n_steps, every, rows, self.blocks)
+        finally:
+            numba.set_num_threads(before)
 
 
 def single_block(m):

@@ -32,6 +32,7 @@ CHUNK_BYTES = 2 ** 20      # ~1 MB chunks: fast sequential reads of long series
 CASE_TEXT = "case"         # root attribute holding the case file as written
 CHECKPOINT = "checkpoint"
 GEOMETRY = "geometry"      # fixed arrays written once (contact points, weights, normals)
+SYSTEM = "system"          # the system integrated (io.systems)
 _BOOKKEEPING = ("status", "rows", "json_attrs")
 
 
@@ -53,7 +54,8 @@ class History:
         self.closed = False
 
     @classmethod
-    def create(cls, path, meta, layout, overwrite=False, expected_rows=None, geometry=None):
+    def create(cls, path, meta, layout, overwrite=False, expected_rows=None, geometry=None,
+               system=None):
         """Create a history file with empty series and status 'running'.
 
         Parameters
@@ -70,12 +72,15 @@ class History:
         geometry : dict, optional
             Name -> array stored once under /geometry (not a series), e.g. the positions of
             the contact points, which maps of the contact series need.
+        system : ReducedSystem or FullSystem, optional
+            The system the run integrates, kept under /system so that a resume continues it
+            (io.systems).
         """
         path = Path(path)
         if path.exists() and not overwrite:
             raise ValueError(f"{path}: file exists (pass overwrite=True to replace it)")
         shapes = {name: tuple(int(n) for n in shape) for name, shape in layout.items()}
-        for reserved in (CHECKPOINT, GEOMETRY):
+        for reserved in (CHECKPOINT, GEOMETRY, SYSTEM):
             if reserved in shapes or any(n.startswith(reserved + "/") for n in shapes):
                 raise ValueError(f"series name '{reserved}' is reserved")
         with _open(path, "w") as f:
@@ -87,6 +92,9 @@ class History:
                                  chunks=(rows,) + tuple(max(n, 1) for n in shape), dtype="f8")
             for name, value in (geometry or {}).items():
                 f.create_dataset(f"{GEOMETRY}/{name}", data=np.asarray(value))
+            if system is not None:
+                from .systems import write_system
+                write_system(f, system)
             _write_attrs(f.attrs, meta)
             f.attrs["status"] = "running"
             f.attrs["rows"] = 0
@@ -220,7 +228,8 @@ def _series_shapes(f):
 
     def visit(name, obj):
         if isinstance(obj, h5py.Dataset) and not name.startswith((CHECKPOINT + "/",
-                                                                   GEOMETRY + "/")):
+                                                                   GEOMETRY + "/",
+                                                                   SYSTEM + "/")):
             shapes[name] = obj.shape[1:]
 
     f.visititems(visit)
@@ -286,12 +295,6 @@ def load_checkpoint(path):
         if group.attrs["rows"] < 0:
             raise ValueError(f"{path}: the checkpoint was interrupted while being written")
         return {name: group[name][()] for name in group}
-
-
-def stored_dt(path):
-    """The time step a history was run with (to resume it)."""
-    with _open(path, "r") as f:
-        return float(f.attrs["dt"])
 
 
 def summary(path):

@@ -55,29 +55,37 @@ def _remainder_rows(C, g0, w, kt0, code, params, q, fb, gap, press, start, stop)
 def remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf):
     """f = C^T [w (p(g) + k_t* (g - g0))] in one pass over the rows of C (m, n).
 
-    Rows are split in blocks, one per thread, each adding into its own row of fbuf; a single
-    block runs serially, off the thread pool (whose wake-up costs more than small passes, and
-    stalls when the cores are busy). Also fills gap and press (m,). Returns (contact
-    potential, 1/2 sum w k_t* (g - g0)^2).
+    Rows are split in blocks, each adding into its own row of fbuf, then summed in block
+    order: the arithmetic is set by the blocks alone, whether the blocks run on one thread or
+    several (Numba's thread count at the call), so that choice may be taken from a timing. A
+    single block runs serially, off the thread pool, and nothing outside the block loop is an
+    array expression (Numba would make it a parallel loop that wakes the pool on every pass).
+    Also fills gap and press (m,). Returns (contact potential, 1/2 sum w k_t* (g - g0)^2).
     """
     m, n = C.shape
     nb = blocks.shape[0] - 1
     if nb == 1:
-        f[:] = 0.0
+        for j in range(n):
+            f[j] = 0.0
         return _remainder_rows(C, g0, w, kt0, code, params, q, f, gap, press, 0, m)
-    phi = np.zeros(nb)
-    lin = np.zeros(nb)
+    parts = np.empty((nb, 2))
     for b in numba.prange(nb):
         fb = fbuf[b]
-        fb[:] = 0.0
-        phi[b], lin[b] = _remainder_rows(C, g0, w, kt0, code, params, q, fb, gap, press,
-                                         blocks[b], blocks[b + 1])
+        for j in range(n):
+            fb[j] = 0.0
+        parts[b, 0], parts[b, 1] = _remainder_rows(C, g0, w, kt0, code, params, q, fb, gap,
+                                                   press, blocks[b], blocks[b + 1])
+    phi = 0.0
+    lin = 0.0
+    for b in range(nb):
+        phi += parts[b, 0]
+        lin += parts[b, 1]
     for j in range(n):
         acc = 0.0
         for b in range(nb):
             acc += fbuf[b, j]
         f[j] = acc
-    return phi.sum(), lin.sum()
+    return phi, lin
 
 
 @njit_fast

@@ -107,6 +107,10 @@ class _Pardiso:
         self.iparm[1] = 2      # METIS nested dissection ordering
         self.iparm[9] = 8 if mtype == 2 else 13   # pivot perturbation 1e-8 / 1e-13
         self.iparm[34] = 1     # zero-based indices
+        # conditional numerical reproducibility on MKL's threads: the same factors and solves
+        # run after run, whatever the load (a preload or a basis must not move in its last
+        # bits from one run to the next)
+        self.iparm[33] = max(1, int(self._lib.mkl_get_max_threads()))
         self._call(12, np.zeros(self.n), np.zeros(self.n))
 
     def _call(self, phase, b, x):

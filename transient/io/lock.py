@@ -1,0 +1,65 @@
+"""One writer per history: a run holds an exclusive lock on its history file from before its
+first stage to its last row, so that a second run writing the same file is refused at once
+instead of interleaving its rows. The lock is flock(2) on the file itself: advisory, released
+by the kernel when the process dies (SIGKILL included), and never taken by readers, which open
+the file without locks while it is written.
+
+Taking it also checks the output before any expensive stage: a path that cannot be written, a
+directory, or a file that is not a history of this package (a case file, a device) is a
+one-line error, and nothing is overwritten."""
+import fcntl
+from contextlib import contextmanager
+from pathlib import Path
+
+import h5py
+
+from ..errors import CaseError
+from .history import CASE_TEXT
+
+
+def is_history(path):
+    """The file at path is an HDF5 history written by this package."""
+    try:
+        if not h5py.is_hdf5(path):
+            return False
+        with h5py.File(path, "r", locking=False) as f:
+            return "rows" in f.attrs and CASE_TEXT in f.attrs
+    except OSError:
+        return False
+
+
+@contextmanager
+def writing(path, key, resume=False):
+    """Hold the history file at path for a run (key: what names it, '-o' or 'output.file').
+
+    Raises CaseError when it cannot be written, is not a history (or, to resume, does not
+    exist), or another run holds it. A file this created is removed if the block fails before
+    anything was written to it.
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise CaseError(path, key, "is a directory: expected a history file (.h5)")
+    existed = path.exists() and path.stat().st_size > 0
+    if resume and not existed:
+        raise CaseError(path, key, "--resume: no history file to resume")
+    if existed and not is_history(path):
+        raise CaseError(path, key, "exists and is not a history written by transient: not "
+                        "overwritten (choose another output file)")
+    try:
+        handle = open(path, "ab")
+    except OSError as exc:
+        raise CaseError(path, key, f"cannot write: {exc.strerror or exc}") from None
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        handle.close()
+        raise CaseError(path, key, "another run is writing this history") from None
+    done = False
+    try:
+        yield path
+        done = True
+    finally:
+        if not done and not existed and path.exists() and path.stat().st_size == 0:
+            path.unlink()
+        fcntl.flock(handle, fcntl.LOCK_UN)
+        handle.close()

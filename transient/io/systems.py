@@ -1,0 +1,100 @@
+"""The system a run integrates, stored in its history (`/system`) and read back: a resumed run
+continues the very system it checkpointed, bit for bit, without redoing the setup (whose
+factorizations and eigensolvers need not give the same last bits under another load or
+thread count).
+
+Every field of the frozen system is kept but the reduced basis T (ndof x n, the largest by
+far; the history keeps it under /geometry when the field is stored): arrays as datasets,
+sparse matrices and the contact set and critical step as groups, numbers and names as
+attributes.
+"""
+import json
+from dataclasses import fields
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..contact.contactset import ContactSet
+from ..dynamics.critical import CriticalStep
+from ..dynamics.system import FullSystem, ReducedSystem
+from .history import SYSTEM as GROUP
+
+SKIPPED = ("T",)
+
+
+def write_system(f, system):
+    """Store system (ReducedSystem or FullSystem) under /system of the open HDF5 file f."""
+    g = f.create_group(GROUP)
+    g.attrs["kind"] = "reduced" if system.reduced else "full"
+    for field in fields(system):
+        if field.name not in SKIPPED:
+            _write(g, field.name, getattr(system, field.name))
+
+
+def read_system(f):
+    """The system stored by write_system in the open HDF5 file f."""
+    g = f[GROUP]
+    cls = ReducedSystem if g.attrs["kind"] == "reduced" else FullSystem
+    values = {}
+    for field in fields(cls):
+        if field.name not in SKIPPED:
+            values[field.name] = _read(g, field.name)
+    # the critical step evaluates the laws of the system's own contact set
+    crit = values["critical"]
+    values["critical"] = CriticalStep(crit["dt"], crit["kt_checked"], crit["rows"],
+                                      values["contacts"])
+    return cls(**values)
+
+
+def _write(g, name, value):
+    if value is None:
+        g.attrs[name] = "null"
+    elif isinstance(value, np.ndarray):
+        g.create_dataset(name, data=value)
+    elif sp.issparse(value):
+        s = g.create_group(name)
+        s.attrs["type"], s.attrs["shape"] = "csr", value.shape
+        A = sp.csr_matrix(value)
+        for part in ("indptr", "indices", "data"):
+            s.create_dataset(part, data=getattr(A, part))
+    elif isinstance(value, ContactSet):
+        s = g.create_group(name)
+        s.attrs["type"] = "contacts"
+        s.attrs["slices"] = json.dumps({k: [v.start, v.stop] for k, v in value.slices.items()})
+        for part in ("gap0", "weights", "code", "params"):
+            s.create_dataset(part, data=getattr(value, part))
+        _write(s, "C", value.C)
+    elif isinstance(value, CriticalStep):
+        s = g.create_group(name)
+        s.attrs["type"], s.attrs["dt"] = "critical", value.dt
+        s.create_dataset("kt_checked", data=value.kt_checked)
+        s.create_dataset("rows", data=value.rows)
+    elif isinstance(value, tuple) and all(isinstance(v, np.ndarray) for v in value):
+        s = g.create_group(name)
+        s.attrs["type"], s.attrs["length"] = "arrays", len(value)
+        for k, v in enumerate(value):
+            s.create_dataset(str(k), data=v)
+    else:
+        # numbers, flags, and the sensor names (a tuple of strings)
+        g.attrs[name] = json.dumps(list(value) if isinstance(value, tuple) else value)
+
+
+def _read(g, name):
+    if name not in g:
+        value = json.loads(g.attrs[name])
+        return tuple(value) if isinstance(value, list) else value
+    node = g[name]
+    kind = node.attrs.get("type") if hasattr(node, "keys") else None
+    if kind is None:
+        return node[()]
+    if kind == "csr":
+        return sp.csr_matrix((node["data"][()], node["indices"][()], node["indptr"][()]),
+                             shape=tuple(node.attrs["shape"]))
+    if kind == "contacts":
+        slices = {k: slice(a, b) for k, (a, b) in json.loads(node.attrs["slices"]).items()}
+        return ContactSet(_read(node, "C"), node["gap0"][()], node["weights"][()],
+                          node["code"][()], node["params"][()], slices)
+    if kind == "critical":
+        return {"dt": float(node.attrs["dt"]), "kt_checked": node["kt_checked"][()],
+                "rows": node["rows"][()]}
+    return tuple(node[str(k)][()] for k in range(int(node.attrs["length"])))
