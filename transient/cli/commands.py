@@ -176,6 +176,19 @@ def _numbers(text, key, kind):
                         f"'{text}'") from None
 
 
+def bench_directory(out, case):
+    """The bench's output directory, made and checked writable before the sweep: --out, or
+    <case name>_bench in the working directory (not next to a shipped case)."""
+    import tempfile
+    path = Path(out) if out else Path.cwd() / f"{Path(case).stem}_bench"
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        tempfile.TemporaryFile(dir=path).close()
+    except OSError as exc:
+        raise CaseError(path, "--out", f"cannot write: {exc.strerror or exc}") from None
+    return path
+
+
 def cmd_bench(args):
     from ..studies.bench import HEADER, bench, format_row, target, write
     eps = _numbers(args.eps, "--eps", float)
@@ -187,9 +200,9 @@ def cmd_bench(args):
     def show(row):
         if not args.json:
             print(format_row(row), flush=True)
+    out = bench_directory(args.out, args.case)
     rows = bench(args.case, args.overrides, args.pair, eps, points, args.t_end, show,
                  tolerances)
-    out = args.out or Path(args.case).with_name(Path(args.case).stem + "_bench")
     files = write(rows, out)
     best = target(rows)
     if args.json:

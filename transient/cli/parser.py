@@ -51,7 +51,7 @@ def build_parser():
                    "3e-2,1e-2,3e-3; empty for none)")
     p.add_argument("--t-end", type=float, help="simulated time [s] (default: the case's)")
     p.add_argument("--out", metavar="DIR", help="directory of bench.csv, bench.json and "
-                   "bench.png (default: <case name>_bench next to the case)")
+                   "bench.png (default: <case name>_bench in the working directory)")
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
     _plot_parser(sub)
     p = sub.add_parser("export", help="a history as time series for ParaView: the contact "

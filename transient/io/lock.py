@@ -39,6 +39,9 @@ def writing(path, key, resume=False):
     path = Path(path)
     if path.is_dir():
         raise CaseError(path, key, "is a directory: expected a history file (.h5)")
+    if path.exists() and not path.is_file():
+        raise CaseError(path, key, "is not a history but a device, pipe or socket: not "
+                        "written")
     existed = path.exists() and path.stat().st_size > 0
     if resume and not existed:
         raise CaseError(path, key, "--resume: no history file to resume")

@@ -1,0 +1,102 @@
+"""Outputs are checked before any stage: an output that cannot be written, or that is not a
+history of this package, is a one-line error (exit 2) naming it, before the model is built; a
+history is written by one run at a time; a run stopped in its setup leaves no file behind."""
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from transient.cli import main
+from transient.io.lock import writing
+
+CASES = Path(__file__).resolve().parent.parent / "cases"
+BAR = str(CASES / "bar_impact.toml")
+
+
+@pytest.fixture
+def no_model(monkeypatch):
+    """Fail the test if the model is built: the refusal must come before any stage."""
+    import transient.stages
+
+    def refuse(case):
+        raise AssertionError("the model was built before the output was checked")
+    monkeypatch.setattr(transient.stages, "build_model", refuse)
+
+
+def refused(capsys, args):
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith("error: ")
+    return err
+
+
+@pytest.mark.parametrize("where, words", [
+    ("nodir/x.h5", "cannot write"),
+    ("adir", "is a directory"),
+    ("/proc/transient_test.h5", "cannot write"),
+    ("/dev/null", "is not a history"),
+    ("fifo", "is not a history"),
+])
+def test_an_unwritable_output_is_refused_before_the_setup(tmp_path, capsys, no_model, where,
+                                                          words):
+    (tmp_path / "adir").mkdir()
+    os.mkfifo(tmp_path / "fifo")
+    path = where if where.startswith("/") else str(tmp_path / where)
+    err = refused(capsys, ["run", BAR, "-o", path, "--quiet"])
+    assert f"{path}: -o: " in err and words in err
+
+
+def test_the_case_file_is_never_overwritten(tmp_path, capsys, no_model):
+    case = tmp_path / "bar.toml"
+    case.write_text((CASES / "bar_impact.toml").read_text())
+    before = case.read_text()
+    err = refused(capsys, ["run", str(case), "-o", str(case), "--quiet"])
+    assert "is not a history written by transient" in err and case.read_text() == before
+
+
+def test_output_file_of_the_case_is_named_by_its_key(tmp_path, capsys, no_model):
+    err = refused(capsys, ["run", BAR, "--quiet", "--set", f'output.file="{tmp_path}/no/x.h5"'])
+    assert ": output.file: cannot write" in err
+
+
+def test_a_second_writer_is_refused(tmp_path, capsys):
+    path = tmp_path / "bar.h5"
+    assert main(["run", BAR, "-o", str(path), "--quiet"]) == 0
+    before = path.read_bytes()
+    with writing(path, "-o"):                    # a run writing it now
+        err = refused(capsys, ["run", BAR, "-o", str(path), "--quiet"])
+        assert "another run is writing this history" in err
+        err = refused(capsys, ["run", BAR, "-o", str(path), "--resume", "--quiet"])
+        assert "another run is writing this history" in err
+    assert path.read_bytes() == before
+    assert main(["run", BAR, "-o", str(path), "--quiet"]) == 0   # released
+
+
+def test_sigint_during_the_setup_leaves_no_file(tmp_path):
+    path = tmp_path / "pad.h5"
+    child = subprocess.Popen([sys.executable, "-m", "transient", "run",
+                              str(CASES / "pad_disc.toml"), "-o", str(path), "--quiet"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # the output is held (created empty) before the first stage, which takes seconds here
+    deadline = time.monotonic() + 120
+    while not path.exists():
+        assert child.poll() is None and time.monotonic() < deadline
+        time.sleep(0.02)
+    child.send_signal(signal.SIGINT)
+    _, err = child.communicate(timeout=120)
+    assert child.returncode == 130 and "Traceback" not in err
+    assert not path.exists()
+
+
+def test_bench_refuses_an_unwritable_directory_first_and_writes_under_the_cwd(
+        tmp_path, capsys, no_model, monkeypatch):
+    err = refused(capsys, ["bench", BAR, "--out", "/proc/transient_bench"])
+    assert ": --out: cannot write" in err
+    monkeypatch.chdir(tmp_path)
+    from transient.cli.commands import bench_directory
+    assert bench_directory(None, BAR) == Path.cwd() / "bar_impact_bench"
+    assert os.access(tmp_path, os.W_OK)
