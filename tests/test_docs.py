@@ -8,7 +8,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def test_case_reference_is_up_to_date():
     text = (ROOT / "cases" / "README.md").read_text()
-    assert reference_markdown() in text, "regenerate with: python -m transient.case.schema"
+    assert reference_markdown() in text, "regenerate with: python -m transient.case"
 
 
 def test_readme_quick_start_commands():

@@ -1,11 +1,20 @@
 """Errors a user can act on: they name the file, the key path and what was expected."""
 
 
+def one_line(text):
+    """text with its control characters escaped: a value quoted in a message never breaks
+    the message over lines."""
+    return "".join(c if c.isprintable() or c == " " else c.encode("unicode_escape").decode()
+                   for c in str(text))
+
+
 class CaseError(Exception):
     """Bad input: printed as one line 'FILE: KEY: MESSAGE', exit code 2, no traceback."""
 
     def __init__(self, path, key, message):
-        super().__init__(f"{path}: {key}: {message}" if key else f"{path}: {message}")
+        key, message = one_line(key), one_line(message)
+        super().__init__(f"{one_line(path)}: {key}: {message}" if key
+                         else f"{one_line(path)}: {message}")
         self.path = str(path)
         self.key = key
         self.message = message

@@ -113,8 +113,9 @@ def _loop(case, path, start, progress, t_start):
     solver, output, system, state = case.solver, case.output, start.system, start.state
     history, balance, scheme, dt = start.history, start.balance, start.scheme, start.dt
     every = output.every
-    chunk = max(every, solver.chunk // every * every)
     n_total = int(round(solver.t_end / dt))
+    # no buffer longer than the run (where a run is cut changes nothing)
+    chunk = max(every, min(solver.chunk, n_total) // every * every)
     step, t_stored = start.step, state.time
     status, t_kernel = "complete", 0.0
     bar = _progress_bar(progress, n_total, step)

@@ -10,6 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .case.signals import compile_signals
+from .case.sizes import check_steps
 from .contact.contactset import stack
 from .contact.pair import build_contact, contact_stiffness
 from .dynamics import schemes
@@ -145,7 +146,9 @@ def choose_dt(case, setup, stored=None):
     dt = solver.dt if stored is None else stored
     if solver.scheme in ("exponential", "implicit"):
         # unconditionally stable: the step is set by accuracy, 20 steps per period at fmax
-        return dt or 1.0 / (20.0 * solver.reduction.fmax)
+        dt = dt or 1.0 / (20.0 * solver.reduction.fmax)
+        check_steps(case, dt)
+        return dt
     critical = setup.system.critical.dt
     if dt == 0.0:
         dt = 0.9 * critical
@@ -155,6 +158,7 @@ def choose_dt(case, setup, stored=None):
         raise CaseError(case.path, "solver.dt", f"{dt:.3e} s is above the critical step of "
                         f"central differences {critical:.3e} s (set solver.force_dt = true to "
                         "run anyway)")
+    check_steps(case, dt)
     return dt
 
 

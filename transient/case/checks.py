@@ -1,12 +1,17 @@
 """Checks that need several keys of a case, run at load: before any mesh is built, a wrong
 combination is a one-line error naming the key to change."""
 from ..errors import CaseError
+from .signals import check_signal
+from .sizes import check_generated, check_steps
 
 
 def check(case):
     """Raise CaseError on the first combination of keys that no stage admits (every case)."""
     _references(case)
     _contact(case)
+    _signals(case)
+    _directions(case)
+    check_generated(case)
 
 
 def check_transient(case):
@@ -14,6 +19,11 @@ def check_transient(case):
     run by the commands that integrate in time, before their first stage."""
     _sampled(case)
     _solver(case)
+    if case.solver.t_end <= 0.0:
+        _fail(case, "solver.t_end", "expected > 0 for a transient: the time simulated after "
+              "the preload")
+    if case.solver.dt > 0.0:
+        check_steps(case, case.solver.dt)
 
 
 def _fail(case, key, message):
@@ -56,6 +66,38 @@ def _references(case):
         _known(case, f"sensors.{name}.part", sensor.part, parts, "part")
     for name, initial in case.initial.items():
         _known(case, f"initial.{name}.part", initial.part, parts, "part")
+
+
+def check_two_surfaces(case, name):
+    """Compatibility (transient compat, plot compat) is between two meshes: not a wall's."""
+    if case.contact[name].wall:
+        _fail(case, f"contact.{name}.wall_point", "a rigid wall has no second mesh: "
+              "compatibility is between two surfaces")
+
+
+def _signals(case):
+    """Each load's signal within its kind's bounds (durations > 0, increasing tables)."""
+    for name, load in case.loads.items():
+        try:
+            check_signal(load.signal, f"loads.{name}.signal")
+        except ValueError as exc:
+            key, _, message = str(exc).partition(": ")
+            _fail(case, key, message)
+
+
+def _directions(case):
+    """Normals, axes and directions that must have a length."""
+    vectors = [(f"contact.{n}.wall_normal", c.wall_normal) for n, c in case.contact.items()
+               if c.wall]
+    vectors += [(f"sensors.{n}.direction", s.direction) for n, s in case.sensors.items()]
+    for part, spec in case.parts.items():
+        for name, sel in spec.sets.items():
+            for field in ("normal", "axis"):
+                if field in sel.params:
+                    vectors.append((f"parts.{part}.sets.{name}.{field}", sel.params[field]))
+    for key, v in vectors:
+        if not any(x != 0.0 for x in v):
+            _fail(case, key, "expected a nonzero vector")
 
 
 def _contact(case):

@@ -4,9 +4,9 @@ from dataclasses import fields, is_dataclass
 
 # what a resumed run may change: how long it runs and how it is watched, not what it computes
 RESUMABLE = ("title", "solver.t_end", "solver.chunk", "solver.drift_tolerance",
-             "solver.force_dt", "output.file", "output.vtu")
+             "solver.force_dt", "output.file", "output.vtu", "limits.memory", "limits.steps")
 CASE_FIELDS = ("title", "materials", "parts", "constraints", "loads", "contact", "sensors",
-               "initial", "solver", "output")
+               "initial", "solver", "output", "limits")
 
 
 def flatten(case):

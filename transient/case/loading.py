@@ -2,13 +2,14 @@
 import copy
 import difflib
 import math
+import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 from . import schema as S
 from .checks import check
-from .specs import OutputSpec, SolverSpec, build
+from .specs import LimitsSpec, OutputSpec, SolverSpec, build
 from ..errors import CaseError
 
 
@@ -28,6 +29,7 @@ class Case:
     initial: dict        # name -> InitialSpec
     solver: SolverSpec
     output: OutputSpec
+    limits: LimitsSpec
 
     @property
     def directory(self):
@@ -35,6 +37,9 @@ class Case:
 
     def error(self, key, message):
         return CaseError(self.path, key, message)
+
+
+NAME = re.compile(r"[A-Za-z0-9_-]+")
 
 
 def parse_override(assignment, path):
@@ -83,10 +88,12 @@ def parse(text, path, overrides=()):
     path = Path(path)
     try:
         raw = tomllib.loads(text)
+        raw = apply_overrides(raw, overrides, path)
+        data = _Validator(path).table(S.CASE, raw, "")
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(path, "", f"invalid TOML: {exc}") from None
-    raw = apply_overrides(raw, overrides, path)
-    data = _Validator(path).table(S.CASE, raw, "")
+    except RecursionError:
+        raise CaseError(path, "", "tables or arrays nested too deeply") from None
     case = Case(path, text, tuple(overrides), **build(data))
     check(case)
     return case
@@ -121,8 +128,9 @@ class _Validator:
         for k in value:
             if k not in fields:
                 close = difflib.get_close_matches(k, list(fields), n=1)
-                hint = f" (did you mean '{close[0]}'?)" if close else \
-                    f" (expected one of: {', '.join(fields)})"
+                hint = (f" (did you mean '{close[0]}'?)" if close else
+                        f" (expected one of: {', '.join(fields)})" if fields else
+                        " (this table takes no key here)")
                 self.fail(_join(key, k), f"unknown key{hint}")
         out = {}
         for k, spec in fields.items():
@@ -148,6 +156,10 @@ class _Validator:
         self.expect_table(value, key)
         if len(value) < spec.min_items:
             self.fail(key, f"expected at least {spec.min_items} table(s) [{key}.NAME]")
+        for name in value:
+            # names become dotted keys (--set) and HDF5 paths (sensors/NAME)
+            if not NAME.fullmatch(name):
+                self.fail(_join(key, name), "expected a name of letters, digits, '_' and '-'")
         return {name: self.node(spec.item, item, _join(key, name)) for name, item in value.items()}
 
     def variant(self, spec, value, key):
@@ -155,6 +167,9 @@ class _Validator:
         kind = value.get("kind")
         if kind is None:
             self.fail(_join(key, "kind"), f"missing key (one of: {', '.join(spec.options)})")
+        if not isinstance(kind, str):
+            self.fail(_join(key, "kind"), f"expected a string (one of: "
+                      f"{', '.join(spec.options)}), got {_show(kind)}")
         if kind not in spec.options:
             close = difflib.get_close_matches(str(kind), list(spec.options), n=1)
             hint = f"did you mean '{close[0]}'? " if close else ""

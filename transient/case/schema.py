@@ -1,53 +1,10 @@
 """The case file schema: every key, its type, default, unit and meaning.
 
 Tables keyed by name (`[parts.NAME]`) give every value a dotted path. The schema drives
-validation (`case.py`), `--set` overrides, and the key reference in `cases/README.md`
-(`python -m transient.case.schema` prints it).
+validation (`loading.py`), `--set` overrides, and the key reference in `cases/README.md`
+(`python -m transient.case` prints it).
 """
-from dataclasses import dataclass, field
-
-REQUIRED = object()
-
-
-@dataclass(frozen=True)
-class Value:
-    """A leaf value. kind: float, int, str, bool, floats, ints, strs (lists), choice, table
-    (names to strings), eps (a float within bounds or the string "auto")."""
-    kind: str
-    doc: str
-    default: object = REQUIRED
-    unit: str = ""
-    length: int = 0            # exact list length when > 0
-    choices: tuple = ()
-    minimum: float = None      # inclusive bounds on numbers (and list items)
-    maximum: float = None
-    open_min: float = None     # exclusive bounds
-    open_max: float = None
-
-
-@dataclass(frozen=True)
-class Table:
-    doc: str
-    fields: dict
-    optional: bool = False     # an absent table is filled with its defaults
-
-
-@dataclass(frozen=True)
-class Named:
-    """Tables keyed by a user-chosen name, such as [parts.NAME]."""
-    doc: str
-    item: object
-    min_items: int = 0
-
-
-@dataclass(frozen=True)
-class Variant:
-    """A table whose fields depend on its `kind` key."""
-    doc: str
-    options: dict
-    common: dict = field(default_factory=dict)
-    default: str = None        # kind taken when the table is absent (None: required)
-
+from .nodes import REQUIRED, Named, Table, Value, Variant, reference_markdown as _markdown
 
 def _pos(doc, unit="", default=REQUIRED):
     return Value("float", doc, default, unit, open_min=0.0)
@@ -346,6 +303,14 @@ OUTPUT = Table("outputs", {
                    "displacement field", False),
 }, optional=True)
 
+LIMITS = Table("bounds on the work of a case, checked before it starts (raise them to go "
+               "beyond)", {
+    "memory": Value("float", "memory the model and its setup may take, estimated from the "
+                    "cells before any is meshed (0: the machine's physical memory)", 0.0, "GB",
+                    minimum=0.0),
+    "steps": Value("int", "time steps a run may make", 100_000_000, minimum=1),
+}, optional=True)
+
 INITIAL = Table("initial velocity of a part (impact)", {
     "part": Value("str", "part set in motion"),
     "velocity": _vec3("velocity", "m/s"),
@@ -362,39 +327,10 @@ CASE = Table("a case", {
     "initial": Named("initial velocities by name", INITIAL),
     "solver": SOLVER,
     "output": OUTPUT,
+    "limits": LIMITS,
 })
 
 
-def reference(node=CASE, prefix=""):
-    """Markdown rows (path, type, default, unit, meaning) of every key under a schema node."""
-    rows = []
-    if isinstance(node, Table):
-        for key, sub in node.fields.items():
-            rows += reference(sub, f"{prefix}.{key}" if prefix else key)
-    elif isinstance(node, Named):
-        rows += reference(node.item, f"{prefix}.NAME")
-    elif isinstance(node, Variant):
-        rows.append((f"{prefix}.kind", "choice", repr(node.default) if node.default else
-                     "required", "",
-                     f"{node.doc}: one of {', '.join(node.options)}"))
-        for key, sub in node.common.items():
-            rows += reference(sub, f"{prefix}.{key}")
-        for kind, fields in node.options.items():
-            for key, sub in fields.items():
-                rows += reference(sub, f"{prefix}.{key} ({kind})")
-    else:
-        default = "required" if node.default is REQUIRED else repr(node.default)
-        kind = node.kind + (f"[{node.length}]" if node.length else "")
-        doc = node.doc + (f" ({', '.join(node.choices)})" if node.choices else "")
-        rows.append((prefix, kind, default, node.unit, doc))
-    return rows
-
-
 def reference_markdown():
-    lines = ["| key | type | default | unit | meaning |", "|---|---|---|---|---|"]
-    lines += [f"| `{p}` | {k} | {d} | {u} | {m} |" for p, k, d, u, m in reference()]
-    return "\n".join(lines)
-
-
-if __name__ == "__main__":
-    print(reference_markdown())
+    """The key table of cases/README.md."""
+    return _markdown(CASE)

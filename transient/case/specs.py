@@ -164,6 +164,18 @@ class SolverSpec:
 
 
 @dataclass(frozen=True)
+class LimitsSpec:
+    memory: float            # [GB], 0: the machine's physical memory
+    steps: int
+
+    @property
+    def memory_bytes(self):
+        import os
+        physical = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+        return self.memory * 1e9 if self.memory > 0 else float(physical)
+
+
+@dataclass(frozen=True)
 class OutputSpec:
     vtu: str
     file: str
@@ -213,4 +225,5 @@ def build(data):
                         newton=_make(NewtonSpec, solver["newton"]),
                         quadrature=_make(QuadratureSpec, solver["quadrature"])),
         "output": _make(OutputSpec, data["output"]),
+        "limits": _make(LimitsSpec, data["limits"]),
     }

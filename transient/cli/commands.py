@@ -4,8 +4,10 @@ import sys
 import time
 from pathlib import Path
 
+from ..case.checks import check_two_surfaces
 from ..case.loading import load
 from ..errors import CaseError
+from ..solve.linsolve import FactorizationError
 from .parser import build_parser
 from .plotting import cmd_export, cmd_plot
 
@@ -77,6 +79,7 @@ def cmd_compat(args):
     name = args.pair or names[0]
     if name not in names:
         raise CaseError(case.path, "contact", f"no pair '{name}' (pairs: {', '.join(names)})")
+    check_two_surfaces(case, name)
     model = build_model(case)
     t1 = time.perf_counter()
     pair = build_pair(case, model, name, need_compatibility=True)
@@ -228,6 +231,12 @@ def main(argv=None):
         return COMMANDS[args.command](args)
     except CaseError as exc:
         print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except FactorizationError as exc:
+        # a singular or indefinite stiffness: what the case says of it is what to check
+        print(f"error: {getattr(args, 'case', '')}: constraints, contact.NAME.k: the stiffness "
+              f"cannot be factorized ({exc}): a part free to move, or a contact stiffness far "
+              "beyond the structure's", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

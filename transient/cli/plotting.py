@@ -3,6 +3,7 @@ history; the drawing lives in transient/plots, the files in transient/io."""
 import sys
 from pathlib import Path
 
+from ..case.checks import check_two_surfaces
 from ..case.loading import load
 from ..errors import CaseError
 
@@ -104,6 +105,9 @@ def _plot_compat(args):
     if args.pair is not None and args.pair not in names:
         raise CaseError(case.path, "contact", f"no pair '{args.pair}' "
                         f"(pairs: {', '.join(names)})")
+    for name in names:
+        if args.pair in (None, name):
+            check_two_surfaces(case, name)
     model = build_model(case)
     pairs = [build_pair(case, model, name, need_compatibility=True)
              for name in names if args.pair in (None, name)]

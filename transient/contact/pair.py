@@ -48,7 +48,7 @@ class ContactPair:
 
 
 def _surface(case, model, ref, key):
-    part, name = resolve_set(case, model.parts, ref, key)
+    part, name = resolve_set(case, model.parts, ref, key, surface=True)
     faces = set_faces(part.mesh, name)
     if not faces:
         raise CaseError(case.path, key, f"selection '{ref}' holds no boundary face")

@@ -218,9 +218,17 @@ def _chunk_rows(shape, expected_rows):
 
 
 def _rows(f, path):
+    """The complete rows, checked against the series: a damaged count is an error."""
     if "rows" not in f.attrs:
-        raise ValueError(f"{path}: not a transient history (no 'rows' attribute)")
-    return int(f.attrs["rows"])
+        raise ValueError("not a transient history (no 'rows' attribute)")
+    value = f.attrs["rows"]
+    if not isinstance(value, (int, np.integer)) or value < 0:
+        raise ValueError(f"damaged history: attribute 'rows' is {value!r}, expected a count")
+    for name, shape in _series_shapes(f).items():
+        if f[name].shape[0] < value:
+            raise ValueError(f"damaged history: series '{name}' has {f[name].shape[0]} rows, "
+                             f"attribute 'rows' says {int(value)}")
+    return int(value)
 
 
 def _series_shapes(f):

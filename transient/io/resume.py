@@ -11,7 +11,7 @@ from ..case.compare import RESUMABLE, changed
 from ..case.loading import parse
 from ..dynamics.state import State
 from ..errors import CaseError
-from .history import CASE_TEXT, CHECKPOINT, _read_attrs, load_checkpoint
+from .history import CASE_TEXT, CHECKPOINT, _read_attrs, _rows, load_checkpoint
 from .systems import GROUP, read_system
 
 
@@ -30,6 +30,7 @@ def resumed(path, case):
     """The run stored at path, to continue with case (which must be the one it ran)."""
     try:
         with h5py.File(path, "r", locking=False) as f:
+            _rows(f, path)
             meta = _read_attrs(f.attrs)
             if GROUP not in f or CHECKPOINT not in f:
                 raise CaseError(path, "--resume", "the history keeps no system or checkpoint "
@@ -42,7 +43,7 @@ def resumed(path, case):
         state = State(saved["state"], saved["acc"], saved["gmin"])
         step, blocks, balance = int(saved["step"][0]), saved["blocks"], saved["balance"]
     except (KeyError, ValueError, TypeError, OSError) as exc:
-        raise CaseError(path, "--resume", f"damaged history: {exc}") from None
+        raise CaseError(path, "--resume", f"not a history to resume ({exc})") from None
     if state.array.shape != (6, system.n) or len(state.gmin) != system.n_points:
         raise CaseError(path, "--resume", "damaged history: its checkpoint does not fit its "
                         "system")

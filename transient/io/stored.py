@@ -66,8 +66,8 @@ def read_summary(path):
         raise CaseError(path, "", "file not found")
     try:
         return summary(path)
-    except (OSError, KeyError, ValueError) as exc:
-        raise CaseError(path, "", f"not a transient history: {exc}") from None
+    except (OSError, KeyError, ValueError, TypeError) as exc:
+        raise CaseError(path, "", f"not a transient history, or a damaged one ({exc})") from None
 
 
 def open_history(path):

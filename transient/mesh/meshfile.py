@@ -64,14 +64,19 @@ def _meshio_read(path):
     SystemExit is caught as well; other malformed input raises all kinds of exceptions.
     """
     console = io.StringIO()
-    try:
-        with contextlib.redirect_stdout(console), contextlib.redirect_stderr(console):
-            raw = meshio.read(path)
-    except (Exception, SystemExit) as exc:
-        detail = _one_line(console.getvalue() if isinstance(exc, SystemExit) else str(exc))
-        raise MeshFileError(path, f"cannot read: {detail or type(exc).__name__}") from exc
-    if _one_line(console.getvalue()):
-        warnings.warn(f"meshio reading {path}: {_one_line(console.getvalue())}", stacklevel=3)
+    # meshio's own warnings are held too: before an error they would only precede it, and
+    # after a read that worked they are said once, as the console output is
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            with contextlib.redirect_stdout(console), contextlib.redirect_stderr(console):
+                raw = meshio.read(path)
+        except (Exception, SystemExit) as exc:
+            detail = _one_line(console.getvalue() if isinstance(exc, SystemExit) else str(exc))
+            raise MeshFileError(path, f"cannot read: {detail or type(exc).__name__}") from exc
+    said = _one_line(" ".join([console.getvalue()] + [str(w.message) for w in caught]))
+    if said:
+        warnings.warn(f"meshio reading {path}: {said}", stacklevel=3)
     return raw
 
 

@@ -12,6 +12,7 @@ import scipy.sparse as sp
 from ..mesh import generators
 from .assembly import CellBlock, assemble
 from ..mesh.elements import ALIASES
+from ..case.sizes import check_memory
 from ..errors import CaseError
 from .loads import nearest_node, pressure_forces
 from ..mesh.meshfile import MeshFileError, read_mesh
@@ -88,8 +89,9 @@ def part_mesh(case, name):
     return with_geometric_sets(mesh, case.parts[name].sets)
 
 
-def resolve_set(case, parts, ref, key):
-    """(part, set name) of a 'PART.SET' reference, with errors naming the key."""
+def resolve_set(case, parts, ref, key, surface=False):
+    """(part, set name) of a 'PART.SET' reference, with errors naming the key; a surface
+    (contact, pressure) takes a face or node set, not a cell set."""
     if not isinstance(ref, str) or "." not in ref:
         raise CaseError(case.path, key, f"expected PART.SET, got '{ref}'")
     part, name = ref.split(".", 1)
@@ -99,6 +101,10 @@ def resolve_set(case, parts, ref, key):
     if name not in mesh.set_names():
         raise CaseError(case.path, key, f"part '{part}' has no set '{name}' (sets: "
                         f"{', '.join(mesh.set_names()) or 'none'})")
+    if surface and name not in mesh.face_sets and name not in mesh.node_sets:
+        raise CaseError(case.path, key, f"'{ref}' is a cell set: a surface is a face or node "
+                        f"set (face sets of part '{part}': "
+                        f"{', '.join(sorted(mesh.face_sets)) or 'none'})")
     return parts[part], name
 
 
@@ -156,7 +162,7 @@ def _loads(case, parts, points, M):
         f = np.zeros(3 * len(points))
         key = f"loads.{lname}"
         if spec.kind == "pressure":
-            part, sname = resolve_set(case, parts, spec.set, f"{key}.set")
+            part, sname = resolve_set(case, parts, spec.set, f"{key}.set", surface=True)
             faces = set_faces(part.mesh, sname)
             if not faces:
                 raise CaseError(case.path, f"{key}.set",
@@ -182,8 +188,6 @@ def _sensors(case, parts, ndof):
     for i, (sname, spec) in enumerate(case.sensors.items()):
         part = parts[spec.part]
         d = np.asarray(spec.direction, float)
-        if np.linalg.norm(d) == 0:
-            raise CaseError(case.path, f"sensors.{sname}.direction", "expected a nonzero vector")
         node = nearest_node(part.mesh.points, spec.point) + part.offset
         names.append(sname)
         rows += [i] * 3
@@ -203,6 +207,12 @@ def build_model(case):
         offset += mesh.n_nodes
     points = np.vstack([p.mesh.points for p in parts.values()])
     timings["mesh"] = time.perf_counter() - t0
+    files = [n for n in case.parts if case.parts[n].mesh.kind == "file"]
+    if files:
+        # the cells read: the memory bound before any matrix is assembled
+        check_memory(case, [(len(c), c.shape[1]) for p in parts.values()
+                            for c in p.mesh.cells.values()],
+                     [f"parts.{n}.mesh.path" for n in files])
 
     t0 = time.perf_counter()
     blocks = _cell_blocks(case, parts)

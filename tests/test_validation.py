@@ -1,0 +1,92 @@
+"""Bad input found by fuzzing, each a one-line error naming the key (exit 2, no traceback, no
+warning), before the stage that would have failed on it."""
+import warnings
+from pathlib import Path
+
+import h5py
+import pytest
+
+from transient.cli import main
+
+CASES = Path(__file__).resolve().parent.parent / "cases"
+BAR, TWO, PAD = (str(CASES / f"{n}.toml") for n in ("bar_impact", "two_bars", "pad_disc"))
+
+
+def one_error(capsys, args):
+    """Run the command line: exit 2 and one line on stderr, no warning; returns the line."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code = main(args)
+    err = capsys.readouterr().err.strip()
+    assert code == 2, err
+    assert len(err.splitlines()) == 1 and err.startswith("error: ") and "Traceback" not in err
+    assert not caught, [str(w.message) for w in caught]
+    return err
+
+
+def sets(*overrides):
+    return [a for o in overrides for a in ("--set", o)]
+
+
+@pytest.mark.parametrize("command, case, overrides, key", [
+    ("run", BAR, ['loads.x.kind=["force"]'], "loads.x.kind"),
+    ("run", TWO, ['contact.impact.surface1="left.all"'], "contact.impact.surface1"),
+    ("run", PAD, ['loads.piston.set="pad.lining"'], "loads.piston.set"),
+    ("run", PAD, ["loads.tap.signal.duration=0"], "loads.tap.signal.duration"),
+    ("run", PAD, ["loads.tap.signal.duration=-1e-5"], "loads.tap.signal.duration"),
+    ("run", BAR, ["solver.t_end=1e300"], "solver.t_end"),
+    ("run", BAR, ["solver.t_end=0"], "solver.t_end"),
+    ("run", BAR, ["solver.t_end=1e-9", "solver.dt=1e-7"], "solver.t_end"),
+    ("run", BAR, ["solver.t_end=1.0", "solver.dt=1e-9"], "solver.t_end"),
+    ("run", BAR, ["parts.bar.mesh.divisions=[9223372036854775807,1,1]"],
+     "parts.bar.mesh.divisions"),
+    ("run", BAR, ["parts.bar.mesh.divisions=[10000,10000,10000]"], "parts.bar.mesh.divisions"),
+    ("modes", TWO, ["contact.impact.k=1e30"], "constraints, contact.NAME.k"),
+    ("run", BAR, ["contact.wall.wall_normal=[0,0,0]"], "contact.wall.wall_normal"),
+    ("run", BAR, ["sensors.tip.direction=[0,0,0]"], "sensors.tip.direction"),
+    ("run", BAR, ["parts.bar.sets.s.kind=\"plane\"", "parts.bar.sets.s.point=[0,0,0]",
+                  "parts.bar.sets.s.normal=[0,0,0]"], "parts.bar.sets.s.normal"),
+    ("run", PAD, ['loads.tap.signal.kind="constant"'], "loads.tap.signal.duration"),
+    ("run", BAR, ['contact.wall.rule="fi\\nne"'], "contact.wall.rule"),
+    ("run", BAR, ["solver.t_end=" + "[" * 3000 + "]" * 3000], ""),
+    ("compat", BAR, [], "contact.wall.wall_point"),
+    ("plot", BAR, [], "contact.wall.wall_point"),
+])
+def test_bad_input_is_one_line_naming_the_key(tmp_path, capsys, command, case, overrides, key):
+    args = [command] + (["compat", case, "--out", str(tmp_path)] if command == "plot" else
+                        [case]) + sets(*overrides)
+    if command == "run":
+        args += ["-o", str(tmp_path / "out.h5"), "--quiet"]
+    err = one_error(capsys, args)
+    assert f": {key}: " in err if key else ": tables or arrays nested too deeply" in err
+
+
+def test_names_that_cannot_be_keys_or_series_are_refused(tmp_path, capsys):
+    text = (CASES / "bar_impact.toml").read_text().replace("[sensors.tip]",
+                                                           '[sensors."\\u0000"]')
+    path = tmp_path / "bar.toml"
+    path.write_text(text)
+    err = one_error(capsys, ["run", str(path), "-o", str(tmp_path / "o.h5")])
+    assert "sensors.\\x00: expected a name of letters, digits" in err
+
+
+@pytest.mark.parametrize("damage", ["rows too large", "rows not a number", "no rows",
+                                    "shortened series"])
+@pytest.mark.parametrize("command", ["info", "plot history", "export", "run --resume"])
+def test_a_damaged_history_is_one_line_in_every_reader(tmp_path, capsys, damage, command):
+    path = tmp_path / "bar.h5"
+    assert main(["run", BAR, "-o", str(path), "--quiet"]) == 0
+    with h5py.File(path, "r+") as f:
+        if damage == "rows too large":
+            f.attrs["rows"] = 10 ** 6
+        elif damage == "rows not a number":
+            f.attrs["rows"] = "many"
+        elif damage == "no rows":
+            del f.attrs["rows"]
+        else:
+            f["sensors/tip"].resize(3, axis=0)
+    capsys.readouterr()
+    words = command.split()
+    args = ([words[0], BAR, "-o", str(path), "--resume", "--quiet"] if words[0] == "run" else
+            words + [str(path)])
+    one_error(capsys, args)
