@@ -100,3 +100,25 @@ def test_bench_refuses_an_unwritable_directory_first_and_writes_under_the_cwd(
     from transient.cli.commands import bench_directory
     assert bench_directory(None, BAR) == Path.cwd() / "bar_impact_bench"
     assert os.access(tmp_path, os.W_OK)
+
+
+def test_sigkill_during_the_setup_leaves_an_empty_file_a_next_run_takes(tmp_path, capsys):
+    path = tmp_path / "pad.h5"
+    child = subprocess.Popen([sys.executable, "-m", "transient", "run",
+                              str(CASES / "pad_disc.toml"), "-o", str(path), "--quiet"],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120
+    while not path.exists():
+        assert child.poll() is None and time.monotonic() < deadline
+        time.sleep(0.02)
+    child.kill()
+    child.wait(timeout=60)
+    assert path.stat().st_size == 0           # held, never written: no history in it
+    refused(capsys, ["info", str(path)])
+    # the kernel released the lock with the process: the file is free for a run
+    assert main(["run", BAR, "-o", str(path), "--quiet"]) == 0
+
+
+def test_a_vtu_that_cannot_be_written_is_refused_before_the_modes(tmp_path, capsys, no_model):
+    err = refused(capsys, ["modes", BAR, "--set", f'output.vtu="{tmp_path}/no/m.vtu"'])
+    assert ": output.vtu: cannot write" in err

@@ -7,6 +7,7 @@ from pathlib import Path
 from ..case.checks import check_two_surfaces
 from ..case.loading import load
 from ..errors import CaseError
+from ..io.lock import check_writable
 from ..solve.linsolve import FactorizationError
 from .parser import build_parser
 from .plotting import cmd_export, cmd_plot
@@ -19,6 +20,8 @@ def cmd_modes(args):
     from ..solve.modes import normal_modes
     t0 = time.perf_counter()
     case = load(args.case, args.overrides)
+    if case.output.vtu:
+        check_writable(case.directory / case.output.vtu, "output.vtu")
     model = build_model(case)
     pairs = build_contact(case, model)
     # contact enters the modes as tied (bilateral linear) springs of density k on the pair's rule

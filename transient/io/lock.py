@@ -28,6 +28,21 @@ def is_history(path):
         return False
 
 
+def check_writable(path, key):
+    """Refuse (CaseError) an output file that cannot be written, before the work that makes
+    it: a missing or read-only directory, a directory in its place."""
+    path = Path(path)
+    if path.is_dir():
+        raise CaseError(path, key, "is a directory: expected a file")
+    existed = path.exists()
+    try:
+        open(path, "ab").close()
+    except OSError as exc:
+        raise CaseError(path, key, f"cannot write: {exc.strerror or exc}") from None
+    if not existed:
+        path.unlink()
+
+
 @contextmanager
 def writing(path, key, resume=False):
     """Hold the history file at path for a run (key: what names it, '-o' or 'output.file').
