@@ -45,7 +45,18 @@ def _timed(stages, name, fn, *args):
 
 
 def prepare(case):
-    """Model, contact, preload, linearization and (optionally) reduction of a case."""
+    """Model, contact, preload, linearization and (optionally) reduction of a case.
+
+    The setup's dense algebra runs on one OpenBLAS thread: its calls are many and mid-sized
+    (eigh of a few thousand, products of n x a few hundred), where two threads on this 2-core
+    machine were 2.8 times slower over the setup of pad_disc_long (an 2668^2 eigh: 4.1 s on
+    one thread, 22-26 s on two). PARDISO (MKL) keeps its threads, which pay for its solves."""
+    from threadpoolctl import ThreadpoolController
+    with ThreadpoolController().select(internal_api="openblas").limit(limits=1):
+        return _prepare(case)
+
+
+def _prepare(case):
     solver, stages = case.solver, {}
     model = _timed(stages, "model", build_model, case)
     pairs = _timed(stages, "contact", build_contact, case, model) if case.contact else []

@@ -2,6 +2,7 @@
 the raw TOML dict. Field names are the case keys ("lambda", a Python keyword, becomes `lam`);
 units SI as in the schema. Tables keyed by name become dicts of specs in file order.
 """
+import os
 from dataclasses import dataclass, fields
 
 SHIFT_HZ = 1.0     # -(2 pi SHIFT_HZ)^2 shifts K so that floating parts stay solvable
@@ -170,7 +171,6 @@ class LimitsSpec:
 
     @property
     def memory_bytes(self):
-        import os
         physical = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
         return self.memory * 1e9 if self.memory > 0 else float(physical)
 

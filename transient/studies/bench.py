@@ -3,7 +3,7 @@
 Each variant of the case's contact pair (the fine rule: the reference; the fine rule regularized
 at each eps; the centre rule, plain and regularized; the greedy coarse rule at several m; the
 sampled rule at several tolerances, regularized at the case's eps) is
-set up (`run.prepare`, timed) and integrated in memory (`run.simulate`, timed) over the same
+set up (`stages.prepare`, timed) and integrated in memory (`stages.simulate`, timed) over the same
 time, then compared with the reference:
 - error_rms: RMS over the sensor histories of the difference of the motion about the preloaded
   state (each run's own) to the reference's (interpolated to the reference's times), relative
