@@ -25,6 +25,9 @@ from .kernels.codes import NO_CONVERGENCE, NOT_FINITE
 from .stages import choose_dt, prepare, stepper
 
 
+CHECKS = 20       # energy balance and critical step checks per run, at least
+
+
 @dataclass(frozen=True)
 class RunResult:
     path: str
@@ -114,8 +117,9 @@ def _loop(case, path, start, progress, t_start):
     history, balance, scheme, dt = start.history, start.balance, start.scheme, start.dt
     every = output.every
     n_total = int(round(solver.t_end / dt))
-    # no buffer longer than the run (where a run is cut changes nothing)
-    chunk = max(every, min(solver.chunk, n_total) // every * every)
+    # the checks between chunks come at least every CHECKS-th of the run, so a run going
+    # wrong is stopped within that fraction of its length (where a run is cut changes nothing)
+    chunk = max(every, min(solver.chunk, -(-n_total // CHECKS)) // every * every)
     step, t_stored = start.step, state.time
     status, t_kernel = "complete", 0.0
     bar = _progress_bar(progress, n_total, step)

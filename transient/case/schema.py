@@ -247,7 +247,8 @@ SOLVER = Table("solution settings", {
     "dt": Value("float", "time step (0: 0.9 times the critical step for explicit, "
                 "1 / (20 reduction.fmax) for exponential)", 0.0, "s", minimum=0.0),
     "force_dt": Value("bool", "run explicit with dt above the critical step anyway", False),
-    "chunk": Value("int", "steps per kernel call (output and checks between calls)", 2000,
+    "chunk": Value("int", "steps per kernel call at most (output and checks between calls, "
+                   "at least 20 times a run; the results do not depend on it)", 2000,
                    minimum=1),
     "drift_tolerance": Value("float", "stop when the energy balance drifts by more than this "
                              "fraction of the peak total energy", 0.05, open_min=0.0),

@@ -24,30 +24,35 @@ def mechanical(energy):
 
 
 class Balance:
-    """The drift of a run so far, updated chunk by chunk from its first row's energies."""
+    """The drift of a run so far, updated chunk by chunk from its first row's energies: the
+    largest deviation of E over the largest mechanical energy, each a running maximum, so the
+    figure does not depend on where the run was cut into chunks."""
 
     def __init__(self, initial):
         self.e0 = float(total(initial))
         self.peak = max(float(mechanical(initial)), 1e-300)
-        self.drift = 0.0
+        self.deviation = 0.0
 
-    def arrays(self):
-        """(E(0), peak, drift), as a checkpoint keeps them."""
-        return np.array([self.e0, self.peak, self.drift])
-
-    @classmethod
-    def restore(cls, saved):
-        balance = cls.__new__(cls)
-        balance.e0, balance.peak, balance.drift = (float(x) for x in saved)
-        return balance
+    @property
+    def drift(self):
+        return self.deviation / self.peak
 
     def update(self, energy):
         """Add the rows (r, 5) of a chunk; returns the drift so far."""
         if len(energy):
             self.peak = max(self.peak, float(mechanical(energy).max()))
-            self.drift = max(self.drift, float(np.abs(total(energy) - self.e0).max())
-                             / self.peak)
+            self.deviation = max(self.deviation, float(np.abs(total(energy) - self.e0).max()))
         return self.drift
+
+    def arrays(self):
+        """(E(0), peak, largest deviation), as a checkpoint keeps them."""
+        return np.array([self.e0, self.peak, self.deviation])
+
+    @classmethod
+    def restore(cls, saved):
+        balance = cls.__new__(cls)
+        balance.e0, balance.peak, balance.deviation = (float(x) for x in saved)
+        return balance
 
 
 def drift(terms):
