@@ -169,9 +169,13 @@ def _check(case, system, state, dt, balance, status):
                              f"the deepest penetration reached ({state.gmin.min():.3e} m) at "
                              f"t = {state.time:.6g} s")
     if balance.drift > solver.drift_tolerance:
+        point = system.critical.stiffest_point(dt) if solver.scheme == "explicit" else None
+        hint = "" if point is None else (
+            f"; with the penalty closed the step runs at omega_max dt = {point[0]:.2f} (limit "
+            f"2): lower contact.{point[1]}.k ({point[2]:.3g} Pa/m) or solver.dt ({dt:.3g} s)")
         raise RunAborted(f"energy balance drifted by {balance.drift:.2e} of the peak "
                          f"mechanical energy (tolerance {solver.drift_tolerance:g}) at "
-                         f"t = {state.time:.6g} s")
+                         f"t = {state.time:.6g} s{hint}")
 
 
 def _timings(stages, t_kernel, t_start):

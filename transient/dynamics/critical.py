@@ -32,6 +32,19 @@ class CriticalStep:
         return 2.0 / np.sqrt(omega2 + np.sum(self.contacts.weights * grow * self.rows))
 
 
+    def stiffest_point(self, dt):
+        """(omega_max dt, pair, tangent) at step dt: the system's highest frequency (penalty
+        contact closed) times dt, and the pair and tangent of the contact point whose own
+        oscillator is the fastest (w k_t |C_i M^-1/2|^2); None without contact. What an
+        explicit run losing its energy balance to a stiff penalty should be told."""
+        if not len(self.rows):
+            return None
+        omega2 = self.contacts.weights * self.kt_checked * self.rows
+        i = int(np.argmax(omega2))
+        name = next(n for n, s in self.contacts.slices.items() if s.start <= i < s.stop)
+        return 2.0 * dt / self.dt, name, float(self.kt_checked[i])
+
+
 def critical_tangent(contacts, tangent):
     """The preload's tangents, raised to k for the penalty laws."""
     kt = tangent.copy()
