@@ -126,7 +126,10 @@ def _model_line(meta):
     """What was integrated: the reduced model's size and each pair's contact points."""
     parts = []
     if meta.get("reduced_dofs"):
-        parts.append(f"reduced model {meta['reduced_dofs']} dofs")
+        asked, kept = meta.get("static_shapes", (0, 0))
+        parts.append(f"reduced model {meta['reduced_dofs']} dofs ({meta['normal_modes']} modes "
+                     f"and {kept} of {asked} static shapes"
+                     + ("; the others lie in the span of the rest)" if kept < asked else ")"))
     for name, p in meta.get("pairs", {}).items():
         of = f" of {p['candidates']}" if p.get("candidates") else ""
         parts.append(f"{name}: {p['rule']} rule, {p['points']}{of} points")

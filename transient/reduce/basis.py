@@ -26,6 +26,7 @@ class Basis:
     timings: dict
     n_contact_shapes: int = 0      # contact shapes kept (reduction.statics_tolerance)
     contact_flexibility: np.ndarray = None   # mu of contact_shapes, descending
+    n_static_kept: int = 0         # static directions (contact shapes and loads) beyond the modes
 
 
 def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None, tol=0.0):
@@ -55,18 +56,23 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
         n_shapes = shapes.shape[1]
     if statics.shape[1]:
         columns.append(np.atleast_2d(solve(np.asfortranarray(statics[free])).T).T)
-    X = np.hstack(columns)
     t_static = time.perf_counter() - t0 - t_modes
     Mf = M[free][:, free]
     Kf = K_lin[free][:, free]
-    # unit M-norm columns (static responses to unit loads are tiny), then drop directions the
-    # others already span, then diagonalize
-    norms = np.sqrt(np.einsum("ij,ij->j", X, Mf @ X))
-    X = X[:, norms > 0] / norms[norms > 0]
-    Mr = X.T @ (Mf @ X)
-    lam, V = np.linalg.eigh(Mr)
-    keep = lam > 1e-12 * lam.max()
-    X = X @ (V[:, keep] / np.sqrt(lam[keep]))
+    # the static responses without what the modes already hold (twice, for round-off): on a
+    # part free to move they are dominated by its rigid motion, 1e10 times their elastic part,
+    # which the independence test below would otherwise take for round-off and drop with them
+    S = np.hstack(columns[1:]) if len(columns) > 1 else np.zeros((len(free), 0))
+    for _ in range(2):
+        S = S - Phi @ (Phi.T @ (Mf @ S))
+    # unit M-norm columns, then drop directions the others already span, then diagonalize
+    norms = np.sqrt(np.einsum("ij,ij->j", S, Mf @ S))
+    scale = norms.max() if len(norms) else 0.0
+    S = S[:, norms > 1e-12 * scale] / norms[norms > 1e-12 * scale]
+    lam, V = np.linalg.eigh(S.T @ (Mf @ S))
+    keep = lam > 1e-12 * max(lam.max(), 1.0) if len(lam) else np.zeros(0, bool)
+    X = np.hstack([Phi, S @ (V[:, keep] / np.sqrt(lam[keep]))])
+    n_static_kept = int(keep.sum())
     Kr = X.T @ (Kf @ X)
     omega2, W = sla.eigh(0.5 * (Kr + Kr.T))
     T = np.zeros((K_lin.shape[0], len(omega2)))
@@ -74,7 +80,7 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     timings = {"modes": t_modes, "statics": t_static,
                "orthonormalization": time.perf_counter() - t0 - t_modes - t_static}
     return Basis(T, np.maximum(omega2, 0.0), len(modes.frequencies), statics.shape[1], timings,
-                 n_shapes, mu)
+                 n_shapes, mu, n_static_kept)
 
 
 def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):

@@ -53,7 +53,11 @@ def reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0, solve,
     MT = M @ T
     q0, v = MT.T @ preload.u, MT.T @ v0
     meta = {"reduced_dofs": len(basis.omega2), "normal_modes": basis.n_modes,
-            "contact_shapes": basis.n_contact_shapes, "basis_timings": basis.timings,
+            "contact_shapes": basis.n_contact_shapes,
+            # the static directions asked (contact shapes, load patterns, the preload) and kept
+            # beyond the modes: those dropped lie in the span of the rest
+            "static_shapes": [basis.n_contact_shapes + basis.n_static, basis.n_static_kept],
+            "basis_timings": basis.timings,
             "basis_projection_error": float(np.linalg.norm(T @ q0 - preload.u)
                                             / max(np.linalg.norm(preload.u), 1e-300)),
             "free_dofs": int((~model.fixed).sum())}
