@@ -782,7 +782,8 @@ def history_layout(path):
 
 
 def damage_history(d, layout):
-    """One damage to the history copy d.history."""
+    """One damage to the history copy d.history; True if it is no longer an HDF5 file that
+    h5py opens (truncated, overwritten, replaced), so no other damage can follow."""
     import h5py
     import numpy as np
     datasets, groups, attrs, group_attrs = layout
@@ -794,6 +795,7 @@ def damage_history(d, layout):
         cut = rng.randrange(size)
         os.truncate(path, cut)
         d.note(f"history: truncated to {cut} of {size} bytes")
+        return True
     elif choice == "overwrite":
         data = bytearray(path.read_bytes())
         spots = [rng.randrange(len(data)) for _ in range(rng.randint(1, 16))]
@@ -801,6 +803,7 @@ def damage_history(d, layout):
             data[i] = rng.randrange(256)
         path.write_bytes(bytes(data))
         d.note(f"history: {len(spots)} bytes overwritten from {min(spots)}")
+        return True
     elif choice == "replace":
         what = d.pick(["empty", "case text", "foreign hdf5", "directory", "missing"])
         path.unlink()
@@ -815,6 +818,7 @@ def damage_history(d, layout):
         elif what == "directory":
             path.mkdir()
         d.note(f"history: replaced by {what}")
+        return True
     elif choice == "dataset" and datasets:
         name = d.pick(datasets)
         what = d.pick(["shorter", "strings", "2-D", "scalar", "group", "nan", "empty"])
@@ -863,6 +867,7 @@ def damage_history(d, layout):
         with h5py.File(path, "r+", locking=False) as f:
             f[name] = np.zeros(d.pick([0, 1, 1000]))
         d.note(f"history: dataset {name} added")
+    return False
 
 
 def history_mutant(d, base_history, base_case_file, layout):
@@ -870,8 +875,8 @@ def history_mutant(d, base_history, base_case_file, layout):
     d.history = d.directory / "history.h5"
     shutil.copy(base_history, d.history)
     for _ in range(d.rng.choices([0, 1, 2, 3], [2, 5, 2, 1])[0]):
-        if d.history.is_file():
-            damage_history(d, layout)
+        if damage_history(d, layout):
+            break
     command = d.rng.choices(*zip(*HISTORY_COMMANDS))[0]
     h = str(d.history)
     series = d.pick(["sensors/tip", "sensors", "energy", "energy/kinetic", "nosuch", "time",

@@ -20,5 +20,9 @@ class CaseError(Exception):
         self.message = message
 
 
+class FactorizationError(RuntimeError):
+    """A sparse factorization that failed (singular, not positive definite, out of memory)."""
+
+
 class RunAborted(Exception):
     """A run that stopped before its end; the reason is kept in the output file."""

@@ -4,11 +4,9 @@ import sys
 import time
 from pathlib import Path
 
-from ..case.checks import check_two_surfaces
+from ..case.checks import check_transient, check_two_surfaces
 from ..case.loading import load
-from ..errors import CaseError
-from ..io.lock import check_writable
-from ..solve.linsolve import FactorizationError
+from ..errors import CaseError, FactorizationError
 from .parser import build_parser
 from .plotting import cmd_export, cmd_plot
 
@@ -21,6 +19,7 @@ def cmd_modes(args):
     t0 = time.perf_counter()
     case = load(args.case, args.overrides)
     if case.output.vtu:
+        from ..io.lock import check_writable
         check_writable(case.directory / case.output.vtu, "output.vtu")
     model = build_model(case)
     pairs = build_contact(case, model)
@@ -142,8 +141,9 @@ def _model_line(meta):
 def cmd_run(args):
     import os
     from pathlib import Path
-    from ..run import run
     case = load(args.case, args.overrides)
+    check_transient(case)           # before the stages' modules (Numba, SciPy) are imported
+    from ..run import run
     path = Path(args.output) if args.output else case.directory / (
         case.output.file or Path(case.path).with_suffix(".h5").name)
     quiet = args.quiet or args.json or os.environ.get("CI") or not sys.stderr.isatty()

@@ -10,9 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-
-class FactorizationError(RuntimeError):
-    pass
+from ..errors import FactorizationError  # noqa: F401 (raised here, caught by callers)
 
 
 def available():
