@@ -61,6 +61,9 @@ def _prepare(case):
     model = _timed(stages, "model", build_model, case)
     pairs = _timed(stages, "contact", build_contact, case, model) if case.contact else []
     contacts = stack(pairs, model.ndof)
+    if solver.scheme == "implicit" and not solver.reduction.enabled:
+        # Newmark on the full model keeps S^-1 C^T dense: refused now, not after the setup
+        schemes.check_woodbury(len(model.free), contacts.n_points, case.path)
     patterns = [model.load_patterns[name] for name in case.loads]
     constant = sum((p for p, load in zip(patterns, case.loads.values())
                     if load.signal["kind"] == "constant"), np.zeros(model.ndof))

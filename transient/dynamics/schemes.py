@@ -102,15 +102,21 @@ def implicit(system, dt, newton, linear_solver="auto", blocks=None):
     return Stepper("implicit", dt, advance, blocks, stages, meta)
 
 
+def check_woodbury(n, m, path=""):
+    """Refuse Newmark on a full model of n free dofs whose m contact rows make S^-1 C^T too
+    large to keep dense."""
+    if 8.0 * n * m > MAX_WOODBURY_BYTES:
+        raise CaseError(path, "solver.scheme", f"the implicit scheme on the full model keeps "
+                        f"S^-1 C^T dense: {n} dofs x {m} contact points is "
+                        f"{8e-9 * n * m:.1f} GB; use a reduced model (solver.reduction)")
+
+
 def _newmark_operator(system, dt, linear_solver):
     """Newmark's iteration operator S = (1 + dt/2 alpha) M + (dt/2 beta + dt^2/4) K_lin on the
     full model, factorized for the kernel, with Z = S^-1 C^T and G = C Z for the exact contact
     corrections."""
-    n, m = system.K.shape[0], system.n_points
-    if 8.0 * n * m > MAX_WOODBURY_BYTES:
-        raise CaseError("", "solver.scheme", f"the implicit scheme on the full model keeps "
-                        f"S^-1 C^T dense: {n} dofs x {m} contact points is "
-                        f"{8e-9 * n * m:.1f} GB; use a reduced model (solver.reduction)")
+    n = system.K.shape[0]
+    check_woodbury(n, system.n_points)
     h = 0.5 * dt
     op = ((1.0 + h * system.alpha) * system.M + (h * system.beta + h * h) * system.K).tocsr()
     try:
