@@ -9,9 +9,11 @@ or switched kind, a reference to a missing part, set or material, a cell set use
 a mesh file that is missing, a directory, a /proc file or a truncated copy of tests/data,
 deep nesting, control characters in strings and table names, damaged TOML text, malformed
 `--set` literals, outputs that cannot be written, valid but unusual settings, Ctrl-C at a
-random moment. Most mutants are `run`, some `modes` and `compat`; others damage a copy of a
-history (truncated, bytes overwritten, datasets or attributes deleted or retyped, the stored
-case text broken) and give it to `info`, `plot`, `export` or `run --resume`.
+random moment (--no-interrupts leaves it out: where SIGINT lands depends on the machine's
+speed, every other outcome does not). Most mutants are `run`, some `modes` and `compat`;
+others damage a copy of a history (truncated, bytes overwritten, datasets or attributes
+deleted or retyped, the stored case text broken) and give it to `info`, `plot`, `export` or
+`run --resume`.
 
 Mutants run in-process through `transient.cli.main` in a worker subprocess (many in sequence)
 with an address-space limit (RLIMIT_AS) and a per-mutant timeout; a crash, a timeout or a
@@ -19,13 +21,16 @@ MemoryError restarts the worker and is reported, so a runaway mutant never hangs
 Warnings are recorded (`simplefilter("always")`), stdout and stderr captured at the Python and
 the file-descriptor level. Outcome classes are the counts of exit 0, 2, 3 and 130 and of the
 mutants with a FAILURE: another exit code, an uncaught exception, a traceback, a Python warning,
-an error message of more than one line or not starting with 'error: ', stderr output on
-success, a timeout, the memory bound, a crash. One example is shown per failure class. Mutant i
-of seed S is the same on every machine: `--only I` runs it again, `--keep DIR` keeps its files
-so its command line reruns as printed. The exit code is 1 when a FAILURE occurred.
+an exception Python could only ignore (in a finalizer), an error message of more than one line,
+not starting with 'error: ' or naming no file, stderr output on success, a timeout, the memory
+bound, a crash. One example is shown per failure class. Mutant i of seed S makes the same
+mutations on every machine (a base history's bytes hold its timings and paths, so the same
+overwritten bytes may hit another structure): `--only I` runs it again, `--keep DIR` keeps its
+files so its command line reruns as printed. The exit code is 1 when a FAILURE occurred.
 
     python tools/fuzz_cases.py [--mutants N] [--seed S] [--cases a,b] [--json] [--keep DIR]
-                               [--only I,J] [--timeout SECONDS] [--memory-gb GB]
+                               [--only I,J] [--no-interrupts] [--timeout SECONDS]
+                               [--memory-gb GB]
 """
 import argparse
 import copy
@@ -63,8 +68,11 @@ BASES = {
     "pad_disc": ({"parts.disc.mesh.divisions": [2, 36, 1], "parts.disc.mesh.element": "hex8",
                   "parts.pad.mesh.divisions": [3, 8, 1, 1], "parts.pad.mesh.element": "hex8",
                   "solver.reduction.fmax": 6000.0, "solver.modes.fmax": 6000.0}, 2e-3),
+    # its contact statics (250 shapes of 624 points) would make most of the setup and of the
+    # exponential scheme's coefficients: the larger 30 are kept
     "drilled_cube": ({"parts.lower.mesh.divisions": [6, 6, 3],
-                      "parts.upper.mesh.divisions": [2, 2, 2]}, 5e-4),
+                      "parts.upper.mesh.divisions": [2, 2, 2],
+                      "solver.reduction.statics_tolerance": 0.3}, 5e-4),
 }
 # The package's own bounds, well inside the worker's: a mutant that makes the mesh or the run
 # large is refused by them (exit 2) instead of taking minutes or the fuzzer's memory.
@@ -80,7 +88,8 @@ FACE_SETS = {"bar_impact": ["bar.xmin", "bar.ymax"], "two_bars": ["left.xmin", "
 
 TIMEOUT_S = 60.0          # a guard against a hung mutant, far above any mutant's cost
 MEMORY_GB = 3.0           # RLIMIT_AS of the worker; limits.memory keeps models far below it
-OUTPUT_CHARS = 4000       # of stdout kept per mutant (a failure's example shows the rest)
+OUTPUT_CHARS = 4000       # of stdout kept per mutant (stdout is not judged, only kept)
+STDERR_CHARS = 100000     # of stderr kept (judged: one line 'error: ...' is far shorter)
 RESTART_VM_GB = 2.0       # a worker grown beyond this is restarted before the next mutant
 SUCCESS_CODES = (0, 2, 3, 130)
 CASE_COMMANDS = (("run", 78), ("modes", 12), ("compat", 10))
@@ -141,7 +150,19 @@ def toml_value(value):
 
 
 def dumps(data):
-    """TOML text of a case dict: scalars of a table under its [header], sub-tables after."""
+    """TOML text of a case dict: scalars of a table under its [header], sub-tables after.
+
+    Parameters
+    ----------
+    data : dict
+        Tables, strings (any character), numbers (nan, inf and ints of any size), booleans,
+        lists, and `Raw` text written as it is.
+
+    Returns
+    -------
+    str
+        ASCII TOML that tomllib reads back to data (Raw values aside).
+    """
     lines = []
 
     def table(node, path):
@@ -318,6 +339,7 @@ class Draft:
     notes: list = field(default_factory=list)
     history: Path = None           # history mutants: the damaged copy
     case_file: Path = None
+    interrupts: bool = True        # Ctrl-C mutations allowed (their outcome depends on timing)
 
     def note(self, text):
         self.notes.append(one_line(text))
@@ -411,6 +433,8 @@ def m_unknown(d):
 def m_rename(d):
     """A table renamed: a near miss, another name, or one that cannot be a key."""
     tables = d.paths(lambda p, v: isinstance(v, dict))
+    if not tables:
+        return False
     path = d.pick(tables)
     name = misspell(d.rng, path[-1]) if d.rng.random() < 0.4 else d.pick(BAD_NAMES)
     parent = get(d.data, path[:-1])
@@ -542,6 +566,10 @@ def m_mesh_file(d):
     else:
         if choice == "empty":
             (d.directory / "empty.msh").write_bytes(b"")
+        elif choice == "newline":
+            # a file that exists under a name with a newline, so the messages that follow
+            # the read name it
+            shutil.copy(MESHES / "two_hex_v4.msh", d.directory / "mesh\n.msh")
         path = {"missing": "missing.msh", "directory": d.pick([".", str(d.directory)]),
                 "proc": d.pick(["/proc/self/status", "/proc/self/cmdline", "/proc"]),
                 "device": d.pick(["/dev/null", "/dev/zero"]), "empty": "empty.msh",
@@ -643,7 +671,8 @@ def m_output(d):
     where = d.pick(["-o", "-o", "output.file", "output.vtu"] if d.command == "run"
                    else ["output.vtu"])
     if target == "FIFO":
-        os.mkfifo(d.directory / "fifo.h5")
+        if not (d.directory / "fifo.h5").exists():
+            os.mkfifo(d.directory / "fifo.h5")
         target = "DIR/fifo.h5"
     elif target == "FOREIGN":
         shutil.copy(d.pick(sorted(MESHES.iterdir())), d.directory / "foreign.h5")
@@ -655,7 +684,7 @@ def m_output(d):
     if where == "-o":
         d.output = target
     else:
-        d.data.setdefault("output", {})[where.split(".")[1]] = resolve(target, d)
+        put(d.data, tuple(where.split(".")), resolve(target, d))
         if where == "output.file":
             d.output = None
     d.note(f"output: {where} = {short(target)}")
@@ -711,9 +740,10 @@ def m_variation(d):
 
 def m_interrupt(d):
     """Ctrl-C (SIGINT) at a random moment of the command."""
-    if d.command != "run":
+    if d.command != "run" or not d.interrupts:
         return False
-    d.interrupt = round(d.rng.uniform(0.02, 1.5), 3)
+    # log-uniform from the setup's first milliseconds to past the end of most runs
+    d.interrupt = round(10 ** d.rng.uniform(-2.5, 0.5), 4)
     d.note(f"SIGINT after {d.interrupt} s")
     return True
 
@@ -721,7 +751,7 @@ def m_interrupt(d):
 CASE_MUTATIONS = [(m_type, 10), (m_extreme, 12), (m_delete, 8), (m_unknown, 6), (m_rename, 6),
                   (m_kind, 6), (m_reference, 8), (m_cell_set, 5), (m_mesh_file, 7), (m_deep, 4),
                   (m_control, 6), (m_text, 4), (m_set, 6), (m_output, 6), (m_variation, 14),
-                  (m_interrupt, 2)]
+                  (m_interrupt, 3)]
 
 
 @functools.lru_cache(maxsize=None)
@@ -870,12 +900,13 @@ def damage_history(d, layout):
     return False
 
 
-def history_mutant(d, base_history, base_case_file, layout):
+def history_mutant(d, base_history, base_case_file):
     """A damaged copy of a history, and the command reading it with unusual options."""
     d.history = d.directory / "history.h5"
     shutil.copy(base_history, d.history)
     for _ in range(d.rng.choices([0, 1, 2, 3], [2, 5, 2, 1])[0]):
-        if damage_history(d, layout):
+        # what the damage before left: a deleted dataset cannot be damaged again
+        if damage_history(d, history_layout(d.history)):
             break
     command = d.rng.choices(*zip(*HISTORY_COMMANDS))[0]
     h = str(d.history)
@@ -916,7 +947,7 @@ def history_mutant(d, base_history, base_case_file, layout):
     if command.startswith("plot") and d.rng.random() < 0.15:
         argv += ["-o", d.pick(["/proc/p.png", str(d.directory), "/dev/full",
                                str(d.directory / "missing" / "p.png")])]
-    d.note(f"command: {command}")
+    d.note("command: " + " ".join("HISTORY" if a == h else a for a in argv))
     return argv
 
 
@@ -960,23 +991,36 @@ def case_mutant(d):
     return argv
 
 
-def make_mutant(seed, index, bases, directory, histories):
-    """Mutant `index` of `seed`: the same on every machine, whatever ran before it.
+def make_mutant(seed, index, bases, directory, histories, interrupts=True):
+    """Mutant `index` of `seed`, its files written: the same on every machine, whatever ran
+    before it.
 
-    histories: callable(name) -> (history path, its case file, its layout), making the base
-    history on first use.
+    Parameters
+    ----------
+    seed, index : int
+    bases : list of str
+        Base cases the mutant may start from (keys of BASES).
+    directory : Path
+        Where its files go (made here; it must not exist).
+    histories : callable(name) -> (history path, its case file)
+        The base histories of HISTORY_RUNS, made on first use.
+    interrupts : bool
+        Allow Ctrl-C mutations (without them no outcome depends on the machine's speed).
+
+    Returns
+    -------
+    Mutant
     """
     rng = random.Random(f"{seed}:{index}")
     base = rng.choice(bases)
     directory.mkdir(parents=True)
-    d = Draft(rng, directory, base)
+    d = Draft(rng, directory, base, interrupts=interrupts)
     d.case_file = directory / "case.toml"
     runs = [n for n, (b, _, _) in HISTORY_RUNS.items() if b in bases]
     if runs and rng.random() < HISTORY_SHARE:
         name = rng.choice(runs)
         d.base = HISTORY_RUNS[name][0]
-        history, case_file, layout = histories(name)
-        argv = history_mutant(d, history, case_file, layout)
+        argv = history_mutant(d, *histories(name))
         d.notes.insert(0, f"history '{name}' of {d.base}")
         return Mutant(index, d.base, argv, d.notes, directory)
     d.data = base_case(base)
@@ -1026,15 +1070,39 @@ def _interrupt(result):
     os.kill(os.getpid(), signal.SIGINT)
 
 
+def _before_command(exc):
+    """exc was raised while main parsed its arguments, before the command began."""
+    own = [f for f in traceback.extract_tb(exc.__traceback__)
+           if Path(f.filename).parts[-2:] == ("cli", "commands.py")]
+    return bool(own) and all("parse_args" in (f.line or "") for f in own)
+
+
 def _vm():
-    """(VmSize, VmHWM) of this process [bytes]."""
+    """VmSize of this process [bytes]: what RLIMIT_AS bounds."""
     status = dict(line.split(":", 1) for line in Path("/proc/self/status").read_text()
                   .splitlines() if ":" in line)
-    return tuple(int(status[k].split()[0]) * 1024 for k in ("VmSize", "VmHWM"))
+    return int(status["VmSize"].split()[0]) * 1024
 
 
 def run_job(main, job):
-    """Run one command line through main; what it returned, raised, printed and warned."""
+    """Run one command line through main in this process.
+
+    Parameters
+    ----------
+    main : callable(argv) -> int
+        `transient.cli.main`.
+    job : dict
+        id, argv, cwd (the working directory) and interrupt (seconds after which SIGINT is
+        sent, or None).
+
+    Returns
+    -------
+    dict
+        id, code (what main returned, or the SystemExit code), exception and traceback (of
+        what escaped main), before_command, interrupted (SIGINT delivered while main ran),
+        unraisable (exceptions Python ignored), warnings, stdout, stderr (Python and
+        file-descriptor level), seconds, vm (VmSize after it).
+    """
     out, err = _Text(), _Text()
     saved = os.dup(1), os.dup(2)
     raw = tempfile.TemporaryFile(), tempfile.TemporaryFile()
@@ -1043,7 +1111,9 @@ def run_job(main, job):
     streams = sys.stdout, sys.stderr
     sys.stdout, sys.stderr = out, err
     result = {"id": job["id"], "code": None, "exception": None, "traceback": None,
-              "interrupted": False}
+              "interrupted": False, "unraisable": []}
+    sys.unraisablehook = lambda u: result["unraisable"].append(
+        f"{u.exc_type.__name__} in {one_line(repr(u.object))[:200]}")
     timer = None
     t0 = time.perf_counter()
     try:
@@ -1062,9 +1132,10 @@ def run_job(main, job):
             except SystemExit as exc:
                 result["code"] = (0 if exc.code is None else exc.code
                                   if isinstance(exc.code, int) else 1)
-            except BaseException as exc:   # noqa: B902 -- what escapes main is the finding
+            except BaseException as exc:   # whatever escapes main is the finding
                 result["exception"] = f"{type(exc).__name__}: {one_line(exc)[:300]}"
                 result["traceback"] = traceback.format_exc()[-6000:]
+                result["before_command"] = _before_command(exc)
             finally:
                 _ARMED[0] = False
                 if timer is not None:
@@ -1073,6 +1144,7 @@ def run_job(main, job):
         result["warnings"] = [f"{w.category.__name__}: {one_line(w.message)[:300]} "
                               f"({w.filename}:{w.lineno})" for w in caught]
     finally:
+        sys.unraisablehook = sys.__unraisablehook__
         sys.stdout, sys.stderr = streams
         os.dup2(saved[0], 1)
         os.dup2(saved[1], 2)
@@ -1083,8 +1155,8 @@ def run_job(main, job):
     for f in raw:
         f.close()
     result["stdout"] = (out.getvalue() + low[0])[:OUTPUT_CHARS]
-    result["stderr"] = err.getvalue() + low[1]
-    result["vm"], result["rss"] = _vm()
+    result["stderr"] = (err.getvalue() + low[1])[:STDERR_CHARS]
+    result["vm"] = _vm()
     return result
 
 
@@ -1174,7 +1246,10 @@ class Worker:
         except (EOFError, BrokenPipeError):
             code = self.proc.wait()
             self.stop()
-            tail = Path(self.log_path).read_bytes()[-3000:].decode(errors="backslashreplace")
+            # the log holds every worker's: this crash is its last fatal error, if it said one
+            log = Path(self.log_path).read_bytes().decode(errors="backslashreplace")
+            fatal = log.rfind("Fatal Python error")
+            tail = log[fatal:] if fatal >= 0 else log[-3000:]
             return {"id": job["id"], "crash": code, "seconds": time.monotonic() - t0,
                     "stderr": tail}
         # a MemoryError or an interrupt may leave the package half imported or cached;
@@ -1189,8 +1264,20 @@ class Worker:
 
 
 def classify(result):
-    """(outcome, failure classes) of a worker result: outcome an exit code of the contract
-    (0, 2, 3, 130) or 'FAILURE'."""
+    """What a worker result says of the contract.
+
+    Parameters
+    ----------
+    result : dict
+        `run_job`'s result, or `Worker.run`'s for a timeout or a crash.
+
+    Returns
+    -------
+    outcome : int or str
+        The exit code (0, 2, 3 or 130), or 'FAILURE'.
+    failures : list of str
+        The failure classes, empty when the outcome is an exit code.
+    """
     failures = []
     if "timeout" in result:
         return "FAILURE", [f"timeout: no result within {result['timeout']:g} s"]
@@ -1199,6 +1286,12 @@ def classify(result):
         what = f"signal {-code}" if code < 0 else f"exit {code}"
         return "FAILURE", [f"crash: the worker died ({what})"]
     exception = result.get("exception")
+    interrupted = result.get("interrupted")
+    if exception and exception.startswith("KeyboardInterrupt") and interrupted and result.get(
+            "before_command"):
+        # Ctrl-C in the few milliseconds main parses its arguments is Ctrl-C at start-up,
+        # like one during the imports before main: Python's traceback, not the package's
+        return 130, []
     if exception:
         failures.append("memory bound: MemoryError" if exception.startswith("MemoryError")
                         else f"uncaught exception: {exception.split(':')[0]}")
@@ -1208,13 +1301,24 @@ def classify(result):
     stderr = result.get("stderr", "")
     if "Traceback (most recent call last)" in stderr:
         failures.append("traceback on stderr")
-    failures += sorted({f"warning: {w.split(':')[0]}" for w in result.get("warnings", [])})
+    # an interrupted stdlib iterator (glob's scandir) warns when collected; Python shows no
+    # ResourceWarning by default
+    failures += sorted({f"warning: {w.split(':')[0]}" for w in result.get("warnings", [])
+                        if not (interrupted and w.startswith("ResourceWarning"))})
+    for u in result.get("unraisable", []):
+        # Python's own behaviour at Ctrl-C: a KeyboardInterrupt raised in a finalizer is
+        # ignored (and printed); the package cannot catch it
+        if not (u.startswith("KeyboardInterrupt ") and interrupted):
+            failures.append(f"unraisable exception: {u.split(' ')[0]}")
     lines = stderr.splitlines()
     if code in (2, 3) and not exception:
         if len(lines) != 1:
             failures.append(f"error message of {'no' if not lines else 'several'} line(s)")
         elif not lines[0].startswith("error: "):
             failures.append("error message not starting with 'error: '")
+        elif code == 2 and not re.match(r"error: (/|\.|command line)", lines[0]):
+            # every path the fuzzer gives is absolute ('.' is what -o '' names)
+            failures.append("error message naming no file")
     elif code == 0 and stderr and not exception:
         failures.append("stderr output on exit 0")
     elif code == 130 and len(lines) > 1:
@@ -1242,7 +1346,7 @@ def _clip(text, n):
 def example(mutant, result):
     """What a report shows of a failing mutant."""
     return {"id": mutant.id, "base": mutant.base, "mutations": mutant.notes,
-            "command": shell(mutant.argv), "directory": str(mutant.directory),
+            "command": _clip(shell(mutant.argv), 600), "directory": str(mutant.directory),
             "code": result.get("code"), "exception": result.get("exception"),
             "stderr": one_line(_clip(result.get("stderr", ""), 1500)),
             "stderr_lines": len(result.get("stderr", "").splitlines()),
@@ -1251,7 +1355,7 @@ def example(mutant, result):
 
 
 def fuzz(mutants=200, seed=0, cases=None, keep=None, only=None, timeout=TIMEOUT_S,
-         memory_gb=MEMORY_GB, progress=None):
+         memory_gb=MEMORY_GB, progress=None, interrupts=True):
     """Generate and run mutants; the outcome classes and one example per failure class.
 
     Parameters
@@ -1273,6 +1377,9 @@ def fuzz(mutants=200, seed=0, cases=None, keep=None, only=None, timeout=TIMEOUT_
         Address-space limit of the worker [GB].
     progress : callable(str), optional
         Called with a line every 100 mutants.
+    interrupts : bool
+        Include Ctrl-C mutations. Where SIGINT lands depends on the machine's speed, so
+        without them every outcome is the same on every machine.
 
     Returns
     -------
@@ -1303,7 +1410,7 @@ def fuzz(mutants=200, seed=0, cases=None, keep=None, only=None, timeout=TIMEOUT_
             directory = root / f"m{i:05d}"
             if directory.exists():
                 shutil.rmtree(directory)
-            mutant = make_mutant(seed, i, bases, directory, histories)
+            mutant = make_mutant(seed, i, bases, directory, histories, interrupts)
             result = _run_mutant(worker_, mutant, timeout)
             outcome, classes = classify(result)
             outcomes[outcome] = outcomes.get(outcome, 0) + 1
@@ -1328,11 +1435,14 @@ def fuzz(mutants=200, seed=0, cases=None, keep=None, only=None, timeout=TIMEOUT_
     return {"seed": seed, "mutants": len(ids), "cases": bases,
             "seconds": round(time.perf_counter() - t0, 1),
             "worker_restarts": max(worker_.restarts, 0), "slowest": slowest,
-            "outcomes": {str(k): v for k, v in sorted(outcomes.items(), key=str)},
+            "outcomes": {str(k): v for k, v in sorted(
+                outcomes.items(), key=lambda kv: (kv[0] == "FAILURE", str(kv[0]).zfill(3)))},
             "failures": failures}
 
 
 def _run_mutant(worker_, mutant, timeout):
+    """The worker's result of mutant, with the lock on its output held meanwhile if it
+    asks for one."""
     job = {"id": mutant.id, "argv": mutant.argv, "cwd": str(mutant.directory),
            "interrupt": mutant.interrupt}
     if mutant.lock is None:
@@ -1345,11 +1455,11 @@ def _run_mutant(worker_, mutant, timeout):
 
 
 def _make_history(worker_, directory, name, timeout):
-    """Run the base of HISTORY_RUNS[name] once: (its history, its case file, layout)."""
+    """Run the base of HISTORY_RUNS[name] once: (its history, its case file)."""
     base, extra, expected = HISTORY_RUNS[name]
     directory.mkdir(parents=True, exist_ok=True)
     data = base_case(base)
-    data.setdefault("output", {})["contact"] = True
+    put(data, ("output", "contact"), True)
     for key, value in extra.items():
         put(data, tuple(key.split(".")), value)
     case_file = directory / f"{name}.toml"
@@ -1361,7 +1471,7 @@ def _make_history(worker_, directory, name, timeout):
     if result.get("code") != expected:
         raise RuntimeError(f"the base history '{name}' could not be made (expected exit "
                            f"{expected}): {json.dumps(result)[:2000]}")
-    return history, case_file, history_layout(history)
+    return history, case_file
 
 
 def format_report(report):
@@ -1405,6 +1515,8 @@ def main(argv=None):
     parser.add_argument("--keep", metavar="DIR", help="keep every mutant's files in DIR")
     parser.add_argument("--timeout", type=float, default=TIMEOUT_S, metavar="SECONDS")
     parser.add_argument("--memory-gb", type=float, default=MEMORY_GB, metavar="GB")
+    parser.add_argument("--no-interrupts", action="store_true", help="no Ctrl-C mutations "
+                        "(then no outcome depends on the machine's speed)")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -1414,7 +1526,8 @@ def main(argv=None):
     try:
         report = fuzz(args.mutants, args.seed, [c for c in args.cases.split(",") if c],
                       args.keep, only, args.timeout, args.memory_gb,
-                      lambda line: print(line, file=sys.stderr, flush=True))
+                      lambda line: print(line, file=sys.stderr, flush=True),
+                      not args.no_interrupts)
     except (ValueError, RuntimeError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -52,7 +52,7 @@ def parse_override(assignment, path):
         raise CaseError(path, f"--set {assignment}", "expected KEY.PATH=VALUE")
     try:
         value = tomllib.loads(f"v = {literal.strip()}")["v"]
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, ValueError):     # ValueError: an int of 5000 digits
         value = literal.strip()
     return keys, value
 
@@ -90,7 +90,7 @@ def parse(text, path, overrides=()):
         raw = tomllib.loads(text)
         raw = apply_overrides(raw, overrides, path)
         data = _Validator(path).table(S.CASE, raw, "")
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, ValueError) as exc:
         raise CaseError(path, "", f"invalid TOML: {exc}") from None
     except RecursionError:
         raise CaseError(path, "", "tables or arrays nested too deeply") from None

@@ -83,6 +83,8 @@ class Rows:
 
     def finite_rows(self, n):
         """How many of the first n rows are finite in every output."""
+        if n <= 0:
+            return 0
         bad = np.zeros(n, bool)
         for x in self.arrays:
             bad |= ~np.isfinite(x[:n].reshape(n, -1)).all(axis=1)

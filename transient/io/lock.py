@@ -28,17 +28,32 @@ def is_history(path):
         return False
 
 
+def _kind(path, key):
+    """'dir', 'file', 'other' or None (absent) of an output path; CaseError for a path the
+    system cannot even look up (too long, a NUL in it)."""
+    try:
+        if not path.exists():
+            return None
+        return "dir" if path.is_dir() else "file" if path.is_file() else "other"
+    except (OSError, ValueError) as exc:
+        raise CaseError(path, key, f"not a usable file name ({exc})") from None
+
+
 def check_writable(path, key):
     """Refuse (CaseError) an output file that cannot be written, before the work that makes
-    it: a missing or read-only directory, a directory in its place."""
+    it: a missing or read-only directory, a directory, device or pipe in its place."""
     path = Path(path)
-    if path.is_dir():
+    kind = _kind(path, key)
+    if kind == "dir":
         raise CaseError(path, key, "is a directory: expected a file")
-    existed = path.exists()
+    if kind == "other":
+        raise CaseError(path, key, "is a device, pipe or socket: expected a file")
+    existed = kind is not None
     try:
         open(path, "ab").close()
-    except OSError as exc:
-        raise CaseError(path, key, f"cannot write: {exc.strerror or exc}") from None
+    except (OSError, ValueError) as exc:        # ValueError: a NUL in the name
+        raise CaseError(path, key, f"cannot write: {getattr(exc, 'strerror', None) or exc}") \
+            from None
     if not existed:
         path.unlink()
 
@@ -52,9 +67,10 @@ def writing(path, key, resume=False):
     anything was written to it.
     """
     path = Path(path)
-    if path.is_dir():
+    kind = _kind(path, key)
+    if kind == "dir":
         raise CaseError(path, key, "is a directory: expected a history file (.h5)")
-    if path.exists() and not path.is_file():
+    if kind == "other":
         raise CaseError(path, key, "is not a history but a device, pipe or socket: not "
                         "written")
     existed = path.exists() and path.stat().st_size > 0
@@ -65,8 +81,9 @@ def writing(path, key, resume=False):
                         "overwritten (choose another output file)")
     try:
         handle = open(path, "ab")
-    except OSError as exc:
-        raise CaseError(path, key, f"cannot write: {exc.strerror or exc}") from None
+    except (OSError, ValueError) as exc:        # ValueError: a NUL in the name
+        raise CaseError(path, key, f"cannot write: {getattr(exc, 'strerror', None) or exc}") \
+            from None
     try:
         fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:

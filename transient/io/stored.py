@@ -66,7 +66,7 @@ def read_summary(path):
         raise CaseError(path, "", "file not found")
     try:
         return summary(path)
-    except (OSError, KeyError, ValueError, TypeError) as exc:
+    except (OSError, KeyError, ValueError, TypeError, RuntimeError) as exc:
         raise CaseError(path, "", f"not a transient history, or a damaged one ({exc})") from None
 
 

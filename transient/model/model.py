@@ -171,7 +171,7 @@ def _loads(case, parts, points, M):
             f[3 * part.offset:3 * part.offset + local.size] += local.ravel()
         elif spec.kind == "force":
             part = parts[spec.part]
-            node = nearest_node(part.mesh.points, spec.point) + part.offset
+            node = _nearest(case, part, spec.point, f"{key}.point")
             f[3 * node:3 * node + 3] += spec.vector
         else:
             acc = np.zeros((len(points), 3))
@@ -183,12 +183,25 @@ def _loads(case, parts, points, M):
     return out
 
 
+def _nearest(case, part, point, key):
+    """Global id of the part's node nearest point; a point farther from every node than the
+    part's own size is an error, not its nearest node."""
+    points = part.mesh.points
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    size = float(np.linalg.norm(hi - lo))
+    # compared by coordinate, which no magnitude overflows
+    if not np.all(np.abs(np.asarray(point, float) - 0.5 * (lo + hi)) <= 2.0 * size + 1e-12):
+        raise CaseError(case.path, key, f"{list(point)} is far from part '{part.name}' (its "
+                        f"nodes lie in the box {lo.tolist()} to {hi.tolist()})")
+    return nearest_node(points, point) + part.offset
+
+
 def _sensors(case, parts, ndof):
     names, rows, cols, vals = [], [], [], []
     for i, (sname, spec) in enumerate(case.sensors.items()):
         part = parts[spec.part]
         d = np.asarray(spec.direction, float)
-        node = nearest_node(part.mesh.points, spec.point) + part.offset
+        node = _nearest(case, part, spec.point, f"sensors.{sname}.point")
         names.append(sname)
         rows += [i] * 3
         cols += list(range(3 * node, 3 * node + 3))

@@ -1,0 +1,86 @@
+"""tools/fuzz_cases.py: its TOML writer and its outcome classes, then a fixed seed of mutants
+through the command line, each of which must exit 0, 2 or 3 and none end in a FAILURE (a
+traceback, a warning, an error message that is not one line 'error: ...', a crash, the memory
+bound, a timeout). No outcome depends on the machine's speed: the Ctrl-C mutations (where
+SIGINT lands is a matter of timing) are left out, and the timeout only guards against a hung
+mutant (the slowest take a few seconds)."""
+import importlib.util
+import math
+import tomllib
+from pathlib import Path
+
+import pytest
+
+TOOL = Path(__file__).resolve().parent.parent / "tools" / "fuzz_cases.py"
+spec = importlib.util.spec_from_file_location("fuzz_cases", TOOL)
+fuzz = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(fuzz)
+
+SEED = 2026
+MUTANTS = 400
+
+
+@pytest.mark.parametrize("base", sorted(fuzz.BASES))
+def test_base_cases_round_trip_through_the_toml_writer(base):
+    data = fuzz.base_case(base)
+    assert tomllib.loads(fuzz.dumps(data)) == data
+
+
+def test_control_characters_reach_the_package_as_themselves():
+    data = {"title": "a\nb\x00\x1b\u2028\x7f\x85", "t": {"x\ny": [1.5, 2 ** 70, True, {}],
+                                                       "": {"k": -math.inf}}, "e": {}}
+    text = fuzz.dumps(data)
+    assert text.isascii()
+    assert tomllib.loads(text) == data
+
+
+def test_outcomes_of_the_contract_and_failures_beside_them():
+    ok = {"code": 2, "stderr": "error: /c.toml: solver.t_end: expected a number\n"}
+    assert fuzz.classify(ok) == (2, [])
+    assert fuzz.classify({"code": 0, "stderr": ""}) == (0, [])
+    assert fuzz.classify({"code": 130, "stderr": "interrupted\n"}) == (130, [])
+    cases = [({"code": 1, "stderr": ""}, "exit code 1"),
+             ({"code": 2, "stderr": "error: /c.toml: x\nmore\n"}, "error message of several"),
+             ({"code": 2, "stderr": "c.toml: x\n"}, "error message not starting"),
+             ({"code": 2, "stderr": "error: no file named\n"}, "error message naming no file"),
+             ({"code": 0, "stderr": "", "warnings": ["RuntimeWarning: overflow (a.py:1)"]},
+              "warning: RuntimeWarning"),
+             ({"code": None, "exception": "ValueError: x"}, "uncaught exception: ValueError"),
+             ({"code": None, "exception": "MemoryError: "}, "memory bound"),
+             ({"code": 0, "stderr": "Traceback (most recent call last):\n"}, "traceback"),
+             ({"timeout": 60.0}, "timeout"), ({"crash": -11}, "crash"),
+             ({"code": 0, "stderr": "", "unraisable": ["ValueError in <f>"]}, "unraisable")]
+    for result, failure in cases:
+        outcome, failures = fuzz.classify(result)
+        assert outcome == "FAILURE" and any(f.startswith(failure) for f in failures), result
+    # Ctrl-C landing in a finalizer is Python's (ignored and printed), not the package's
+    interrupted = {"code": 0, "stderr": "", "interrupted": True,
+                   "unraisable": ["KeyboardInterrupt in <function remove>"]}
+    assert fuzz.classify(interrupted) == (0, [])
+    # and so is Ctrl-C while main parses its arguments, before the command's own handling
+    early = {"code": None, "exception": "KeyboardInterrupt: ", "interrupted": True,
+             "before_command": True}
+    assert fuzz.classify(early) == (130, [])
+    assert fuzz.classify(dict(early, before_command=False))[0] == "FAILURE"
+
+
+def test_a_mutant_is_the_same_whatever_ran_before_it(tmp_path):
+    # two_bars makes no base history, so every mutant of it is a case mutant
+    made = [fuzz.make_mutant(SEED, i, ["two_bars"], tmp_path / f"{run}{i}", None)
+            for run in ("a", "b") for i in (3, 7)]
+    for first, again in zip(made[:2], made[2:]):
+        assert first.notes == again.notes
+
+        def text(m):
+            # paths the mutations write into the case name the mutant's own directory
+            return (m.directory / "case.toml").read_bytes().replace(bytes(m.directory), b"")
+        assert text(first) == text(again)
+
+
+def test_fixed_seed_has_no_failure(tmp_path):
+    report = fuzz.fuzz(MUTANTS, SEED, keep=tmp_path, timeout=fuzz.TIMEOUT_S, interrupts=False)
+    assert sum(report["outcomes"].values()) == MUTANTS
+    # a seed that ran nothing to its end would test nothing but the validation
+    assert report["outcomes"].get("0", 0) > MUTANTS // 20
+    assert not report["failures"], fuzz.format_report(report)
+    assert set(report["outcomes"]) <= {"0", "2", "3"}
