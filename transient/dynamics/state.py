@@ -50,12 +50,6 @@ class State:
         """Name -> array, as a checkpoint stores them (bit for bit)."""
         return {"state": self.array, "acc": self.acc, "gmin": self.gmin}
 
-    def restore(self, saved):
-        """Set from the arrays of a checkpoint."""
-        self.array[:] = saved["state"]
-        self.acc[:] = saved["acc"]
-        self.gmin[:] = saved["gmin"]
-
 
 @dataclass(frozen=True)
 class Rows:
