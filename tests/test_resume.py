@@ -93,7 +93,7 @@ def wait_for_checkpoint(path, process, timeout=300.0):
     raise AssertionError("no checkpoint written")
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL])
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL])
 def test_a_run_stopped_by_a_signal_resumes_to_the_uninterrupted_run(tmp_path, sig):
     # the run is long enough never to end by itself; the uninterrupted reference and the
     # resume go to a time set after the stop, whenever the signal landed
@@ -112,6 +112,9 @@ def test_a_run_stopped_by_a_signal_resumes_to_the_uninterrupted_run(tmp_path, si
         # what it says it did is what the file holds
         line = next(x for x in out.splitlines() if "aborted" in x)
         assert f"to t = {stopped['t_end']:.6g} s" in line
+    elif sig == signal.SIGTERM:
+        # a batch scheduler's notice: the same orderly stop, checkpoint written
+        assert child.returncode == 143 and stopped["status"] == "aborted: terminated (SIGTERM)"
     else:
         assert child.returncode == -signal.SIGKILL and stopped["status"] == "running"
     t_end = f"solver.t_end={stopped['t_end'] + 1e-3!r}"

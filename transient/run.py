@@ -14,7 +14,7 @@ import numpy as np
 
 from . import __version__
 from .case.checks import check_transient
-from .dynamics.chunks import buffer, chunks, fastest_threads, threaded_blocks
+from .dynamics.chunks import buffer, chunks, fastest_threads, stop_requests, threaded_blocks
 from .dynamics.energy import Balance
 from .errors import RunAborted
 from .io.history import CASE_TEXT, History
@@ -124,7 +124,7 @@ def _loop(case, path, start, progress, t_start):
     status, t_kernel = "complete", 0.0
     bar = _progress_bar(progress, n_total, step)
     out = buffer(system, chunk // every, output.contact)
-    with history:
+    with history, stop_requests() as stop:
         try:
             for c in chunks(scheme, state, n_total, chunk, every, out, step):
                 t_kernel += c.seconds
@@ -140,6 +140,8 @@ def _loop(case, path, start, progress, t_start):
                                     "blocks": scheme.blocks if system.reduced
                                     else np.zeros(0), "balance": balance.arrays()})
                 bar.update(c.done)
+                if stop:
+                    raise RunAborted(stop[0])
                 _check(case, system, state, dt, balance, c.status)
         except RunAborted as exc:
             status = f"aborted: {exc}"
@@ -171,8 +173,10 @@ def _check(case, system, state, dt, balance, status):
     if balance.drift > solver.drift_tolerance:
         point = system.critical.stiffest_point(dt) if solver.scheme == "explicit" else None
         hint = "" if point is None else (
-            f"; with the penalty closed the step runs at omega_max dt = {point[0]:.2f} (limit "
-            f"2): lower contact.{point[1]}.k ({point[2]:.3g} Pa/m) or solver.dt ({dt:.3g} s)")
+            f"; with the penalty closed the step runs at omega_max dt = {point[0]:.2f} (limit 2), "
+            f"the contact at omega_c dt = {dt * system.critical.omega_contact:.2f} (impacts keep "
+            f"their energy to 0.7): lower contact.{point[1]}.k ({point[2]:.3g} Pa/m) or "
+            f"solver.dt ({dt:.3g} s)")
         raise RunAborted(f"energy balance drifted by {balance.drift:.2e} of the peak "
                          f"mechanical energy (tolerance {solver.drift_tolerance:g}) at "
                          f"t = {state.time:.6g} s{hint}")
@@ -184,11 +188,7 @@ def _timings(stages, t_kernel, t_start):
 
 
 class _NoBar:
-    def update(self, n):
-        pass
-
-    def close(self):
-        pass
+    update = close = staticmethod(lambda *args: None)
 
 
 def _progress_bar(progress, total, initial):

@@ -165,7 +165,9 @@ def cmd_run(args):
               f" energy drift {result.energy_drift:.2e}; history: {result.path}")
     if result.status != "complete":
         print(f"error: run {result.status}", file=sys.stderr)
-        return 130 if result.status.endswith("interrupted") else 3
+        if result.status.endswith("interrupted"):
+            return 130
+        return 143 if "terminated" in result.status else 3
     return 0
 
 

@@ -2,9 +2,13 @@
 Python gets it back to store, check and report before the next.
 
 `chunks` yields one Chunk per kernel call; its rows are a view of a buffer the next chunk
-overwrites, so the consumer stores them before asking for the next.
+overwrites, so the consumer stores them before asking for the next. `stop_requests` turns the
+signals that ask a run to stop into a flag read between chunks.
 """
+import signal
+import threading
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 
 import numba
@@ -76,3 +80,29 @@ def fastest_threads(stepper, state, n_sensors, m, steps=20):
             best = min(best, time.perf_counter() - t0)
         times[threads] = best
     return min(times, key=times.get)
+
+
+@contextmanager
+def stop_requests():
+    """Turn SIGINT and SIGTERM into a request the loop reads between chunks: the run stops
+    after the chunk in hand, with its checkpoint written. A KeyboardInterrupt raised wherever
+    the interpreter happens to be can be swallowed (in a weakref or h5py callback) and the run
+    would go on. A second Ctrl-C interrupts at once. Off the main thread (a worker of a
+    campaign) signals are not ours to take."""
+    stop = []
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def request(signum, frame):
+        if stop and signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        stop.append("interrupted" if signum == signal.SIGINT else
+                    f"terminated ({signal.Signals(signum).name})")
+
+    previous = {sig: signal.signal(sig, request) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield stop
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
