@@ -17,7 +17,9 @@ spec.loader.exec_module(study)
 # the energy balance or the critical step that a better integrator may turn into a stable run)
 EXPECTED = {
     "dt/auto": {"stable"},
-    "dt/0.9x": {"stable"},
+    "dt/0.5x": {"stable"},
+    "dt/0.9x": {"refused"},
+    "dt/0.9x forced": {"stable"},
     "dt/1.2x": {"refused"},
     "dt/1.2x forced": {"aborted", "stable"},
     "lambda/bar lambda=1e4": {"stable"},
@@ -79,12 +81,25 @@ def test_dt_above_the_critical_step_is_refused_by_name(rows):
     assert "force_dt" in row["reason"]
 
 
+def test_dt_above_the_contacts_step_is_refused_by_name(rows):
+    # stable, but the penalty runs at omega_c dt = 1.13 where impacts need not keep their
+    # energy (dynamics.critical.CONTACT_OMEGA_DT)
+    row = rows["dt/0.9x"]
+    assert row["outcome"] == "refused" and row["exit_code"] == 2
+    assert "solver.dt" in row["reason"] and "contact.wall.k" in row["reason"]
+    assert "omega_c dt = 1.13" in row["reason"] and "force_dt" in row["reason"]
+
+
 def test_dt_below_the_critical_step_is_stable(rows):
-    for key in ("dt/auto", "dt/0.9x"):
+    for key in ("dt/auto", "dt/0.5x", "dt/0.9x forced"):
         row = rows[key]
         assert row["outcome"] == "stable" and row["status"] == "complete"
         assert 0.0 <= row["energy_drift"] < 0.01 and row["steps"] > 500
-    assert rows["dt/0.9x"]["dt"] == pytest.approx(0.9 * rows["dt/auto"]["dt_critical"])
+    for f in (0.5, 0.9):
+        forced = " forced" if f == 0.9 else ""
+        assert rows[f"dt/{f}x{forced}"]["dt"] == pytest.approx(f * rows["dt/auto"]["dt_critical"])
+    # the automatic step: the contact's, 0.56 x critical on the shipped bar
+    assert rows["dt/auto"]["dt"] == pytest.approx(0.556 * rows["dt/auto"]["dt_critical"], rel=0.01)
 
 
 def test_forced_dt_above_critical_never_leaves_a_nan_in_a_complete_file(rows):

@@ -15,7 +15,7 @@ from .contact.contactset import stack
 from .contact.pair import build_contact, contact_stiffness
 from .dynamics import schemes
 from .dynamics.chunks import buffer
-from .dynamics.critical import critical_tangent
+from .dynamics.critical import CONTACT_OMEGA_DT, critical_tangent
 from .dynamics.state import State
 from .dynamics.system import full_system, reduced_system
 from .errors import CaseError
@@ -163,15 +163,23 @@ def choose_dt(case, setup, stored=None):
         dt = dt or 1.0 / (20.0 * solver.reduction.fmax)
         check_steps(case, dt)
         return dt
-    critical = setup.system.critical.dt
+    critical = setup.system.critical
     if dt == 0.0:
-        dt = 0.9 * critical
+        # stable, and within the range where an impact conserves energy
+        dt = min(0.9 * critical.dt, critical.contact_dt)
         if not np.isfinite(dt):
             raise CaseError(case.path, "solver.dt", "no stiffness bounds the step: give dt")
-    elif dt > critical and not solver.force_dt:
+    elif dt > critical.dt and not solver.force_dt:
         raise CaseError(case.path, "solver.dt", f"{dt:.3e} s is above the critical step of "
-                        f"central differences {critical:.3e} s (set solver.force_dt = true to "
-                        "run anyway)")
+                        f"central differences {critical.dt:.3e} s (set solver.force_dt = true "
+                        "to run anyway)")
+    elif dt > critical.contact_dt and not solver.force_dt:
+        pair = critical.stiffest_point(dt)[1]
+        raise CaseError(case.path, "solver.dt", f"{dt:.3e} s runs the contact's penalty "
+                        f"(contact.{pair}.k) at omega_c dt = {dt * critical.omega_contact:.2f}, "
+                        f"above {CONTACT_OMEGA_DT}, where impacts gain or lose energy at each "
+                        f"chatter: a step up to {critical.contact_dt:.3e} s, a lower "
+                        f"contact.{pair}.k, or solver.force_dt = true to run anyway")
     check_steps(case, dt)
     return dt
 

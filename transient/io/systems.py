@@ -42,7 +42,7 @@ def read_system(f):
     # the critical step evaluates the laws of the system's own contact set
     crit = values["critical"]
     values["critical"] = CriticalStep(crit["dt"], crit["kt_checked"], crit["rows"],
-                                      values["contacts"])
+                                      values["contacts"], crit.get("omega_contact", 0.0))
     return cls(**values)
 
 
@@ -67,6 +67,7 @@ def _write(g, name, value):
     elif isinstance(value, CriticalStep):
         s = g.create_group(name)
         s.attrs["type"], s.attrs["dt"] = "critical", value.dt
+        s.attrs["omega_contact"] = value.omega_contact
         s.create_dataset("kt_checked", data=value.kt_checked)
         s.create_dataset("rows", data=value.rows)
     elif isinstance(value, tuple) and all(isinstance(v, np.ndarray) for v in value):
@@ -96,5 +97,6 @@ def _read(g, name):
                           node["code"][()], node["params"][()], slices)
     if kind == "critical":
         return {"dt": float(node.attrs["dt"]), "kt_checked": node["kt_checked"][()],
-                "rows": node["rows"][()]}
+                "rows": node["rows"][()],
+                "omega_contact": float(node.attrs.get("omega_contact", 0.0))}
     return tuple(node[str(k)][()] for k in range(int(node.attrs["length"])))
