@@ -301,3 +301,24 @@ def test_a_penalty_too_stiff_for_the_explicit_step_runs_within_1_percent_or_is_s
     info = summary(out)
     assert info["status"].startswith("aborted: energy balance drifted")
     assert info["t_end"] < 0.05 * 1.2e-4 * 1.5
+
+
+def test_the_run_says_which_factorization_each_stage_used_and_why(tmp_path, capsys):
+    from transient.solve.linsolve import available
+    out = tmp_path / "bar.h5"
+    assert main(["run", str(CASES / "bar_impact.toml"), "-o", str(out), "--quiet",
+                 "--set", 'solver.scheme="implicit"', "--set", "solver.dt=1e-7",
+                 "--set", "solver.t_end=1e-6"]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if "factorizations" in x)
+    kernel = "cholmod" if "cholmod" in available() else "superlu"
+    assert f"iteration operator {kernel} (explicit" in line
+    with h5py.File(out, "r") as f:
+        assert json.loads(f.attrs["iteration_operator"])["backend"] == kernel
+    # a reduced model factorizes K - sigma M once, on the best backend installed or the asked
+    assert main(["run", str(CASES / "bar_impact.toml"), "-o", str(out), "--quiet",
+                 "--set", "solver.reduction.enabled=true", "--set", "solver.reduction.fmax=2e5",
+                 "--set", 'solver.scheme="exponential"', "--set", "solver.dt=1e-7",
+                 "--set", "solver.t_end=1e-6", "--set", 'solver.linear_solver="superlu"',
+                 "--set", "parts.bar.mesh.divisions=[20,1,1]"]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if "factorizations" in x)
+    assert "stiffness superlu (solver.linear_solver)" in line

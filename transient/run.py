@@ -91,7 +91,7 @@ def _new(case, path):
                              geometry=setup.geometry, system=system)
     history.append(series(system, output, setup.rows0))
     return _Start(system, setup.state.copy(), 0, dt, scheme, history,
-                  Balance(setup.rows0.energy[0]), stages, setup.meta)
+                  Balance(setup.rows0.energy[0]), stages, {**setup.meta, **scheme.meta})
 
 
 def _resume(case, path):

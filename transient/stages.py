@@ -22,6 +22,7 @@ from .errors import CaseError
 from .kernels.codes import ENERGY_TERMS, NO_CONVERGENCE, NOT_FINITE, OK
 from .model import build_model
 from .reduce.stage import reduce
+from .solve.linsolve import why
 from .solve.lowrank import ContactSolver
 from .solve.preload import PreloadError, solve_preload
 
@@ -115,6 +116,10 @@ def _prepare(case):
     rows0 = schemes.initial_acceleration(system, state, case.output.contact,
                                          system.M if consistent else None)
     meta.update(_contact_meta(pairs, contacts, preload))
+    if cs is not None:
+        # K - sigma M: the preload's Newton, shift-invert and the static responses
+        meta["factorizations"] = {"stiffness": why(getattr(cs.solve0, "backend", "?"),
+                                                   solver.linear_solver)}
     return Setup(system, state, rows0, stages, meta, _geometry(case, system, pairs))
 
 

@@ -135,7 +135,14 @@ def _model_line(meta):
     if "sampling" in meta:
         parts.append(f"sampling residual {meta['sampling']['residual']:.1e} on "
                      f"{meta['sampling']['band_modes']} modes")
-    return "; ".join(parts)
+    factorized = {**meta.get("factorizations", {})}
+    if "iteration_operator" in meta:
+        factorized["iteration operator"] = meta["iteration_operator"].get("why", "?")
+    line = "; ".join(parts)
+    if factorized:
+        line += ("\n" if line else "") + "factorizations: " + ", ".join(
+            f"{k} {v}" for k, v in factorized.items())
+    return line
 
 
 def cmd_run(args):

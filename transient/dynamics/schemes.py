@@ -125,7 +125,11 @@ def _newmark_operator(system, dt, linear_solver):
         raise CaseError("", "solver", f"Newmark's iteration operator: {exc}") from None
     factors = (p_in, L, U, p_out)
     Z = newmark.factor_columns(factors, csr_triplet(system.C), n)
-    meta = {"iteration_operator": {"backend": backend,
+    # the kernel solves with explicit triangular factors, which PARDISO does not hand out
+    how = ("cholmod (explicit L L^T for the kernel)" if backend == "cholmod" else
+           "superlu (explicit L U for the kernel: PARDISO keeps its factors, CHOLMOD needs "
+           "scikit-sparse)")
+    meta = {"iteration_operator": {"backend": backend, "why": how,
                                    "factor_nonzeros": int(len(L[2]) + len(U[2]))}}
     return factors, Z, np.ascontiguousarray(system.C @ Z), meta
 

@@ -29,6 +29,16 @@ def available():
     return names + ["superlu"]
 
 
+def why(backend, asked):
+    """Why a factorization ran on backend, for the run's output: asked by the case's
+    solver.linear_solver, or the best one installed."""
+    if asked != "auto":
+        return f"{backend} (solver.linear_solver)"
+    note = "" if backend == "cholmod" or "cholmod" in available() else (
+        "; CHOLMOD needs scikit-sparse")
+    return f"{backend} (the best installed{note})"
+
+
 def factorize(A, backend="auto", definite=True):
     """Factorize a symmetric matrix A; returns solve(b) with b of shape (n,) or (n, k).
 
