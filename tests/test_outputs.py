@@ -122,3 +122,24 @@ def test_sigkill_during_the_setup_leaves_an_empty_file_a_next_run_takes(tmp_path
 def test_a_vtu_that_cannot_be_written_is_refused_before_the_modes(tmp_path, capsys, no_model):
     err = refused(capsys, ["modes", BAR, "--set", f'output.vtu="{tmp_path}/no/m.vtu"'])
     assert ": output.vtu: cannot write" in err
+
+
+def test_ctrl_c_while_numba_loads_a_kernel_is_an_interruption(monkeypatch, capsys):
+    # Numba's cache loader turns a KeyboardInterrupt into a SystemError raised from it
+    import transient.cli.commands as commands
+
+    def loading(args):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("<built-in function loads> returned a result with an exception "
+                              "set") from exc
+    monkeypatch.setitem(commands.COMMANDS, "info", loading)
+    assert commands.main(["info", "x.h5"]) == 130
+    assert capsys.readouterr().err == "interrupted\n"
+
+    def broken(args):
+        raise SystemError("something else")
+    monkeypatch.setitem(commands.COMMANDS, "info", broken)
+    with pytest.raises(SystemError):
+        commands.main(["info", "x.h5"])
