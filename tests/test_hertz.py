@@ -211,3 +211,19 @@ def test_hertz_impact_within_5_percent_of_johnson(case_path, model):
         _, force_wrong, time_wrong = johnson(wrong * E)
         assert abs(measured["F_max"] / force_wrong - 1) > 0.05
         assert abs(measured["t_c"] / time_wrong - 1) > 0.05
+
+
+@pytest.mark.parametrize("corrector, limit", [("propagated", 0.5), ("evaluated", 2.0)])
+def test_explicit_correctors_of_a_stiff_penalty_are_refused_by_name(case_path, corrector, limit,
+                                                                    capsys):
+    # the exponential scheme at the implicit runs' step: the penalty, open at the preload, is
+    # all remainder, at omega dt = 833 of its own frequency. "propagated" used to report a
+    # complete run in which every contact bounced within one step, unseen by the rows
+    from transient.cli import main
+    sets = MODELS["reduced"] + ['solver.scheme="exponential"', f'solver.corrector="{corrector}"']
+    code = main(["run", str(case_path), "-o", str(case_path.with_name("refused.h5")), "--quiet"]
+                + [a for s in sets for a in ("--set", s)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1
+    assert "solver.dt" in err and "contact.wall.k" in err and 'solver.corrector = "implicit"' in err
+    assert f"omega dt = 833, above {limit:g}" in err

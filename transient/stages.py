@@ -15,7 +15,7 @@ from .contact.contactset import stack
 from .contact.pair import build_contact, contact_stiffness
 from .dynamics import schemes
 from .dynamics.chunks import buffer
-from .dynamics.critical import CONTACT_OMEGA_DT, critical_tangent
+from .dynamics.critical import CONTACT_OMEGA_DT, REMAINDER_OMEGA_DT, critical_tangent
 from .dynamics.state import State
 from .dynamics.system import full_system, reduced_system
 from .errors import CaseError
@@ -164,8 +164,22 @@ def choose_dt(case, setup, stored=None):
     solver = case.solver
     dt = solver.dt if stored is None else stored
     if solver.scheme in ("exponential", "implicit"):
-        # unconditionally stable: the step is set by accuracy, 20 steps per period at fmax
-        dt = dt or 1.0 / (20.0 * solver.reduction.fmax)
+        # unconditionally stable: the step is set by accuracy, 20 steps per period at fmax,
+        # but for the exponential scheme's explicit correctors of a stiff contact remainder
+        limit = (np.inf if solver.scheme == "implicit" else
+                 REMAINDER_OMEGA_DT.get(solver.corrector, np.inf))
+        omega = setup.system.critical.omega_remainder
+        dt_max = limit / omega if omega > 0 else np.inf
+        if dt == 0.0:
+            dt = min(1.0 / (20.0 * solver.reduction.fmax), 0.9 * dt_max)
+        elif dt > dt_max and not solver.force_dt:
+            pair = setup.system.critical.stiffest_point(dt)[1]
+            raise CaseError(case.path, "solver.dt", f"{dt:.3e} s: the {solver.corrector} "
+                            "corrector takes the contact beyond the preload's tangent "
+                            f"explicitly, and contact.{pair}.k puts it at omega dt = "
+                            f"{dt * omega:.3g}, above {limit:g}: solver.corrector = "
+                            f'"implicit", a step up to {dt_max:.3e} s, or solver.force_dt = '
+                            "true to run anyway")
         check_steps(case, dt)
         return dt
     critical = setup.system.critical

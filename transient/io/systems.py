@@ -42,7 +42,8 @@ def read_system(f):
     # the critical step evaluates the laws of the system's own contact set
     crit = values["critical"]
     values["critical"] = CriticalStep(crit["dt"], crit["kt_checked"], crit["rows"],
-                                      values["contacts"], crit.get("omega_contact", 0.0))
+                                      values["contacts"], crit.get("omega_contact", 0.0),
+                                      crit.get("omega_remainder", 0.0))
     return cls(**values)
 
 
@@ -68,6 +69,7 @@ def _write(g, name, value):
         s = g.create_group(name)
         s.attrs["type"], s.attrs["dt"] = "critical", value.dt
         s.attrs["omega_contact"] = value.omega_contact
+        s.attrs["omega_remainder"] = value.omega_remainder
         s.create_dataset("kt_checked", data=value.kt_checked)
         s.create_dataset("rows", data=value.rows)
     elif isinstance(value, tuple) and all(isinstance(v, np.ndarray) for v in value):
@@ -98,5 +100,6 @@ def _read(g, name):
     if kind == "critical":
         return {"dt": float(node.attrs["dt"]), "kt_checked": node["kt_checked"][()],
                 "rows": node["rows"][()],
-                "omega_contact": float(node.attrs.get("omega_contact", 0.0))}
+                "omega_contact": float(node.attrs.get("omega_contact", 0.0)),
+                "omega_remainder": float(node.attrs.get("omega_remainder", 0.0))}
     return tuple(node[str(k)][()] for k in range(int(node.attrs["length"])))
