@@ -30,6 +30,12 @@ def record(out, long_t_end, names):
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     cases = sorted((ROOT / "cases").glob("*.toml"))
+    # children run in an empty directory: from a checkout, `python -m` would import the
+    # package of the working directory before the PYTHONPATH one
+    here = subprocess.run([sys.executable, "-c", "import transient; print(transient.__file__)"],
+                          capture_output=True, text=True, env=os.environ.copy(),
+                          cwd=tempfile.gettempdir(), check=True).stdout.strip()
+    print(f"recording the package at {Path(here).parent}", flush=True)
     for case in cases:
         if names and case.stem not in names:
             continue
@@ -38,7 +44,7 @@ def record(out, long_t_end, names):
             h5 = Path(tmp) / "run.h5"
             done = subprocess.run([sys.executable, "-m", "transient", "run", str(case), "-o",
                                    str(h5), "--quiet", *sets], capture_output=True, text=True,
-                                  env=os.environ.copy())
+                                  env=os.environ.copy(), cwd=tmp)
             if done.returncode != 0:
                 sys.exit(f"{case.name}: transient run failed ({done.returncode}): "
                          f"{done.stderr.strip()}")
