@@ -63,13 +63,18 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     # part free to move they are dominated by its rigid motion, 1e10 times their elastic part,
     # which the independence test below would otherwise take for round-off and drop with them
     S = np.hstack(columns[1:]) if len(columns) > 1 else np.zeros((len(free), 0))
+    # M S formed once (n x a few hundred: the setup's costliest sparse product) and carried
+    # through the projections with M Phi, which has only the modes' columns
+    MS, MPhi = Mf @ S, Mf @ Phi
     for _ in range(2):
-        S = S - Phi @ (Phi.T @ (Mf @ S))
+        P = Phi.T @ MS
+        S, MS = S - Phi @ P, MS - MPhi @ P
     # unit M-norm columns, then drop directions the others already span, then diagonalize
-    norms = np.sqrt(np.einsum("ij,ij->j", S, Mf @ S))
+    norms = np.sqrt(np.einsum("ij,ij->j", S, MS))
     scale = norms.max() if len(norms) else 0.0
-    S = S[:, norms > 1e-12 * scale] / norms[norms > 1e-12 * scale]
-    lam, V = np.linalg.eigh(S.T @ (Mf @ S))
+    big = norms > 1e-12 * scale
+    S, MS = S[:, big] / norms[big], MS[:, big] / norms[big]
+    lam, V = np.linalg.eigh(S.T @ MS)
     keep = lam > 1e-12 * max(lam.max(), 1.0) if len(lam) else np.zeros(0, bool)
     X = np.hstack([Phi, S @ (V[:, keep] / np.sqrt(lam[keep]))])
     n_static_kept = int(keep.sum())
@@ -104,7 +109,10 @@ def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):
     if tol <= 0:
         return np.atleast_2d(solve(np.asfortranarray(CT.toarray())).T).T, np.zeros(0)
     cols = np.unique(sp.csr_matrix(C).indices)
-    if len(cols) < m and 8.0 * C.shape[1] * len(cols) <= BY_COLUMNS_BYTES:
+    known = getattr(solve, "row_space", None)
+    # by columns needs K^-1 E (n x k) unless the solver holds the rows' space already
+    held = known is not None and np.array_equal(known.cols, cols) and len(known.Rm) == m
+    if len(cols) < m and (held or 8.0 * C.shape[1] * len(cols) <= BY_COLUMNS_BYTES):
         return _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols)
     F = np.empty((m, m))
     for start in range(0, m, block):

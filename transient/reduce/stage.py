@@ -50,8 +50,8 @@ def reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0, solve,
                           case.solver.shift_hz, contact, reduction.statics_tolerance)
     stages["reduction"] = perf_counter() - t0
     T = basis.T
-    MT = M @ T
-    q0, v = MT.T @ preload.u, MT.T @ v0
+    # T^T (M u): two sparse products with vectors, not one with the n x r basis
+    q0, v = T.T @ (M @ preload.u), T.T @ (M @ v0)
     meta = {"reduced_dofs": len(basis.omega2), "normal_modes": basis.n_modes,
             "contact_shapes": basis.n_contact_shapes,
             # the static directions asked (contact shapes, load patterns, the preload) and kept
