@@ -103,7 +103,7 @@ def test_transfer_function_of_a_sensor_with_itself_is_one(history, capsys):
 def test_frf_refuses_a_segment_longer_than_the_history(history, capsys):
     assert main(["plot", "frf", str(history), "--input", "sensors/tip", "--output",
                  "sensors/tail", "--segment", "4096"]) == 2
-    _one_line_error(capsys, str(history), "--segment", "191 rows, fewer than the segment")
+    _one_line_error(capsys, str(history), "--segment", "308 rows, fewer than the segment")
 
 
 def test_pressure_maps_side_by_side(history, tmp_path, capsys):
