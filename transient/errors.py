@@ -37,3 +37,11 @@ class FactorizationError(RuntimeError):
 class RunAborted(Exception):
     """A run that stopped before its end; the reason is kept in the output file."""
 
+
+def interrupted(exc):
+    """Whether exc is Ctrl-C: a KeyboardInterrupt, or the SystemError CPython raises from one
+    (at times from such a SystemError) that lands while a compiled (Numba) function runs
+    Python code of its own."""
+    while isinstance(exc, SystemError):
+        exc = exc.__cause__
+    return isinstance(exc, KeyboardInterrupt)

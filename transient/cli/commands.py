@@ -6,7 +6,7 @@ from pathlib import Path
 
 from ..case.checks import check_transient, check_two_surfaces
 from ..case.loading import load
-from ..errors import CaseError, FactorizationError
+from ..errors import CaseError, FactorizationError, interrupted
 from .parser import build_parser
 from .plotting import cmd_export, cmd_plot
 
@@ -246,7 +246,9 @@ def main(argv=None):
               f"cannot be factorized ({exc}): a part free to move, or a contact stiffness far "
               "beyond the structure's", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, SystemError) as exc:
+        if not interrupted(exc):
+            raise
         print("interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:

@@ -25,7 +25,7 @@ import h5py
 import numpy as np
 
 from ..dynamics.energy import drift as energy_drift
-from ..errors import DamagedHistory, RunAborted
+from ..errors import DamagedHistory, RunAborted, interrupted
 from ..kernels.codes import ENERGY_TERMS
 from .attributes import CASE_TEXT, read_attrs, short, write_attrs
 
@@ -278,7 +278,7 @@ def _truncate(f, layout, rows):
 def _reason(exc):
     """One line saying why a run stopped."""
     lines = str(exc).strip().splitlines()
-    if isinstance(exc, KeyboardInterrupt):
+    if interrupted(exc):
         return "interrupted by the user"
     if isinstance(exc, RunAborted) and lines:
         return lines[0]
