@@ -58,6 +58,10 @@ def read_mesh(path):
     # what meshio said is held until the mesh is taken: a refused one gets one error line,
     # which carries it (a truncated file often explains the refusal)
     try:
+        # a section not closed: the file is cut short, and what meshio made of it need not
+        # be its mesh (cells left out, or with fewer nodes)
+        if "not closed by $End" in said:
+            raise MeshFileError(path, "cut short: a section is not closed")
         mesh = _convert(raw, path)
     except MeshFileError as exc:
         if not said:
