@@ -63,6 +63,8 @@ NESTED = "[" * 100000 + "]" * 100000
     (delete_attribute("case"), "export", "attribute case"),
     (attribute("case", 3), "export", "attribute case"),
     (attribute("case", 3), "run --resume", "attribute case"),
+    (attribute("case", ""), "run --resume", "attribute case"),
+    (attribute("case", "[solver"), "export", "attribute case"),
     (replace("geometry/contact/wall/weights", np.full(12, np.nan)), "plot pressure",
      "geometry/contact/wall/weights"),
     (replace("geometry/contact/wall/normals", np.array([b"x"] * 12)), "export",

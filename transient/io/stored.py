@@ -101,7 +101,12 @@ def run_case(path, meta):
         if meta.get(key) is None:
             raise CaseError(path, f"attribute {key}", "missing: the history keeps no case to "
                             "rebuild the run from (damaged, or not written by transient)")
-    return parse(meta[CASE_TEXT], meta["case_path"], meta.get("overrides") or [])
+    try:
+        return parse(meta[CASE_TEXT], meta["case_path"], meta.get("overrides") or [])
+    except CaseError as exc:
+        # named by the history that keeps it: the stored case path need not be a file
+        raise CaseError(path, f"attribute {CASE_TEXT}", f"the stored case does not load "
+                        f"({exc})") from None
 
 
 def read_summary(path):
