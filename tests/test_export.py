@@ -95,6 +95,19 @@ def test_vtu_and_pvd_of_a_reduced_model(tmp_path, capsys):
     points = cloud.read()[0]
     assert points.n_points == 12
     assert np.allclose(points.point_data["pressure"], _stored(path, "contact/wall/pressure")[-1])
+    # the case text of another model (fuzz seed 1, #1369): the stored basis misses its mesh
+    with h5py.File(path, "r+") as f:
+        f.attrs[CASE_TEXT] = (CASE.parent / "two_bars.toml").read_text()
+        f.attrs["overrides"] = '["output.field=true"]'
+    assert main(["export", str(path), "--out", str(tmp_path / "other")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{path}: geometry/field/basis: " in err
+
+
+@pytest.mark.parametrize("every", [2 ** 63, 10 ** 30])
+def test_a_step_past_the_last_row_exports_the_first_and_the_last(every):
+    rows = exported_rows(191, every)
+    assert rows.tolist() == [0, 190] and rows.dtype.kind == "i"     # indices, not floats
 
 
 def test_a_case_changed_since_the_run_is_caught(full, tmp_path, capsys):

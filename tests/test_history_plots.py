@@ -77,8 +77,9 @@ def test_spectrum_of_a_sine_peaks_at_its_frequency(tmp_path, capsys):
     _check_picture(png)
 
 
-def test_spectrum_needs_evenly_spaced_rows(tmp_path, capsys):
-    t = np.cumsum(np.r_[0.0, np.full(50, 1e-6), np.full(50, 2e-6)])
+@pytest.mark.parametrize("gap", [2e-6, np.nan])
+def test_spectrum_needs_evenly_spaced_rows(tmp_path, capsys, gap):
+    t = np.cumsum(np.r_[0.0, np.full(50, 1e-6), np.full(50, gap)])
     path = _synthetic(tmp_path / "uneven.h5", t, np.sin(1e5 * t))
     assert main(["plot", "spectrum", str(path)]) == 2
     _one_line_error(capsys, str(path), "not evenly spaced")

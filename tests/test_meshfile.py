@@ -1,4 +1,5 @@
 """Tests of transient.meshfile: reading Gmsh, Abaqus and VTU files, writing VTU, Jacobian check."""
+import warnings
 from pathlib import Path
 
 import meshio
@@ -287,3 +288,49 @@ def test_inverted_cell_is_kept_and_reported(tmp_path):
     ((ctype, index, det),) = jacobian_check(mesh)
     assert (ctype, index) == ("hexahedron", 1)
     assert det == pytest.approx(-0.125)
+
+
+@pytest.mark.parametrize("old, new, words", [
+    ("*ELSET, ELSET=cap", "*ELSET, ELSET", "cell set without a name"),
+    ("TYPE=C3D10, ELSET=solid", "TYPE=C3D10, ELSET", "cell set without a name"),
+    ("*NSET, NSET=base", "*NSET, NSET", "node set without a name"),
+])
+def test_an_abaqus_set_without_a_name_is_an_error(tmp_path, old, new, words):
+    path = tmp_path / "unnamed.inp"
+    path.write_text((DATA / "two_tet10.inp").read_text().replace(old, new))
+    with pytest.raises(MeshFileError, match=words):
+        read_mesh(path)
+
+
+@pytest.mark.parametrize("name, size", [("two_hex_v2.msh", 19), ("two_hex_v4.msh", 477)])
+def test_a_file_cut_short_is_one_error_that_carries_what_meshio_said(tmp_path, name, size):
+    # meshio warns of an unclosed section; what it reads has no cells, or hexahedra of 4 nodes
+    path = tmp_path / name
+    path.write_bytes((DATA / name).read_bytes()[:size])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with pytest.raises(MeshFileError) as info:
+            read_mesh(path)
+    assert not caught, [str(w.message) for w in caught]
+    assert info.value.path == str(path) and "\n" not in str(info.value)
+    assert info.value.message.startswith("cut short")
+    assert "(meshio: Warning: $" in info.value.message and "not closed" in info.value.message
+
+
+def test_a_section_not_closed_is_refused_though_meshio_reads_cells(tmp_path):
+    # two hexahedra and the faces before them: a later cut could have dropped some
+    path = tmp_path / "unclosed.msh"
+    path.write_text((DATA / "two_hex_v2.msh").read_text().replace("$EndElements\n", "", 1))
+    assert len(meshio.read(path).cells_dict["hexahedron"]) == 2
+    with pytest.raises(MeshFileError, match="cut short.*meshio: Warning: \\$Elements not"):
+        read_mesh(path)
+
+
+def test_what_meshio_said_of_a_mesh_that_is_taken_is_one_warning(tmp_path):
+    # a third tag on a line cell, which meshio's Gmsh 2.2 reader leaves out
+    path = tmp_path / "tags.msh"
+    path.write_text((DATA / "two_hex_v2.msh").read_text().replace("\n1 1 2 4 1 1 2\n",
+                                                                   "\n1 1 3 4 1 7 1 2\n"))
+    with pytest.warns(UserWarning, match="meshio reading .*tag data") as caught:
+        mesh = read_mesh(path)
+    assert len(caught) == 1 and len(mesh.cells["hexahedron"]) == 2

@@ -1,6 +1,7 @@
 """Outputs are checked before any stage: an output that cannot be written, or that is not a
 history of this package, is a one-line error (exit 2) naming it, before the model is built; a
 history is written by one run at a time; a run stopped in its setup leaves no file behind."""
+import dataclasses
 import os
 import signal
 import subprocess
@@ -11,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from transient.cli import main
+from transient.io.history import summary
 from transient.io.lock import writing
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
@@ -90,6 +92,32 @@ def test_sigint_during_the_setup_leaves_no_file(tmp_path):
     _, err = child.communicate(timeout=120)
     assert child.returncode == 130 and "Traceback" not in err
     assert not path.exists()
+
+
+def _interrupt_in_numba(*args, **kwargs):
+    # what CPython raises when Ctrl-C lands in a Numba dispatcher (fuzz seed 1, #141; seed 0,
+    # #214): most often a SystemError from a SystemError from the KeyboardInterrupt
+    message = "CPUDispatcher(<function f>) returned a result with an exception set"
+    try:
+        raise SystemError(message) from KeyboardInterrupt()
+    except SystemError as exc:
+        raise SystemError(message) from exc
+
+
+def test_ctrl_c_landing_in_a_compiled_function_is_an_interrupt(tmp_path, capsys, monkeypatch):
+    import transient.run
+    path = tmp_path / "bar.h5"
+    monkeypatch.setattr(transient.run, "prepare", _interrupt_in_numba)
+    assert main(["run", BAR, "-o", str(path), "--quiet"]) == 130
+    assert capsys.readouterr().err == "interrupted\n" and not path.exists()
+    # in a kernel of the time loop: the run is stopped there, as by Ctrl-C between chunks
+    monkeypatch.undo()
+    real = transient.run.stepper
+    monkeypatch.setattr(transient.run, "stepper", lambda *args: dataclasses.replace(
+        real(*args), advance=_interrupt_in_numba))
+    assert main(["run", BAR, "-o", str(path), "--quiet", "--set", "solver.t_end=6e-5"]) == 130
+    assert "error: run aborted: interrupted" in capsys.readouterr().err
+    assert summary(path)["status"] == "aborted: interrupted"
 
 
 def test_bench_refuses_an_unwritable_directory_first_and_writes_under_the_cwd(

@@ -4,6 +4,7 @@ import warnings
 from pathlib import Path
 
 import h5py
+import numpy as np
 import pytest
 
 from transient.cli import main
@@ -41,6 +42,9 @@ def sets(*overrides):
     ("run", BAR, ["parts.bar.mesh.divisions=[9223372036854775807,1,1]"],
      "parts.bar.mesh.divisions"),
     ("run", BAR, ["parts.bar.mesh.divisions=[10000,10000,10000]"], "parts.bar.mesh.divisions"),
+    ("run", TWO, ["parts.right.mesh.size=[1e300,0.01,0.01]"], "parts.right.mesh"),
+    ("run", TWO, ["parts.right.mesh.size=[1e300,1e300,0.01]"], "parts.right.mesh"),
+    ("run", TWO, ["parts.right.mesh.size=[1e-300,0.01,0.01]"], "parts.right.mesh"),
     ("modes", TWO, ["contact.impact.k=1e30"], "constraints, contact.NAME.k"),
     ("run", BAR, ["contact.wall.wall_normal=[0,0,0]"], "contact.wall.wall_normal"),
     ("run", BAR, ["sensors.tip.direction=[0,0,0]"], "sensors.tip.direction"),
@@ -59,6 +63,27 @@ def test_bad_input_is_one_line_naming_the_key(tmp_path, capsys, command, case, o
         args += ["-o", str(tmp_path / "out.h5"), "--quiet"]
     err = one_error(capsys, args)
     assert f": {key}: " in err if key else ": tables or arrays nested too deeply" in err
+
+
+def test_vectors_and_sizes_of_any_magnitude_double_precision_holds(tmp_path):
+    # |v|^2 of a direction of 1e-300 is 0 and of 1e300 inf; a part 1e160 m long squares past
+    # 1e308 too: the same run as with unit vectors, and no warning
+    short = ["solver.t_end=6e-5", "parts.bar.sets.end.kind=\"plane\"",
+             "parts.bar.sets.end.point=[0,0,0]"]
+    extreme = ["sensors.tip.direction=[1e-300,0,0]", "contact.wall.wall_normal=[-1e300,0,0]",
+               "parts.bar.sets.end.normal=[1e-300,0,0]"]
+    plain = ["parts.bar.sets.end.normal=[1,0,0]"]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for name, overrides in (("extreme", extreme), ("plain", plain)):
+            assert main(["run", BAR, "-o", str(tmp_path / f"{name}.h5"), "--quiet"]
+                        + sets(*short, *overrides)) == 0
+        assert main(["run", TWO, "-o", str(tmp_path / "long.h5"), "--quiet"]
+                    + sets("parts.right.mesh.size=[1e160,0.01,0.01]")) == 0
+    assert not caught, [str(w.message) for w in caught]
+    with h5py.File(tmp_path / "extreme.h5") as a, h5py.File(tmp_path / "plain.h5") as b:
+        for name in ("sensors/tip", "contact/wall/pressure"):
+            assert np.array_equal(a[name][()], b[name][()]), name
 
 
 def test_names_that_cannot_be_keys_or_series_are_refused(tmp_path, capsys):

@@ -20,9 +20,28 @@ class CaseError(Exception):
         self.message = message
 
 
+class DamagedHistory(ValueError):
+    """A history file whose layout is not the one `io.history.History` writes: key names the
+    dataset or the attribute, message what it is and what was expected."""
+
+    def __init__(self, key, message):
+        super().__init__(f"{key}: {message}")
+        self.key = key
+        self.message = message
+
+
 class FactorizationError(RuntimeError):
     """A sparse factorization that failed (singular, not positive definite, out of memory)."""
 
 
 class RunAborted(Exception):
     """A run that stopped before its end; the reason is kept in the output file."""
+
+
+def interrupted(exc):
+    """Whether exc is Ctrl-C: a KeyboardInterrupt, or the SystemError CPython raises from one
+    (at times from such a SystemError) that lands while a compiled (Numba) function runs
+    Python code of its own."""
+    while isinstance(exc, SystemError):
+        exc = exc.__cause__
+    return isinstance(exc, KeyboardInterrupt)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from ..case.checks import check_transient, check_two_surfaces
 from ..case.loading import load
-from ..errors import CaseError, FactorizationError
+from ..errors import CaseError, FactorizationError, interrupted
 from .parser import build_parser
 from .plotting import cmd_export, cmd_plot
 
@@ -122,16 +122,18 @@ def cmd_compat(args):
 
 
 def _model_line(meta):
-    """What was integrated: the reduced model's size and each pair's contact points."""
+    """What was integrated: the reduced model's size and each pair's contact points (from a
+    resumed history's attributes, any of which may be missing)."""
     parts = []
     if meta.get("reduced_dofs"):
         asked, kept = meta.get("static_shapes", (0, 0))
-        parts.append(f"reduced model {meta['reduced_dofs']} dofs ({meta['normal_modes']} modes "
-                     f"and {kept} of {asked} static shapes"
-                     + ("; the others lie in the span of the rest)" if kept < asked else ")"))
-    for name, p in meta.get("pairs", {}).items():
+        parts.append(f"reduced model {meta['reduced_dofs']} dofs "
+                     f"({meta.get('normal_modes', '?')} modes and {kept} of {asked} static "
+                     "shapes" + ("; the others lie in the span of the rest)" if kept < asked
+                                 else ")"))
+    for name, p in (meta.get("pairs") or {}).items():
         of = f" of {p['candidates']}" if p.get("candidates") else ""
-        parts.append(f"{name}: {p['rule']} rule, {p['points']}{of} points")
+        parts.append(f"{name}: {p.get('rule', '?')} rule, {p.get('points', '?')}{of} points")
     if "sampling" in meta:
         parts.append(f"sampling residual {meta['sampling']['residual']:.1e} on "
                      f"{meta['sampling']['band_modes']} modes")
@@ -253,7 +255,9 @@ def main(argv=None):
               f"cannot be factorized ({exc}): a part free to move, or a contact stiffness far "
               "beyond the structure's", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, SystemError) as exc:
+        if not interrupted(exc):
+            raise
         print("interrupted", file=sys.stderr)
         return 130
     except SystemError as exc:

@@ -25,6 +25,7 @@ from scipy.spatial import cKDTree
 
 from . import facemap
 from ..mesh.elements import ELEMENTS
+from ..mesh.mesh import unit
 from ..kernels.clipping import clip_pairs
 from ..mesh.quadrature import triangle
 
@@ -311,8 +312,7 @@ def build_wall_interface(name, points1, faces1, offset1, wall_point, wall_normal
     """Fine rule between a surface of part 1 and a rigid plane (the wall): a triangle Gauss rule
     on each face's projection; side 2 is empty. wall_normal points out of the wall."""
     t0 = time.perf_counter()
-    n = np.asarray(wall_normal, float)
-    n = n / np.linalg.norm(n)
+    n = unit(wall_normal)
     t1 = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
     t1 /= np.linalg.norm(t1)
     frame = np.vstack([t1, np.cross(n, t1), n])

@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 import numba
 import numpy as np
 
+from ..errors import interrupted
 from ..kernels.codes import NOT_FINITE, OK
 from .state import Rows
 
@@ -40,7 +41,13 @@ def chunks(stepper, state, n_total, chunk, every, out, step=0):
     while step < n_total:
         n = min(chunk, n_total - step)
         t0 = time.perf_counter()
-        status, done = stepper(state, n, every, out)
+        try:
+            status, done = stepper(state, n, every, out)
+        except SystemError as exc:
+            # Ctrl-C landing in the kernel's dispatcher: the loop's interrupt all the same
+            if interrupted(exc):
+                raise KeyboardInterrupt from None
+            raise
         seconds = time.perf_counter() - t0
         # a kernel stopping on a non-finite state has not stored that step
         rows = (done - (status == NOT_FINITE)) // every

@@ -85,7 +85,8 @@ def export(path, out=None, fmt="xdmf", every=1):
 
 def exported_rows(n, every):
     """Rows 0, every, 2 every... and the last one."""
-    return np.union1d(np.arange(0, n, every), [n - 1])
+    # a step beyond the rows gives the first and the last (and stays an integer for arange)
+    return np.union1d(np.arange(0, n, min(every, n)), [n - 1])
 
 
 def _contact_pairs(stored):
@@ -94,11 +95,7 @@ def _contact_pairs(stored):
 
 
 def _contact_series(stored, pair):
-    fixed = {key: stored.geometry(f"contact/{pair}/{key}")
-             for key in ("points", "weights", "normals")}
-    if fixed["points"] is None:
-        raise stored.error(f"geometry/contact/{pair}/points", "no contact point positions: "
-                           "run with output.contact = true (this version stores them)")
+    fixed = stored.contact_geometry(pair)
 
     def data(f, row):
         return {"gap": f[f"contact/{pair}/gap"][row],
@@ -111,18 +108,21 @@ def _contact_series(stored, pair):
 
 def _field_series(stored):
     """The displacement on the rebuilt model's mesh."""
-    from ..case.loading import parse
     from ..model.model import build_model
-    meta = stored.meta
-    case = parse(stored.case_text(), meta["case_path"], meta.get("overrides") or [])
-    model = build_model(case)
+    if len(stored.series["field/q"]) != 1:
+        raise stored.error("field/q", f"damaged history: rows of shape "
+                           f"{stored.series['field/q']}, expected one state vector per row")
+    model = build_model(stored.case())
     width = stored.series["field/q"][0]
-    if meta.get("reduced"):
+    if stored.meta.get("reduced"):
         T = stored.geometry("field/basis")
         if T is None:
             # a rebuilt basis would repeat the setup, and need not be the one integrated
             raise stored.error("geometry/field/basis", "the history keeps no basis of its "
                                "reduced model (written by an older version): run again")
+        if T.ndim != 2 or len(T) != model.ndof:
+            raise stored.error("geometry/field/basis", f"damaged history: shape {T.shape}, "
+                               f"expected ({model.ndof}, reduced dofs)")
         T = np.asarray(T, dtype=float)
         columns = T.shape[1]
 

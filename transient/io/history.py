@@ -25,15 +25,14 @@ import h5py
 import numpy as np
 
 from ..dynamics.energy import drift as energy_drift
-from ..errors import RunAborted
+from ..errors import DamagedHistory, RunAborted, interrupted
 from ..kernels.codes import ENERGY_TERMS
+from .attributes import CASE_TEXT, read_attrs, short, write_attrs
 
 CHUNK_BYTES = 2 ** 20      # ~1 MB chunks: fast sequential reads of long series
-CASE_TEXT = "case"         # root attribute holding the case file as written
 CHECKPOINT = "checkpoint"
 GEOMETRY = "geometry"      # fixed arrays written once (contact points, weights, normals)
 SYSTEM = "system"          # the system integrated (io.systems)
-_BOOKKEEPING = ("status", "rows", "json_attrs")
 
 
 def _open(path, mode):
@@ -95,7 +94,7 @@ class History:
             if system is not None:
                 from .systems import write_system
                 write_system(f, system)
-            _write_attrs(f.attrs, meta)
+            write_attrs(f.attrs, meta)
             f.attrs["status"] = "running"
             f.attrs["rows"] = 0
         return cls(path, shapes)
@@ -110,8 +109,8 @@ class History:
         path = Path(path)
         with _open(path, "r+") as f:
             rows = _rows(f, path)
-            if CHECKPOINT in f and 0 <= f[CHECKPOINT].attrs["rows"] < rows:
-                rows = int(f[CHECKPOINT].attrs["rows"])
+            if CHECKPOINT in f and 0 <= _checkpoint_rows(f) < rows:
+                rows = _checkpoint_rows(f)
             layout = _series_shapes(f)
             _truncate(f, layout, rows)
             f.attrs["status"] = "running"
@@ -179,7 +178,7 @@ class History:
         with _open(self.path, "r+") as f:
             _truncate(f, self.layout, int(f.attrs["rows"]))
             if timings is not None:
-                _write_attrs(f.attrs, {"timings": timings})
+                write_attrs(f.attrs, {"timings": timings})
             f.attrs["status"] = status
         self.closed = True
 
@@ -218,17 +217,42 @@ def _chunk_rows(shape, expected_rows):
 
 
 def _rows(f, path):
-    """The complete rows, checked against the series: a damaged count is an error."""
+    """The complete rows, checked against the series: a damaged count or series is an error."""
     if "rows" not in f.attrs:
-        raise ValueError("not a transient history (no 'rows' attribute)")
+        raise DamagedHistory("attribute rows", "missing (not a history written by transient?)")
     value = f.attrs["rows"]
     if not isinstance(value, (int, np.integer)) or value < 0:
-        raise ValueError(f"damaged history: attribute 'rows' is {value!r}, expected a count")
-    for name, shape in _series_shapes(f).items():
-        if f[name].shape[0] < value:
-            raise ValueError(f"damaged history: series '{name}' has {f[name].shape[0]} rows, "
-                             f"attribute 'rows' says {int(value)}")
+        raise DamagedHistory("attribute rows", f"{short(value)}, expected a count")
+    for name in _series_shapes(f):
+        ds = f[name]
+        # a row axis of numbers is what every reader indexes and plots
+        if ds.ndim == 0 or ds.dtype.kind not in "fiu":
+            raise DamagedHistory(name, f"a {ds.dtype} dataset of shape {ds.shape}, expected "
+                                 "rows of numbers")
+        if name == "time" and ds.ndim != 1:
+            raise DamagedHistory(name, f"rows of shape {ds.shape[1:]}, expected one time each")
+        if ds.shape[0] < value:
+            raise DamagedHistory(name, f"{ds.shape[0]} rows, attribute 'rows' says "
+                                 f"{int(value)}")
     return int(value)
+
+
+def check_appendable(f, layout):
+    """Raise DamagedHistory unless the series of the open file f are those of layout (name ->
+    shape of one row), each resizable along its rows as `create` makes them: what
+    `open_for_resume` and `append` rely on."""
+    stored = _series_shapes(f)
+    for name in sorted(set(stored) | set(layout)):
+        if name not in layout:
+            raise DamagedHistory(name, "not a series the run writes")
+        if name not in stored:
+            raise DamagedHistory(name, "missing, the run writes it")
+        if stored[name] != tuple(layout[name]):
+            raise DamagedHistory(name, f"rows of shape {stored[name]}, expected "
+                                 f"{tuple(layout[name])}")
+        if f[name].chunks is None or f[name].maxshape[0] is not None:
+            raise DamagedHistory(name, "a dataset that cannot grow (not written by "
+                                 "transient)")
 
 
 def _series_shapes(f):
@@ -254,44 +278,11 @@ def _truncate(f, layout, rows):
 def _reason(exc):
     """One line saying why a run stopped."""
     lines = str(exc).strip().splitlines()
-    if isinstance(exc, KeyboardInterrupt):
+    if interrupted(exc):
         return "interrupted by the user"
     if isinstance(exc, RunAborted) and lines:
         return lines[0]
     return f"{type(exc).__name__}: {lines[0]}" if lines else type(exc).__name__
-
-
-def _write_attrs(attrs, meta):
-    encoded = set(json.loads(attrs.get("json_attrs", "[]")))
-    for key, value in meta.items():
-        if key in _BOOKKEEPING:
-            raise ValueError(f"meta key '{key}' is reserved")
-        if isinstance(value, (dict, list, tuple)) or value is None:
-            attrs[key] = json.dumps(value)
-            encoded.add(key)
-        elif isinstance(value, (str, bool, int, float, np.number, np.bool_, np.ndarray)):
-            attrs[key] = value
-            encoded.discard(key)
-        else:
-            raise TypeError(f"meta key '{key}': cannot store a {type(value).__name__}")
-    attrs["json_attrs"] = json.dumps(sorted(encoded))
-
-
-def _read_attrs(attrs):
-    """Root attributes as plain Python values (JSON ones decoded), bookkeeping left out."""
-    encoded = set(json.loads(attrs.get("json_attrs", "[]")))
-    out = {}
-    for key, value in attrs.items():
-        if key == "json_attrs":
-            continue
-        if isinstance(value, bytes):
-            value = value.decode()
-        if key in encoded:
-            value = json.loads(value)
-        elif isinstance(value, (np.generic, np.ndarray)):
-            value = value.tolist()
-        out[key] = value
-    return out
 
 
 def load_checkpoint(path):
@@ -299,10 +290,23 @@ def load_checkpoint(path):
     with _open(path, "r") as f:
         if CHECKPOINT not in f:
             raise ValueError(f"{path}: no checkpoint")
-        group = f[CHECKPOINT]
-        if group.attrs["rows"] < 0:
+        if _checkpoint_rows(f) < 0:
             raise ValueError(f"{path}: the checkpoint was interrupted while being written")
+        group = f[CHECKPOINT]
+        for name in group:
+            if not isinstance(group[name], h5py.Dataset):
+                raise DamagedHistory(f"{CHECKPOINT}/{name}", "a group, expected an array")
         return {name: group[name][()] for name in group}
+
+
+def _checkpoint_rows(f):
+    """The rows the checkpoint of the open file f was taken at, -1 while it is written."""
+    group = f[CHECKPOINT]
+    value = group.attrs.get("rows") if isinstance(group, h5py.Group) else None
+    if not isinstance(value, (int, np.integer)) or value < -1:
+        raise DamagedHistory(f"{CHECKPOINT} attribute rows", f"{short(value)}, expected a "
+                             "count")
+    return int(value)
 
 
 def summary(path):
@@ -320,12 +324,14 @@ def summary(path):
     with _open(path, "r") as f:
         rows = _rows(f, path)
         series = {name: list(shape) for name, shape in _series_shapes(f).items()}
-        meta = _read_attrs(f.attrs)
+        meta = read_attrs(f.attrs)
         t_end = float(f["time"][rows - 1]) if rows and "time" in series else None
         drift = energy_drift({name: f[f"energy/{name}"][:rows] for name in ENERGY_TERMS
                               if f"energy/{name}" in series})
     meta.pop(CASE_TEXT, None)
     meta.pop("rows")
+    if "status" not in meta:
+        raise DamagedHistory("attribute status", "missing")
     return {"path": str(path), "status": meta.pop("status"), "steps": rows, "t_end": t_end,
             "timings": meta.pop("timings", {}), "energy_drift": drift, "series": series,
             "meta": meta, "file_size": path.stat().st_size}

@@ -8,10 +8,12 @@ import h5py
 import numpy as np
 
 from ..case.compare import RESUMABLE, changed
-from ..case.loading import parse
 from ..dynamics.state import State
-from ..errors import CaseError
-from .history import CASE_TEXT, CHECKPOINT, _read_attrs, _rows, load_checkpoint
+from ..errors import CaseError, DamagedHistory
+from .attributes import read_attrs
+from .history import CHECKPOINT, _rows, check_appendable, load_checkpoint
+from .series import layout
+from .stored import run_case
 from .systems import GROUP, read_system
 
 
@@ -31,62 +33,99 @@ def resumed(path, case):
     try:
         with h5py.File(path, "r", locking=False) as f:
             _rows(f, path)
-            meta = _read_attrs(f.attrs)
+            meta = read_attrs(f.attrs)
             if GROUP not in f or CHECKPOINT not in f:
                 raise CaseError(path, "--resume", "the history keeps no system or checkpoint "
                                 "to resume from (written by an older version, or stopped "
                                 "before its first chunk): run it again")
             system = read_system(f)
-        saved = load_checkpoint(path)
-        stored = parse(meta[CASE_TEXT], meta["case_path"], meta.get("overrides") or [])
-        dt = float(meta["dt"])
-        state = State(saved["state"], saved["acc"], saved["gmin"])
-        step, blocks, balance = int(saved["step"][0]), saved["blocks"], saved["balance"]
-    except (KeyError, ValueError, TypeError, OSError) as exc:
+            saved = load_checkpoint(path)
+            _fits(system, saved)
+            if "dt" not in meta:
+                raise DamagedHistory("attribute dt", "missing")
+            stored = run_case(path, meta)
+            # the series the run appends to, as the stored case's output names them
+            check_appendable(f, layout(system, stored.output))
+    except DamagedHistory as exc:
+        raise CaseError(path, exc.key, f"damaged history, cannot resume: {exc.message}") \
+            from None
+    except (KeyError, ValueError, TypeError, IndexError, OSError, RuntimeError) as exc:
+        # RuntimeError: h5py's on a corrupted file
         raise CaseError(path, "--resume", f"not a history to resume ({exc})") from None
-    try:
-        _fits(system, state, blocks)
-    except (ValueError, TypeError, IndexError) as exc:
-        raise CaseError(path, "--resume", f"damaged history: {exc}") from None
     keys = changed(stored, case)
     if keys:
         raise CaseError(case.path, keys[0], f"--resume: differs from the case the history "
                         f"was run with ({', '.join(keys)}); a resumed run may change only "
                         f"{', '.join(RESUMABLE)}")
-    return Resumed(system, state, step, dt, blocks, balance, meta)
+    state = State(saved["state"], saved["acc"], saved["gmin"])
+    return Resumed(system, state, int(saved["step"][0]), float(meta["dt"]), saved["blocks"],
+                   saved["balance"], meta)
 
 
-def _fits(system, state, blocks):
-    """Raise ValueError unless the stored system and checkpoint fit together: the kernels
+def _fits(system, saved):
+    """Raise DamagedHistory unless the stored system and checkpoint fit together: the kernels
     index with these sizes and trust them (a damaged file must not reach them)."""
     import scipy.sparse as sp
     n, m = system.n, system.n_points
     c = system.contacts
-    shapes = {"state": (state.array.shape, (6, n)), "gmin": (state.gmin.shape, (m,)),
-              "weights": (c.weights.shape, (m,)), "code": (c.code.shape, (m,)),
-              "params": (c.params.shape, (m, 4)), "tangent": (system.tangent.shape, (m,)),
-              "C": (system.C.shape, (m, n)), "sensors": (system.sensors.shape[1:], (n,))}
+    # blocks: any length on a full system, which does not use them
+    checkpoint = {"state": (6, n), "acc": (3,), "gmin": (m,), "step": (1,), "balance": (3,),
+                  "blocks": (len(np.atleast_1d(saved.get("blocks", ()))),)}
+    for name, want in checkpoint.items():
+        value = saved.get(name)
+        if value is None:
+            raise DamagedHistory(f"{CHECKPOINT}/{name}", "missing")
+        kinds = {"step": "iu", "blocks": "fiu"}.get(name, "f")
+        if value.shape != want or value.dtype.kind not in kinds:
+            raise DamagedHistory(f"{CHECKPOINT}/{name}", f"a {value.dtype} array of shape "
+                                 f"{value.shape}, expected {want} "
+                                 + ("integers" if kinds == "iu" else "numbers"))
+    # None: any length (the sensors' rows)
+    arrays = {"contacts/gap0": (c.gap0, (m,)), "contacts/weights": (c.weights, (m,)),
+              "contacts/code": (c.code, (m,)), "contacts/params": (c.params, (m, 4)),
+              "contacts/C": (c.C, (m, None)), "tangent": (system.tangent, (m,)),
+              "patterns": (system.patterns, (None, n)), "sensors": (system.sensors, (None, n)),
+              "critical/kt_checked": (system.critical.kt_checked, (m,)),
+              "critical/rows": (system.critical.rows, (m,)), "C": (system.C, (m, n))}
     if system.reduced:
-        shapes.update({"omega2": (system.omega2.shape, (n,)), "damp": (system.damp.shape, (n,))})
+        arrays.update({"omega2": (system.omega2, (n,)), "damp": (system.damp, (n,))})
     else:
-        shapes.update({"K": (system.K.shape, (n, n)), "M": (system.M.shape, (n, n)),
-                       "mass": (system.mass.shape, (n,))})
-    for name, (got, want) in shapes.items():
-        if tuple(got) != want:
-            raise ValueError(f"stored {name} has shape {tuple(got)}, expected {want}")
-    for A in (system.C, system.sensors) + (() if system.reduced else (system.K, system.M)):
+        arrays.update({"K": (system.K, (n, n)), "M": (system.M, (n, n)),
+                       "mass": (system.mass, (n,)), "free": (system.free, (n,))})
+    for name, (A, want) in arrays.items():
+        shape = tuple(np.shape(A))
+        if len(shape) != len(want) or any(w not in (None, s) for s, w in zip(shape, want)):
+            raise DamagedHistory(f"{GROUP}/{name}", f"shape {shape}, expected "
+                                 + str(want).replace("None", "any"))
+        # the kernels are compiled for float64 values and int64 codes and indices
+        integers = name in ("contacts/code", "free")
+        dtype = getattr(A, "dtype", np.dtype(object))
+        if dtype.kind not in ("iu" if integers else "f"):
+            raise DamagedHistory(f"{GROUP}/{name}", f"{dtype} data, expected "
+                                 + ("integers" if integers else "floating point numbers"))
+    for name in ("C", "sensors") + (() if system.reduced else ("K", "M")):
+        A = getattr(system, name)
         if sp.issparse(A):
-            A.check_format(full_check=True)
+            try:
+                A.check_format(full_check=True)
+            except (ValueError, TypeError, IndexError) as exc:
+                raise DamagedHistory(f"{GROUP}/{name}", f"not a sparse matrix ({exc})") \
+                    from None
     codes, params, table_t, table_v, table_n = system.signals
+    for k, (A, kinds) in enumerate(zip(system.signals, ("iu", "f", "f", "f", "iu"))):
+        dtype = getattr(A, "dtype", np.dtype(object))
+        if dtype.kind not in kinds:
+            raise DamagedHistory(f"{GROUP}/signals/{k}", f"{dtype} data, expected "
+                                 + ("integers" if kinds == "iu" else "floating point numbers"))
     J = system.patterns.shape[0]
     if (len(codes) != J or params.shape != (J, 8) or table_t.shape != table_v.shape
             or len(table_t) != J or len(table_n) != J or np.any(table_n > table_t.shape[1])
             or np.any(table_n < 0) or np.any((codes < 0) | (codes > 5))):
-        raise ValueError("stored signals do not fit the load patterns")
+        raise DamagedHistory(f"{GROUP}/signals", "the signals do not fit the load patterns")
     if np.any((c.code < 0) | (c.code > 2)):
-        raise ValueError("stored contact laws are not known")
-    blocks = np.asarray(blocks)
+        raise DamagedHistory(f"{GROUP}/contacts/code", "contact laws that are not known")
+    blocks = saved["blocks"]
     if system.reduced and (len(blocks) < 2 or blocks[0] != 0 or blocks[-1] != m
-                           or np.any(np.diff(blocks) < 0)):
-        raise ValueError("stored row blocks do not cover the contact points")
-
+                           or np.any(np.diff(blocks) < 0) or np.any(blocks % 1 != 0)):
+        raise DamagedHistory(f"{CHECKPOINT}/blocks", "row blocks that do not cover the "
+                             "contact points")

@@ -7,9 +7,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import h5py
+import numpy as np
 
-from ..errors import CaseError
-from .history import CASE_TEXT, GEOMETRY, summary
+from ..errors import CaseError, DamagedHistory
+from .attributes import CASE_TEXT, read_attrs
+from .history import GEOMETRY, summary
 
 
 @dataclass(frozen=True)
@@ -42,14 +44,46 @@ class Stored:
 
     def geometry(self, name):
         """A fixed array under /geometry (e.g. 'contact/wall/points'), None if absent."""
+        key = f"{GEOMETRY}/{name}"
         with self.open() as f:
-            key = f"{GEOMETRY}/{name}"
-            return f[key][()] if key in f else None
+            if key not in f:
+                return None
+            if not isinstance(f[key], h5py.Dataset) or f[key].dtype.kind not in "fiu":
+                raise self.error(key, "damaged history: expected an array of numbers")
+            return f[key][()]
 
-    def case_text(self):
-        """The case file as it was run."""
+    def contact_geometry(self, pair):
+        """Positions (m, 3) [m], normals (m, 3) and weights (m,) [m^2] of the contact points
+        of a stored pair, checked against its gap and pressure series (m values per row)."""
+        widths = {self.series.get(f"contact/{pair}/{s}") for s in ("gap", "pressure")}
+        if len(widths) != 1 or None in widths or len(next(iter(widths))) != 1:
+            raise self.error(f"contact/{pair}", "damaged history: expected a gap and a "
+                             "pressure series of one value per contact point")
+        (m,), out = widths.pop(), {}
+        for key, shape in (("points", (m, 3)), ("normals", (m, 3)), ("weights", (m,))):
+            name = f"{GEOMETRY}/contact/{pair}/{key}"
+            value = self.geometry(f"contact/{pair}/{key}")
+            if value is None:
+                raise self.error(name, "no contact point positions: run with output.contact "
+                                 "= true (this version stores them)" if key == "points" else
+                                 "missing: the history is damaged")
+            if value.shape != shape:
+                raise self.error(name, f"damaged history: shape {value.shape}, expected "
+                                 f"{shape}")
+            if not np.all(np.isfinite(value)):
+                raise self.error(name, "damaged history: values that are not finite")
+            out[key] = value
+        return out
+
+    def case(self):
+        """The case the history was run with, rebuilt from the text, path and overrides it
+        keeps."""
         with self.open() as f:
-            return f.attrs[CASE_TEXT]
+            try:
+                text = read_attrs(f.attrs).get(CASE_TEXT)
+            except DamagedHistory as exc:
+                raise self.error(exc.key, f"damaged history: {exc.message}") from None
+        return run_case(self.path, {**self.meta, CASE_TEXT: text})
 
     def pairs(self):
         """Contact pair name -> its description (rule, points, regularized, eps, law)."""
@@ -59,6 +93,22 @@ class Stored:
         return CaseError(self.path, key, message)
 
 
+def run_case(path, meta):
+    """The case a history at path was run with, from its root attributes meta (the case text
+    included); one it does not keep is a CaseError naming the attribute."""
+    from ..case.loading import parse
+    for key in (CASE_TEXT, "case_path"):
+        if meta.get(key) is None:
+            raise CaseError(path, f"attribute {key}", "missing: the history keeps no case to "
+                            "rebuild the run from (damaged, or not written by transient)")
+    try:
+        return parse(meta[CASE_TEXT], meta["case_path"], meta.get("overrides") or [])
+    except CaseError as exc:
+        # named by the history that keeps it: the stored case path need not be a file
+        raise CaseError(path, f"attribute {CASE_TEXT}", f"the stored case does not load "
+                        f"({exc})") from None
+
+
 def read_summary(path):
     """`history.summary` of the file at path; a missing or foreign file is a CaseError."""
     path = Path(path)
@@ -66,6 +116,8 @@ def read_summary(path):
         raise CaseError(path, "", "file not found")
     try:
         return summary(path)
+    except DamagedHistory as exc:
+        raise CaseError(path, exc.key, f"damaged history: {exc.message}") from None
     except (OSError, KeyError, ValueError, TypeError, RuntimeError) as exc:
         raise CaseError(path, "", f"not a transient history, or a damaged one ({exc})") from None
 
@@ -78,4 +130,3 @@ def open_history(path):
         raise CaseError(path, "", "not a transient history: no /time series")
     meta = dict(d["meta"], status=d["status"])
     return Stored(path, d["steps"], {k: tuple(v) for k, v in d["series"].items()}, meta)
-

@@ -17,6 +17,7 @@ import scipy.sparse as sp
 from ..contact.contactset import ContactSet
 from ..dynamics.critical import CriticalStep
 from ..dynamics.system import FullSystem, ReducedSystem
+from ..errors import DamagedHistory
 from .history import SYSTEM as GROUP
 
 SKIPPED = ("T",)
@@ -84,7 +85,7 @@ def _write(g, name, value):
 
 def _read(g, name):
     if name not in g:
-        value = json.loads(g.attrs[name])
+        value = _json(g, name)
         return tuple(value) if isinstance(value, list) else value
     node = g[name]
     kind = node.attrs.get("type") if hasattr(node, "keys") else None
@@ -94,7 +95,11 @@ def _read(g, name):
         return sp.csr_matrix((node["data"][()], node["indices"][()], node["indptr"][()]),
                              shape=tuple(node.attrs["shape"]))
     if kind == "contacts":
-        slices = {k: slice(a, b) for k, (a, b) in json.loads(node.attrs["slices"]).items()}
+        pairs = _json(node, "slices")
+        if not isinstance(pairs, dict):
+            raise DamagedHistory(f"{node.name.lstrip('/')} attribute slices", "expected a table "
+                                 "of pairs")
+        slices = {k: slice(a, b) for k, (a, b) in pairs.items()}
         return ContactSet(_read(node, "C"), node["gap0"][()], node["weights"][()],
                           node["code"][()], node["params"][()], slices)
     if kind == "critical":
@@ -103,3 +108,12 @@ def _read(g, name):
                 "omega_contact": float(node.attrs.get("omega_contact", 0.0)),
                 "omega_remainder": float(node.attrs.get("omega_remainder", 0.0))}
     return tuple(node[str(k)][()] for k in range(int(node.attrs["length"])))
+
+
+def _json(node, name):
+    """The attribute name of node, stored as JSON text."""
+    try:
+        return json.loads(node.attrs[name])
+    except (ValueError, TypeError, RecursionError):
+        raise DamagedHistory(f"{node.name.lstrip('/')} attribute {name}", "not the JSON text "
+                             "it was stored as") from None

@@ -107,3 +107,15 @@ def orient_faces(mesh, faces, ftype):
 
 def volume_cell_types(cells):
     return [t for t in cells if t in VOLUME_TYPES]
+
+
+def unit(vector):
+    """The unit vector along a nonzero vector given in a case (a normal, an axis, a direction)
+    of any magnitude."""
+    v = np.asarray(vector, float)
+    scale = np.abs(v).max()
+    # |v|^2 under- or overflows for components near 1e-160 or 1e160; others are left as they
+    # are, so that their unit vector keeps its last bits
+    if not 1e-100 < scale < 1e100:
+        v = v / scale
+    return v / np.linalg.norm(v)

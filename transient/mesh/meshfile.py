@@ -54,18 +54,32 @@ def read_mesh(path):
     path = Path(path)
     if not path.is_file():
         raise MeshFileError(path, "no such file")
-    return _convert(_meshio_read(path), path)
+    raw, said = _meshio_read(path)
+    # what meshio said is held until the mesh is taken: a refused one gets one error line,
+    # which carries it (a truncated file often explains the refusal)
+    try:
+        # a section not closed: the file is cut short, and what meshio made of it need not
+        # be its mesh (cells left out, or with fewer nodes)
+        if "not closed by $End" in said:
+            raise MeshFileError(path, "cut short: a section is not closed")
+        mesh = _convert(raw, path)
+    except MeshFileError as exc:
+        if not said:
+            raise
+        raise MeshFileError(path, f"{exc.message} (meshio: {said})") from None
+    if said:
+        warnings.warn(f"meshio reading {path}: {said}", stacklevel=2)
+    return mesh
 
 
 def _meshio_read(path):
-    """meshio.read with its console output turned into a warning and its failures into errors.
+    """meshio.read with its failures turned into errors; returns the mesh and, in one line,
+    what meshio said on the console and in warnings while reading it.
 
     meshio 5.3 prints to the console and calls sys.exit(1) when no reader accepts the file, so
     SystemExit is caught as well; other malformed input raises all kinds of exceptions.
     """
     console = io.StringIO()
-    # meshio's own warnings are held too: before an error they would only precede it, and
-    # after a read that worked they are said once, as the console output is
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
@@ -74,10 +88,7 @@ def _meshio_read(path):
         except (Exception, SystemExit) as exc:
             detail = _one_line(console.getvalue() if isinstance(exc, SystemExit) else str(exc))
             raise MeshFileError(path, f"cannot read: {detail or type(exc).__name__}") from exc
-    said = _one_line(" ".join([console.getvalue()] + [str(w.message) for w in caught]))
-    if said:
-        warnings.warn(f"meshio reading {path}: {said}", stacklevel=3)
-    return raw
+    return raw, _one_line(" ".join([console.getvalue()] + [str(w.message) for w in caught]))
 
 
 def _one_line(text):
@@ -94,6 +105,10 @@ def _convert(raw, path):
     points = np.asarray(raw.points, dtype=float)
     if points.ndim != 2 or points.shape[1] != 3:
         raise MeshFileError(path, f"points must be 3-D, got shape {points.shape}")
+    for ctype, conn in cells.items():
+        if len(conn) and (conn.min() < 0 or conn.max() >= len(points)):
+            raise MeshFileError(path, f"{ctype} cells name nodes beyond the {len(points)} "
+                                "points of the file")
 
     selections = _cell_selections(raw, where, path)
     volume, cell_map = _merge_duplicates(volume)
@@ -108,7 +123,7 @@ def _convert(raw, path):
         if chosen:
             cell_sets[name] = chosen
     face_sets = _face_sets(mesh, cells, selections, new_id, path)
-    node_sets = _node_sets(raw, new_id)
+    node_sets = _node_sets(raw, new_id, path)
     for name, faces in face_sets.items():
         node_sets.setdefault(name, face_nodes(faces))
     return Mesh(mesh.points, mesh.cells, node_sets, face_sets, cell_sets)
@@ -124,9 +139,15 @@ def _group_blocks(raw, path):
     for block in raw.cells:
         ctype = block.type
         if ctype in VOLUME_TYPES or ctype in FACE_TYPES:
+            data = np.asarray(block.data, dtype=np.int64)
+            # meshio reads a file cut short as cells with fewer nodes
+            nen = ELEMENTS[ctype].nen
+            if data.ndim != 2 or data.shape[1] != nen:
+                raise MeshFileError(path, f"{ctype} cells of shape {data.shape}, expected "
+                                    f"{nen} nodes each (a file cut short?)")
             blocks = parts.setdefault(ctype, [])
             where.append((ctype, sum(len(b) for b in blocks)))
-            blocks.append(np.asarray(block.data, dtype=np.int64))
+            blocks.append(data)
         elif ctype == "vertex" or ctype.startswith("line"):
             where.append(None)
         else:
@@ -140,6 +161,7 @@ def _cell_selections(raw, where, path):
     per_block = {}   # name -> [(block, indices into the block)]
 
     for name, arrays in raw.cell_sets.items():
+        _check_name(name, "cell", path)
         # 'gmsh:bounding_entities' holds entity tags, not cell indices
         if name.startswith("gmsh:"):
             continue
@@ -173,6 +195,14 @@ def _cell_selections(raw, where, path):
                 out.setdefault(name, {}).setdefault(ctype, []).append(idx + offset)
     return {name: {t: np.concatenate(v) for t, v in by_type.items()}
             for name, by_type in out.items()}
+
+
+def _check_name(name, kind, path):
+    # meshio names a set None when the file gives it no name (Abaqus: '*ELSET, ELSET')
+    if not isinstance(name, str):
+        keyword = {"cell": "ELSET", "node": "NSET"}[kind]
+        raise MeshFileError(path, f"a {kind} set without a name (an Abaqus {keyword} with no "
+                            "=NAME)")
 
 
 def _block_indices(idx, name, path):
@@ -228,8 +258,10 @@ def _face_sets(mesh, cells, selections, new_id, path):
     return out
 
 
-def _node_sets(raw, new_id):
+def _node_sets(raw, new_id, path):
     """meshio point sets and 'set:<name>' point data as node sets in the new numbering."""
+    for name in raw.point_sets:
+        _check_name(name, "node", path)
     found = {name: np.asarray(ids, dtype=np.int64) for name, ids in raw.point_sets.items()}
     for key, values in raw.point_data.items():
         if key.startswith(SET_PREFIX):

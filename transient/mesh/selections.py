@@ -1,7 +1,7 @@
 """Named selections from geometry (plane, box, cylinder) and their lookup as PART.SET."""
 import numpy as np
 
-from .mesh import boundary_faces, face_nodes, faces_on_nodes
+from .mesh import boundary_faces, face_nodes, faces_on_nodes, unit
 
 
 def select_nodes(points, spec):
@@ -9,16 +9,14 @@ def select_nodes(points, spec):
     tol = spec["tol"]
     kind = spec["kind"]
     if kind == "plane":
-        n = np.asarray(spec["normal"], float)
-        n = n / np.linalg.norm(n)
+        n = unit(spec["normal"])
         d = np.abs((points - np.asarray(spec["point"])) @ n)
         return np.flatnonzero(d <= tol)
     if kind == "box":
         lo, hi = np.asarray(spec["min"]) - tol, np.asarray(spec["max"]) + tol
         return np.flatnonzero(np.all((points >= lo) & (points <= hi), axis=1))
     if kind == "cylinder":
-        a = np.asarray(spec["axis"], float)
-        a = a / np.linalg.norm(a)
+        a = unit(spec["axis"])
         r = points - np.asarray(spec["point"])
         radial = np.linalg.norm(r - np.outer(r @ a, a), axis=1)
         return np.flatnonzero(np.abs(radial - spec["radius"]) <= tol)

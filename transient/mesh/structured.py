@@ -156,7 +156,8 @@ def _hex_cells(hexes, points, element, mapping):
     x = points[hexes.corners]
     # The Jacobian at the cell centre: mean corner difference along each index axis.
     jac = np.stack([np.diff(x, axis=1 + d).mean(axis=(1, 2, 3)) for d in range(3)], axis=2)
-    flip = np.linalg.det(jac) < 0
+    # the sign alone, which slogdet gives where det overflows (cells 1e150 m wide)
+    flip = np.linalg.slogdet(jac)[0] < 0
     local = np.where(flip[:, None], _HEX_VTK_REFLECTED, _HEX_VTK)
     conn = np.take_along_axis(ids, local, axis=1)
     if element == "hexahedron20":

@@ -40,4 +40,7 @@ def face_area(points, face_set):
 def nearest_node(points, point, candidates=None):
     """Id of the node nearest a point, among candidates (all nodes if None)."""
     ids = np.arange(len(points)) if candidates is None else np.asarray(candidates)
-    return int(ids[np.argmin(np.linalg.norm(points[ids] - np.asarray(point), axis=1))])
+    d = points[ids] - np.asarray(point)
+    scale = np.abs(d).max(initial=0.0)
+    # squared distances overflow past 1e154 m: scaled then, which keeps the nearest
+    return int(ids[np.argmin(np.linalg.norm(d / scale if scale > 1e100 else d, axis=1))])

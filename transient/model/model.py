@@ -16,7 +16,7 @@ from ..case.sizes import check_memory
 from ..errors import CaseError
 from .loads import nearest_node, pressure_forces
 from ..mesh.meshfile import MeshFileError, read_mesh
-from ..mesh.mesh import Mesh
+from ..mesh.mesh import Mesh, unit
 from ..mesh.selections import set_faces, set_nodes, with_geometric_sets
 
 AXES = {"x": 0, "y": 1, "z": 2}
@@ -132,7 +132,9 @@ def _cell_blocks(case, parts):
 
 def _check_cells(case, blocks, min_det, parts):
     for (name, ctype, block), det in zip(blocks, min_det):
-        scale = np.median(np.abs(det)) if len(det) else 1.0
+        # an overflowing det J (cells 1e100 m wide) is left to _check_finite
+        finite = np.abs(det[np.isfinite(det)])
+        scale = np.median(finite) if len(finite) else 1.0
         bad = np.flatnonzero(det <= 1e-10 * scale)
         if len(bad):
             e = int(bad[np.argmin(det[bad])])
@@ -140,6 +142,22 @@ def _check_cells(case, blocks, min_det, parts):
             raise CaseError(case.path, f"parts.{name}.mesh",
                             f"{ctype} cell {e} is {what} (det J = {det[e]:.3g}; "
                             f"{len(bad)} bad cell(s))")
+
+
+def _check_finite(case, parts, ops):
+    """K, M and the lumped mass in double precision: sizes or material constants far out of
+    range overflow the cell integrals, which no later stage (an eigensolver) would explain."""
+    for what, A in (("stiffness", ops.K), ("mass", ops.M), ("lumped mass", ops.lumped_mass)):
+        values = A.data if sp.issparse(A) else A
+        if np.isfinite(values).all():
+            continue
+        first = int(np.argmin(np.isfinite(values)))
+        dof = np.searchsorted(A.indptr, first, side="right") - 1 if sp.issparse(A) else first
+        name = next(n for n, p in parts.items()
+                    if p.offset <= dof // 3 < p.offset + p.mesh.n_nodes)
+        raise CaseError(case.path, f"parts.{name}.mesh", f"the {what} of its cells overflows "
+                        "double precision: a size or scale, or the material's E or rho, far "
+                        "out of range")
 
 
 def _fixed(case, parts, ndof):
@@ -188,7 +206,8 @@ def _nearest(case, part, point, key):
     part's own size is an error, not its nearest node."""
     points = part.mesh.points
     lo, hi = points.min(axis=0), points.max(axis=0)
-    size = float(np.linalg.norm(hi - lo))
+    # hypot, not norm: the square of the diagonal of a part 1e160 m long overflows
+    size = float(np.hypot.reduce(hi - lo))
     # compared by coordinate, which no magnitude overflows
     if not np.all(np.abs(np.asarray(point, float) - 0.5 * (lo + hi)) <= 2.0 * size + 1e-12):
         raise CaseError(case.path, key, f"{list(point)} is far from part '{part.name}' (its "
@@ -200,12 +219,11 @@ def _sensors(case, parts, ndof):
     names, rows, cols, vals = [], [], [], []
     for i, (sname, spec) in enumerate(case.sensors.items()):
         part = parts[spec.part]
-        d = np.asarray(spec.direction, float)
         node = _nearest(case, part, spec.point, f"sensors.{sname}.point")
         names.append(sname)
         rows += [i] * 3
         cols += list(range(3 * node, 3 * node + 3))
-        vals += list(d / np.linalg.norm(d))
+        vals += list(unit(spec.direction))
     return tuple(names), sp.csr_matrix((vals, (rows, cols)), shape=(len(names), ndof))
 
 
@@ -233,6 +251,7 @@ def build_model(case):
     ops = assemble(points, [b for _, _, b in blocks], quad.stiffness or None,
                    quad.mass or None)
     _check_cells(case, blocks, ops.min_det, parts)
+    _check_finite(case, parts, ops)
     timings["assembly"] = time.perf_counter() - t0
 
     fixed = _fixed(case, parts, 3 * len(points))

@@ -13,7 +13,7 @@ FORCE_CHUNK = 4096      # rows of pressure read at a time for the total force
 
 def contact_force(stored, pair):
     """Total normal contact force sum_i w_i p_i [N] of a pair at every row."""
-    w = stored.geometry(f"contact/{pair}/weights")
+    w = stored.contact_geometry(pair)["weights"]
     force = np.zeros(stored.rows)
     with stored.open() as f:
         ds = f[f"contact/{pair}/pressure"]
@@ -59,7 +59,8 @@ def plane_frame(points, normals):
 
 
 def contact_pair(stored, pair):
-    """The pair to map (default the first stored), checked to have its pressures and points."""
+    """The pair to map (default the first stored), checked to have its pressures and its
+    points' positions, normals and weights."""
     stored_pairs = [name.split("/")[1] for name in stored.series
                     if name.startswith("contact/") and name.endswith("/pressure")]
     if not stored_pairs:
@@ -69,9 +70,7 @@ def contact_pair(stored, pair):
     if pair not in stored_pairs:
         raise stored.error("--pair", f"no contact pair '{pair}' stored (pairs: "
                            f"{', '.join(stored_pairs)})")
-    if stored.geometry(f"contact/{pair}/points") is None:
-        raise stored.error(f"geometry/contact/{pair}/points", "no contact point positions: "
-                           "run with output.contact = true (this version stores them)")
+    stored.contact_geometry(pair)
     return pair
 
 
@@ -116,10 +115,8 @@ def pressure_panels(histories, pair=None, time=None, labels=None):
         row = int(np.argmin(np.abs(t - time)))
         with stored.open() as f:
             pressure = f[f"contact/{pair}/pressure"][row]
-        geometry = {key: stored.geometry(f"contact/{pair}/{key}")
-                    for key in ("points", "normals", "weights")}
-        panels.append({**geometry, "pressure": pressure, "time": float(t[row]),
-                       "force": float(force[row]), "pair": pair,
+        panels.append({**stored.contact_geometry(pair), "pressure": pressure,
+                       "time": float(t[row]), "force": float(force[row]), "pair": pair,
                        "rule": rule_text(stored.pairs().get(pair, {})),
                        "label": labels[k] if labels else stored.path.stem})
     return panels

@@ -17,7 +17,8 @@ def sample_step(stored, time):
         raise stored.error("time", f"{len(time)} row(s): a spectrum needs a time series")
     dt = np.diff(time)
     step = float(np.median(dt))
-    if step <= 0 or np.max(np.abs(dt - step)) > UNIFORM * step:
+    # written so that NaN times (a damaged history) fail too
+    if not (step > 0 and np.max(np.abs(dt - step)) <= UNIFORM * step):
         raise stored.error("time", f"the rows are not evenly spaced (steps from {dt.min():.6g} "
                            f"to {dt.max():.6g} s): spectra need a uniform sample step")
     return step
