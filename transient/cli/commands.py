@@ -260,12 +260,6 @@ def main(argv=None):
             raise
         print("interrupted", file=sys.stderr)
         return 130
-    except SystemError as exc:
-        # Ctrl-C while Numba loads a cached kernel surfaces as a SystemError raised from it
-        if not isinstance(exc.__cause__ or exc.__context__, KeyboardInterrupt):
-            raise
-        print("interrupted", file=sys.stderr)
-        return 130
     except BrokenPipeError:
         # the reader of the output went away (`transient info F | head`): nothing to report
         sys.stderr.close()
