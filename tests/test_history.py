@@ -151,9 +151,11 @@ def test_checkpoint_round_trip_is_bit_exact(tmp_path):
         h.append(chunk(0))
         h.checkpoint({"q": np.zeros(40), "stale": np.ones(3)})
         h.checkpoint(state)
+        h.checkpoint(state)
         size = path.stat().st_size
         h.checkpoint(state)
-        assert path.stat().st_size == size        # rewritten in place
+        h.checkpoint(state)
+        assert path.stat().st_size == size        # both slots rewritten in place
     loaded = load_checkpoint(path)
     assert set(loaded) == set(state)
     for name, value in state.items():
@@ -302,3 +304,28 @@ def test_summary_energy_drift_of_a_drifting_run(tmp_path):
         for part in np.array_split(np.arange(len(t)), 3):
             h.append({"time": t[part]} | {f"energy/{n}": v[part] for n, v in terms.items()})
     assert summary(path)["energy_drift"] == pytest.approx(0.2 / mechanical_peak(terms), rel=1e-12)
+
+
+def test_a_process_killed_while_it_checkpoints_leaves_the_previous_checkpoint_whole(
+        tmp_path, monkeypatch):
+    # the new slot is written and flushed, then the process dies before /checkpoint moves to
+    # it: what a resume reads is the previous checkpoint, with its own rows
+    import h5py
+    path = tmp_path / "run.h5"
+    with History.create(path, META, LAYOUT) as h:
+        h.append(chunk(0))
+        h.checkpoint({"q": np.zeros(4)})
+        h.append(chunk(1))
+
+        flush = h5py.File.flush
+
+        def killed(f):
+            flush(f)
+            raise KeyboardInterrupt
+        monkeypatch.setattr(h5py.File, "flush", killed)
+        with pytest.raises(KeyboardInterrupt):
+            h.checkpoint({"q": np.ones(4)})
+        monkeypatch.undo()
+    assert np.array_equal(load_checkpoint(path)["q"], np.zeros(4))
+    with h5py.File(path, "r") as f:
+        assert f["checkpoint"].attrs["rows"] == len(chunk(0)["time"])

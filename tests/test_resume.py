@@ -49,9 +49,12 @@ def series(path):
         rows = int(f.attrs["rows"])
 
         def visit(name, obj):
-            if isinstance(obj, h5py.Dataset) and not name.startswith(("geometry/", "system/")):
-                out[name] = obj[()] if name.startswith("checkpoint/") else obj[:rows]
+            if isinstance(obj, h5py.Dataset) and not name.startswith(("geometry/", "system/",
+                                                                      "checkpoint")):
+                out[name] = obj[:rows]
         f.visititems(visit)
+        # the checkpoint the file links to (its two slots are written in turn)
+        out.update({f"checkpoint/{k}": v[()] for k, v in f["checkpoint"].items()})
     return out
 
 

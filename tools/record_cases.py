@@ -54,7 +54,7 @@ def record(out, long_t_end, names):
 
                 def visit(name, obj):
                     if isinstance(obj, h5py.Dataset) and not name.startswith(
-                            ("checkpoint/", "geometry/")):
+                            ("checkpoint", "geometry/")):
                         series[name] = obj[:rows]
                 f.visititems(visit)
         np.savez(out / f"{case.stem}.npz", **{k.replace("/", "|"): v for k, v in series.items()})

@@ -286,7 +286,7 @@ def inspect(path):
         ragged = []
 
         def visit(name, obj):
-            if isinstance(obj, h5py.Dataset) and not name.startswith(("checkpoint/",
+            if isinstance(obj, h5py.Dataset) and not name.startswith(("checkpoint",
                                                                        "geometry/",
                                                                        "system/")):
                 if obj.shape[0] != rows:

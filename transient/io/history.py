@@ -30,7 +30,8 @@ from ..kernels.codes import ENERGY_TERMS
 from .attributes import CASE_TEXT, read_attrs, short, write_attrs
 
 CHUNK_BYTES = 2 ** 20      # ~1 MB chunks: fast sequential reads of long series
-CHECKPOINT = "checkpoint"
+CHECKPOINT = "checkpoint"       # a soft link to the last checkpoint written whole
+CHECKPOINTS = "checkpoints"     # its two slots, written in turn
 GEOMETRY = "geometry"      # fixed arrays written once (contact points, weights, normals)
 SYSTEM = "system"          # the system integrated (io.systems)
 
@@ -79,7 +80,7 @@ class History:
         if path.exists() and not overwrite:
             raise ValueError(f"{path}: file exists (pass overwrite=True to replace it)")
         shapes = {name: tuple(int(n) for n in shape) for name, shape in layout.items()}
-        for reserved in (CHECKPOINT, GEOMETRY, SYSTEM):
+        for reserved in (CHECKPOINT, CHECKPOINTS, GEOMETRY, SYSTEM):
             if reserved in shapes or any(n.startswith(reserved + "/") for n in shapes):
                 raise ValueError(f"series name '{reserved}' is reserved")
         with _open(path, "w") as f:
@@ -137,8 +138,12 @@ class History:
     def checkpoint(self, state):
         """Store the kernel state (name -> array) at the end of the last appended chunk.
 
-        Arrays are rewritten in place when their shape and type are unchanged, so the file does
-        not grow with each checkpoint (HDF5 does not reuse the space of deleted datasets).
+        Two slots are written in turn and /checkpoint links to the last one written whole: the
+        new slot is filled and flushed before the link moves, so a process killed at any point
+        leaves the previous checkpoint whole (a kill between the arrays and the rows attribute
+        of a single group left new arrays under old rows: a resume that skipped rows). Arrays
+        are rewritten in place when their shape and type are unchanged, so the file does not
+        grow with each checkpoint (HDF5 does not reuse the space of deleted datasets).
         """
         self._check_open()
         arrays = {name: np.asarray(value) for name, value in state.items()}
@@ -146,8 +151,11 @@ class History:
             if "/" in name:
                 raise ValueError(f"checkpoint name '{name}': no '/' allowed")
         with _open(self.path, "r+") as f:
-            group = f.require_group(CHECKPOINT)
-            # marks the checkpoint as partly written until every array is in
+            link = f.get(CHECKPOINT, getlink=True)
+            last = link.path if isinstance(link, h5py.SoftLink) else ""
+            slot = f"/{CHECKPOINTS}/{'1' if last.endswith('/0') else '0'}"
+            group = f.require_group(slot)
+            # marks the slot as partly written until every array is in
             group.attrs["rows"] = -1
             for name in set(group) - set(arrays):
                 del group[name]
@@ -160,6 +168,10 @@ class History:
                         del group[name]
                     group.create_dataset(name, data=value)
             group.attrs["rows"] = f.attrs["rows"]
+            f.flush()
+            if link is not None:
+                del f[CHECKPOINT]
+            f[CHECKPOINT] = h5py.SoftLink(slot)
 
     def finish(self, status, timings=None):
         """Set the final status ('complete' or 'aborted: <reason>'), store timings, close.
@@ -260,6 +272,7 @@ def _series_shapes(f):
 
     def visit(name, obj):
         if isinstance(obj, h5py.Dataset) and not name.startswith((CHECKPOINT + "/",
+                                                                   CHECKPOINTS + "/",
                                                                    GEOMETRY + "/",
                                                                    SYSTEM + "/")):
             shapes[name] = obj.shape[1:]
