@@ -125,17 +125,21 @@ SIGNAL = _signal_variant()
 LOAD = Variant("load: its nodal forces times its time signal", {
     "pressure": {
         "set": Value("str", "face selection as PART.SET"),
-        "value": Value("float", "pressure, positive when pushing into the surface", unit="Pa"),
+        # bounds far beyond any material's strength, that keep the products of the preload
+        # (norms, energies) finite: 1e300 overflowed in them with warnings
+        "value": Value("float", "pressure, positive when pushing into the surface", unit="Pa",
+                       minimum=-1e12, maximum=1e12),
         "signal": SIGNAL,
     },
     "force": {
         "part": Value("str", "part carrying the force"),
         "point": _vec3("the force goes to the node nearest this point"),
-        "vector": _vec3("force", "N"),
+        "vector": Value("floats", "force", unit="N", length=3, minimum=-1e15, maximum=1e15),
         "signal": SIGNAL,
     },
     "gravity": {
-        "vector": _vec3("acceleration of gravity", "m/s^2"),
+        "vector": Value("floats", "acceleration of gravity", unit="m/s^2", length=3,
+                        minimum=-1e9, maximum=1e9),
         "parts": Value("strs", "parts it applies to (empty: all)", []),
         "signal": SIGNAL,
     },

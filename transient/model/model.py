@@ -11,7 +11,7 @@ import scipy.sparse as sp
 
 from ..mesh import generators
 from .assembly import CellBlock, assemble
-from ..mesh.elements import ALIASES
+from ..mesh.elements import ALIASES, ELEMENTS
 from ..case.sizes import check_memory
 from ..errors import CaseError
 from .loads import nearest_node, pressure_forces
@@ -106,6 +106,25 @@ def resolve_set(case, parts, ref, key, surface=False):
                         f"set (face sets of part '{part}': "
                         f"{', '.join(sorted(mesh.face_sets)) or 'none'})")
     return parts[part], name
+
+
+def _check_quadrature(case, ctypes):
+    """A stiffness rule too coarse for an element leaves K with zero-energy (hourglass) modes,
+    which no loss damps: each point gives 6 strains, and K needs 3 nen - 6 (one point on hex8
+    made the mode search of drilled_cube run past fmax for minutes)."""
+    degree = case.solver.quadrature.stiffness
+    for ctype in sorted(ctypes) if degree else ():
+        element = ELEMENTS[ctype]
+        need = 3 * element.nen - 6
+
+        def enough(d):
+            return 6 * len(element.rule(d)[0]) >= need
+        if not enough(degree):
+            least = next(d for d in range(degree + 1, 20) if enough(d))
+            raise CaseError(case.path, "solver.quadrature.stiffness", f"degree {degree} gives "
+                            f"{ctype} {len(element.rule(degree)[0])} point(s), too few for its "
+                            f"{need} deformation modes (zero-energy modes): at least {least}, "
+                            "or 0 for the element's default")
 
 
 def _cell_blocks(case, parts):
@@ -247,6 +266,7 @@ def build_model(case):
 
     t0 = time.perf_counter()
     blocks = _cell_blocks(case, parts)
+    _check_quadrature(case, {ctype for _, ctype, _ in blocks})
     quad = case.solver.quadrature
     ops = assemble(points, [b for _, _, b in blocks], quad.stiffness or None,
                    quad.mass or None)
