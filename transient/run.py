@@ -171,12 +171,7 @@ def _check(case, system, state, dt, balance, status):
                              f"the deepest penetration reached ({state.gmin.min():.3e} m) at "
                              f"t = {state.time:.6g} s")
     if balance.drift > solver.drift_tolerance:
-        point = system.critical.stiffest_point(dt) if solver.scheme == "explicit" else None
-        hint = "" if point is None else (
-            f"; with the penalty closed the step runs at omega_max dt = {point[0]:.2f} (limit 2), "
-            f"the contact at omega_c dt = {dt * system.critical.omega_contact:.2f} (impacts keep "
-            f"their energy to 0.7): lower contact.{point[1]}.k ({point[2]:.3g} Pa/m) or "
-            f"solver.dt ({dt:.3g} s)")
+        hint = system.critical.drift_hint(dt) if solver.scheme == "explicit" else ""
         raise RunAborted(f"energy balance drifted by {balance.drift:.2e} of the peak "
                          f"mechanical energy (tolerance {solver.drift_tolerance:g}) at "
                          f"t = {state.time:.6g} s{hint}")

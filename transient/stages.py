@@ -166,18 +166,18 @@ def choose_dt(case, setup, stored=None):
     if solver.scheme in ("exponential", "implicit"):
         # unconditionally stable: the step is set by accuracy, 20 steps per period at fmax,
         # but for the exponential scheme's explicit correctors of a stiff contact remainder
-        limit = (np.inf if solver.scheme == "implicit" else
-                 REMAINDER_OMEGA_DT.get(solver.corrector, np.inf))
-        omega = setup.system.critical.omega_remainder
-        dt_max = limit / omega if omega > 0 else np.inf
+        critical = setup.system.critical
+        dt_max = (np.inf if solver.scheme == "implicit" else
+                  critical.remainder_dt(solver.corrector))
         if dt == 0.0:
             dt = min(1.0 / (20.0 * solver.reduction.fmax), 0.9 * dt_max)
         elif dt > dt_max and not solver.force_dt:
-            pair = setup.system.critical.stiffest_point(dt)[1]
+            pair = critical.stiffest_point(dt)[1]
             raise CaseError(case.path, "solver.dt", f"{dt:.3e} s: the {solver.corrector} "
                             "corrector takes the contact beyond the preload's tangent "
                             f"explicitly, and contact.{pair}.k puts it at omega dt = "
-                            f"{dt * omega:.3g}, above {limit:g}: solver.corrector = "
+                            f"{dt * critical.omega_remainder:.3g}, above "
+                            f"{REMAINDER_OMEGA_DT[solver.corrector]:g}: solver.corrector = "
                             f'"implicit", a step up to {dt_max:.3e} s, or solver.force_dt = '
                             "true to run anyway")
         check_steps(case, dt)

@@ -54,6 +54,23 @@ class CriticalStep:
         """The largest step at which an impact keeps its energy (CONTACT_OMEGA_DT)."""
         return CONTACT_OMEGA_DT / self.omega_contact if self.omega_contact > 0 else np.inf
 
+    def remainder_dt(self, corrector):
+        """The largest step the exponential scheme's corrector takes the contact remainder
+        at (REMAINDER_OMEGA_DT; unbounded for the implicit one)."""
+        limit = REMAINDER_OMEGA_DT.get(corrector, np.inf)
+        return limit / self.omega_remainder if self.omega_remainder > 0 else np.inf
+
+    def drift_hint(self, dt):
+        """What an explicit run losing its energy balance at step dt should be told: the
+        frequencies of the step, and the keys that drive them ('' without contact)."""
+        point = self.stiffest_point(dt)
+        if point is None:
+            return ""
+        return (f"; with the penalty closed the step runs at omega_max dt = {point[0]:.2f} "
+                f"(limit 2), the contact at omega_c dt = {dt * self.omega_contact:.2f} "
+                f"(impacts keep their energy to {CONTACT_OMEGA_DT}): lower "
+                f"contact.{point[1]}.k ({point[2]:.3g} Pa/m) or solver.dt ({dt:.3g} s)")
+
     def stiffest_point(self, dt):
         """(omega_max dt, pair, tangent) at step dt: the system's highest frequency (penalty
         contact closed) times dt, and the pair and tangent of the contact point whose own
@@ -79,19 +96,18 @@ def reduced(omega2, Cr, contacts, tangent):
     """CriticalStep of a reduced system (M = I): eigenvalues of the small dense matrix."""
     kt = critical_tangent(contacts, tangent)
     dkw = contacts.weights * (kt - tangent)
-    A = np.diag(omega2) + (Cr.T * dkw) @ Cr if len(dkw) else np.diag(omega2)
-    lam = np.linalg.eigvalsh(0.5 * (A + A.T))[-1]
+    # the remainder's stiffness, what the linear part leaves out of the penalties
+    R = (Cr.T * dkw) @ Cr if len(dkw) else np.zeros((len(omega2),) * 2)
+    lam = _largest(np.diag(omega2) + R)
     dt = 2.0 / np.sqrt(lam) if lam > 0 else np.inf
-    return CriticalStep(dt, kt, np.einsum("ij,ij->i", Cr, Cr), contacts,
-                        _omega(Cr, contacts.weights * kt), _omega(Cr, dkw))
+    omega_c = np.sqrt(_largest((Cr.T * (contacts.weights * kt)) @ Cr)) if len(dkw) else 0.0
+    return CriticalStep(dt, kt, np.einsum("ij,ij->i", Cr, Cr), contacts, float(omega_c),
+                        float(np.sqrt(_largest(R))))
 
 
-def _omega(Cr, kw):
-    """sqrt of the largest eigenvalue of Cr^T diag(kw) Cr (M = I): 0 without contact."""
-    if not len(kw):
-        return 0.0
-    A = (Cr.T * kw) @ Cr
-    return float(np.sqrt(max(np.linalg.eigvalsh(0.5 * (A + A.T))[-1], 0.0)))
+def _largest(A):
+    """The largest eigenvalue of a symmetric A, 0 at least (and for an empty one)."""
+    return max(np.linalg.eigvalsh(0.5 * (A + A.T))[-1], 0.0) if len(A) else 0.0
 
 
 def full(K, mass, Cf, contacts, tangent):

@@ -10,6 +10,7 @@ import numpy as np
 from ..case.compare import RESUMABLE, changed
 from ..dynamics.state import State
 from ..errors import CaseError, DamagedHistory
+from ..kernels.codes import BILATERAL, TABLE
 from .attributes import read_attrs
 from .history import CHECKPOINT, _rows, check_appendable, load_checkpoint
 from .series import layout
@@ -120,9 +121,9 @@ def _fits(system, saved):
     J = system.patterns.shape[0]
     if (len(codes) != J or params.shape != (J, 8) or table_t.shape != table_v.shape
             or len(table_t) != J or len(table_n) != J or np.any(table_n > table_t.shape[1])
-            or np.any(table_n < 0) or np.any((codes < 0) | (codes > 5))):
+            or np.any(table_n < 0) or np.any((codes < 0) | (codes > TABLE))):
         raise DamagedHistory(f"{GROUP}/signals", "the signals do not fit the load patterns")
-    if np.any((c.code < 0) | (c.code > 2)):
+    if np.any((c.code < 0) | (c.code > BILATERAL)):
         raise DamagedHistory(f"{GROUP}/contacts/code", "contact laws that are not known")
     blocks = saved["blocks"]
     if system.reduced and (len(blocks) < 2 or blocks[0] != 0 or blocks[-1] != m
