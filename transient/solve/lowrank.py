@@ -67,7 +67,7 @@ class ContactSolver:
         self.solve0 = factorize(self.A0, backend, definite=sigma <= 0)
         if m and self.by_columns:
             # the gate is on what Z holds, rho columns: regularized rows span far fewer
-            # directions than the k dofs they touch (pad_disc: 612 of 2668)
+            # directions than the k dofs they touch (pad_disc: 599 of 2668)
             self.Rm, self.V = row_space(self.C[:, self.cols].toarray())
         rank = self.Rm.shape[1] if m and self.by_columns else min(m, k)
         self.lowrank = m > 0 and 8.0 * n * rank <= MAX_BYTES
