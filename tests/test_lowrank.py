@@ -53,3 +53,48 @@ def test_rows_of_low_rank_run_on_their_row_space():
     B = np.zeros((n, rho))
     B[cols_] = V
     assert np.allclose(Z @ R(), spla.spsolve(direct, B), rtol=1e-9, atol=1e-12)
+
+
+def test_factored_rows_give_the_same_row_space_and_solves():
+    """Rows given as L B^T (regularized rules) with dependent columns of L, as the two sides'
+    compatible shapes give: the row space from the r x r algebra is the dense rows' one, cut
+    at the same rank, and the solves match the direct ones."""
+    rng = np.random.default_rng(11)
+    n, m, k, r = 90, 70, 24, 10
+    A = sp.random(n, n, density=0.05, random_state=3)
+    K = (A + A.T + n * sp.eye(n)).tocsr()
+    M = sp.eye(n).tocsr()
+    cols = np.sort(rng.choice(n, k, replace=False))
+    L = rng.standard_normal((m, r))
+    L[:, -3:] = L[:, :3] @ rng.standard_normal((3, 3))      # rank r - 3
+    B = np.zeros((n, r))
+    B[cols] = rng.standard_normal((k, r))
+    C = sp.csr_matrix(L @ B.T)
+    dense = ContactSolver(K, M, C, -4.0)
+    factored = ContactSolver(K, M, C, -4.0, factors=(L, sp.csr_matrix(B)))
+    assert dense.Rm.shape == factored.Rm.shape == (m, r - 3)
+    V1, V2 = dense.V, factored.V
+    assert np.allclose(V1 @ (V1.T @ V2), V2, atol=1e-10)
+    assert np.allclose(factored.Rm @ V2.T, C[:, factored.cols].toarray(), atol=1e-10)
+    b = rng.standard_normal((n, 2))
+    d = rng.uniform(0, 1e2, m)
+    direct = (K + 4.0 * M + C.T @ sp.diags(d) @ C).tocsc()
+    assert np.allclose(factored.solver(d)(b), spla.spsolve(direct, b), rtol=1e-9, atol=1e-12)
+
+
+def test_regularized_pairs_carry_their_rows_factored():
+    """The factors a regularized pair carries are its observation rows (pad_disc, coarse)."""
+    from pathlib import Path
+
+    from transient.case.loading import load
+    from transient.contact.contactset import stack
+    from transient.contact.pair import build_contact
+    from transient.model import build_model
+    case = load(Path(__file__).resolve().parent.parent / "cases" / "pad_disc.toml",
+                ["parts.disc.mesh.divisions=[4,48,1]", "parts.pad.mesh.divisions=[3,8,1,1]"])
+    model = build_model(case)
+    contacts = stack(build_contact(case, model), model.ndof)
+    L, B = contacts.factors
+    x = np.random.default_rng(0).standard_normal(model.ndof)
+    assert np.linalg.norm(contacts.C @ x - L @ (B.T @ x)) <= 1e-12 * np.linalg.norm(contacts.C @ x)
+    assert L.shape[1] < contacts.C.shape[0]

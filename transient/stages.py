@@ -73,9 +73,11 @@ def _prepare(case):
     # (with initial velocities), in equilibrium or not
     cs = None
     if np.any(constant) or solver.reduction.enabled:
+        factors = (None if contacts.factors is None
+                   else (contacts.factors[0], contacts.factors[1][free]))
         cs = _timed(stages, "factorization", ContactSolver, model.K[free][:, free],
                     model.M[free][:, free], contacts.C[:, free],
-                    -(2 * np.pi * solver.shift_hz) ** 2, solver.linear_solver)
+                    -(2 * np.pi * solver.shift_hz) ** 2, solver.linear_solver, factors)
     try:
         preload = _timed(stages, "preload", solve_preload, model.K, model.fixed, constant,
                          contacts, cs, solver.newton.tolerance, solver.newton.max_iter)

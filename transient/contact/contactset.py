@@ -2,6 +2,7 @@
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..kernels.laws import evaluate
@@ -16,6 +17,8 @@ class ContactSet:
     code: np.ndarray         # (P,) law code of each point
     params: np.ndarray       # (P, 4) law parameters of each point
     slices: dict             # pair name -> slice of its points
+    factors: tuple = None    # (L (P, r), B (ndof, r) sparse) with C = L B^T, when every pair's
+    #                          rows are factored (regularized rules: contact.pair.row_factors)
 
     @property
     def n_points(self):
@@ -30,9 +33,10 @@ class ContactSet:
     def subset(self, keep, weights):
         """The points keep (sorted indices) with new weights; pairs stay contiguous."""
         bounds = {name: np.searchsorted(keep, [s.start, s.stop]) for name, s in self.slices.items()}
+        factors = None if self.factors is None else (self.factors[0][keep], self.factors[1])
         return ContactSet(self.C[keep], self.gap0[keep], weights, self.code[keep],
                           self.params[keep], {name: slice(int(a), int(b))
-                                              for name, (a, b) in bounds.items()})
+                                              for name, (a, b) in bounds.items()}, factors)
 
     def force(self, u):
         """Contact force C^T (w p) [N] at displacement u, with gaps, pressures and tangents."""
@@ -60,5 +64,9 @@ def stack(pairs, ndof):
         start += n
     C = sp.vstack(rows).tocsr()
     C.eliminate_zeros()
+    factors = None
+    if all(pair.factors is not None for pair in pairs):
+        factors = (sla.block_diag(*[pair.factors[0] for pair in pairs]),
+                   sp.hstack([pair.factors[1] for pair in pairs]).tocsr())
     return ContactSet(C, np.concatenate(gap0), np.concatenate(w), np.concatenate(code),
-                      np.vstack(params), slices)
+                      np.vstack(params), slices, factors)

@@ -17,7 +17,7 @@ from .compatibility import auto_eps, compatibility
 from ..errors import CaseError
 from .interface import InterfaceError, build_interface, build_wall_interface
 from ..model.model import resolve_set
-from .regularize import dual_projectors, primal_basis, regularized_rule
+from .regularize import dual_factors, primal_basis, regularized_rule, row_factors
 from .rules import centre_rule
 from ..mesh.selections import set_faces
 
@@ -37,6 +37,7 @@ class ContactPair:
     coarse: object            # CoarseRule of the greedy rule, else None
     timings: dict             # stage -> seconds, in the order run
     candidates: int = 0       # sampled rule: the fine points it was sampled from
+    factors: tuple = None     # (L, B): the rule's observation is L B^T (regularize.row_factors)
 
     @property
     def k(self):
@@ -73,7 +74,7 @@ def build_pair(case, model, name, need_compatibility=False):
         raise CaseError(case.path, key, str(exc)) from None
     timings["interface"] = time.perf_counter() - t0
 
-    comp, eps, eps_source, primal, coarse = None, None, "", None, None
+    comp, eps, eps_source, primal, coarse, factors = None, None, "", None, None, None
     greedy = spec.rule == "greedy"
     if spec.regularized or need_compatibility:
         t0 = time.perf_counter()
@@ -92,7 +93,11 @@ def build_pair(case, model, name, need_compatibility=False):
     if spec.regularized:
         t0 = time.perf_counter()
         if spec.formulation == "dual":
-            P1, P2 = dual_projectors(comp, eps, interface.fine, spec.project, spec.norm)
+            F1, F2 = dual_factors(comp, eps, interface.fine, spec.project, spec.norm)
+            P1 = F1[0] @ F1[1] if F1 else np.eye(comp.n1)
+            P2 = F2[0] @ F2[1] if F2 else np.eye(comp.n2)
+            if not greedy:
+                factors = row_factors(interface, rule, F1, F2, model.ndof)
             rule = regularized_rule(rule, P1, P2)
             fine = regularized_rule(interface.fine, P1, P2) if greedy else None
         else:
@@ -113,7 +118,7 @@ def build_pair(case, model, name, need_compatibility=False):
         rule = coarse.rule
         timings["coarse_rule"] = time.perf_counter() - t0
     return ContactPair(name, spec, interface, comp, eps, eps_source, rule, primal, coarse,
-                       timings)
+                       timings, factors=factors)
 
 
 def build_contact(case, model, need_compatibility=False):

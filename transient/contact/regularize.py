@@ -21,13 +21,20 @@ def range_basis(U, tol=RANK_TOL):
     return Q[:, s > tol * s[0]] if s.size and s[0] > 0 else Q[:, :0]
 
 
-def projector(U, W=None):
-    """Projector (N, N) on range(U): orthogonal in the identity norm, or W-orthogonal."""
+def projector_factors(U, W=None):
+    """(Q, Y) with Q Y the projector on range(U): Q (N, r) an orthonormal basis of the range,
+    Y = Q^T (identity norm) or (Q^T W Q)^-1 Q^T W (W-orthogonal)."""
     Q = range_basis(U)
     if W is None:
-        return Q @ Q.T
+        return Q, Q.T
     G = Q.T @ W @ Q
-    return Q @ np.linalg.solve(G, Q.T @ W)
+    return Q, np.linalg.solve(G, Q.T @ W)
+
+
+def projector(U, W=None):
+    """Projector (N, N) on range(U): orthogonal in the identity norm, or W-orthogonal."""
+    Q, Y = projector_factors(U, W)
+    return Q @ Y
 
 
 def interface_mass(rule):
@@ -36,13 +43,35 @@ def interface_mass(rule):
     return (rule.C1.T @ w @ rule.C1).toarray(), (rule.C2.T @ w @ rule.C2).toarray()
 
 
-def dual_projectors(comp, eps, fine, project="both", norm="mass"):
-    """P1, P2 of the dual regularization; a side not projected keeps the identity."""
+def dual_factors(comp, eps, fine, project="both", norm="mass"):
+    """(Q1, Y1), (Q2, Y2): the factors of the dual regularization's projectors P_n = Q_n Y_n,
+    None for a side not projected (its projector is the identity)."""
     U1, U2 = comp.traces(eps)
     W1, W2 = interface_mass(fine) if norm == "mass" else (None, None)
-    P1 = projector(U1, W1) if project in ("both", "surface1") else np.eye(comp.n1)
-    P2 = projector(U2, W2) if project in ("both", "surface2") else np.eye(comp.n2)
-    return P1, P2
+    F1 = projector_factors(U1, W1) if project in ("both", "surface1") else None
+    F2 = projector_factors(U2, W2) if project in ("both", "surface2") else None
+    return F1, F2
+
+
+def dual_projectors(comp, eps, fine, project="both", norm="mass"):
+    """P1, P2 of the dual regularization; a side not projected keeps the identity."""
+    F1, F2 = dual_factors(comp, eps, fine, project, norm)
+    return (F1[0] @ F1[1] if F1 else np.eye(comp.n1)), (F2[0] @ F2[1] if F2 else np.eye(comp.n2))
+
+
+def row_factors(interface, rule, F1, F2, ndof):
+    """(L, B) with the regularized rule's gap observation C1 P1 T1 - C2 P2 T2 = L B^T in model
+    dofs (T_n the sides' dof maps): L = [C1 Q1, -C2 Q2] (P, r1 + r2) dense and
+    B = [T1^T Y1^T, T2^T Y2^T] (ndof, r1 + r2) sparse, nonzero on the interface dofs only.
+    The rows' space then comes from r1 + r2 columns, not from the dense P x N rows; None
+    unless both sides are projected."""
+    if F1 is None or F2 is None:
+        return None
+    (Q1, Y1), (Q2, Y2) = F1, F2
+    L = np.hstack([rule.C1 @ Q1, -(rule.C2 @ Q2)])
+    B = sp.hstack([interface.side1.dof_map(ndof).T @ sp.csr_matrix(Y1.T),
+                   interface.side2.dof_map(ndof).T @ sp.csr_matrix(Y2.T)]).tocsr()
+    return L, B
 
 
 def regularized_rule(rule, P1, P2):

@@ -52,10 +52,13 @@ class ContactSolver:
     B = E V: E selects those dofs and V (k x rho) is an orthonormal basis of the row space of
     C E. Woodbury then runs on the rho columns of B instead of the m rows of C: rho = k for the
     fine rule, and only r1 + r2 (the kept shapes' traces) for a regularized one, whose dense
-    rows touch every interface dof (pad_disc: 2668 dofs, rank 612).
+    rows touch every interface dof (pad_disc: 2668 dofs, rank 599).
+
+    factors (L, B), C = L B^T with r columns (regularized rows: contact.pair.row_factors),
+    give the row space from r x r algebra instead of the k x k Gram of the dense rows.
     """
 
-    def __init__(self, K, M, C, sigma, backend="auto"):
+    def __init__(self, K, M, C, sigma, backend="auto", factors=None):
         self.A0 = (K - sigma * M).tocsr() if sigma else K.tocsr()
         self.C = C.tocsr()
         self.sigma = sigma
@@ -68,7 +71,8 @@ class ContactSolver:
         if m and self.by_columns:
             # the gate is on what Z holds, rho columns: regularized rows span far fewer
             # directions than the k dofs they touch (pad_disc: 599 of 2668)
-            self.Rm, self.V = row_space(self.C[:, self.cols].toarray())
+            self.Rm, self.V = (row_space(self.C[:, self.cols].toarray()) if factors is None
+                               else factored_row_space(*factors, self.cols))
         rank = self.Rm.shape[1] if m and self.by_columns else min(m, k)
         self.lowrank = m > 0 and 8.0 * n * rank <= MAX_BYTES
         if not self.lowrank:
@@ -118,6 +122,18 @@ class ContactSolver:
                 return y - Z @ sla.lu_solve(lu, d[:, None] * Cy if Cy.ndim == 2 else d * Cy)
             known = None
         return TangentSolve(solve, getattr(self.solve0, "backend", "?") + "+woodbury", known)
+
+
+def factored_row_space(L, B, cols, tol=ROW_SPACE_TOL):
+    """row_space of C E = L B[cols]^T (L (m, r), B (n, r) sparse) without the dense rows: with
+    B[cols] = Q R, C E = (L R^T) Q^T, and the eigenvectors X of (L R^T)^T (L R^T) (r x r)
+    above tol give V = Q X and Rm = L R^T X, the same cut as row_space (its k x k Gram has
+    the same nonzero eigenvalues). The columns of B need not be independent."""
+    Q, R = np.linalg.qr(B[cols].toarray())
+    LR = L @ R.T
+    lam, X = np.linalg.eigh(LR.T @ LR)
+    X = X[:, lam > tol * max(lam.max(), 1e-300)]
+    return LR @ X, Q @ X
 
 
 def row_space(Cc, tol=ROW_SPACE_TOL):
