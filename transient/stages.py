@@ -21,6 +21,7 @@ from .dynamics.system import full_system, reduced_system
 from .errors import CaseError
 from .kernels.codes import ENERGY_TERMS, NO_CONVERGENCE, NOT_FINITE, OK
 from .model import build_model
+from .model.dofs import free_block, restrict
 from .reduce.stage import reduce
 from .solve.linsolve import why
 from .solve.lowrank import ContactSolver
@@ -75,8 +76,8 @@ def _prepare(case):
     if np.any(constant) or solver.reduction.enabled:
         factors = (None if contacts.factors is None
                    else (contacts.factors[0], contacts.factors[1][free]))
-        cs = _timed(stages, "factorization", ContactSolver, model.K[free][:, free],
-                    model.M[free][:, free], contacts.C[:, free],
+        cs = _timed(stages, "factorization", ContactSolver, free_block(model.K, free),
+                    free_block(model.M, free), restrict(contacts.C, cols=free),
                     -(2 * np.pi * solver.shift_hz) ** 2, solver.linear_solver, factors)
     try:
         preload = _timed(stages, "preload", solve_preload, model.K, model.fixed, constant,

@@ -11,6 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import critical
+from ..model.dofs import free_block, restrict
 
 
 @dataclass(frozen=True)
@@ -92,12 +93,12 @@ def full_system(K_lin, lumped, M, damping, contacts, tangent, free, patterns, si
                 sensor_names, field):
     """The full system on the free dofs. M: the mass the implicit scheme uses, None for the
     lumped one."""
-    Kf = K_lin[free][:, free].tocsr()
+    Kf = free_block(K_lin, free)
     mass = lumped[free]
-    Cf = contacts.C[:, free].tocsr()
+    Cf = restrict(contacts.C, cols=free)
     S = _observation(sensors[:, free], len(free), field, dense=False)
     return FullSystem(contacts, tangent, patterns_matrix([p[free] for p in patterns], len(free)),
                       signals, S, sensor_names, len(free) if field else 0,
                       critical.full(Kf, mass, Cf, contacts, tangent), K=Kf, mass=mass,
-                      M=sp.diags(mass).tocsr() if M is None else M[free][:, free].tocsr(),
+                      M=sp.diags(mass).tocsr() if M is None else free_block(M, free),
                       alpha=damping.alpha, beta=damping.beta, C=Cf, free=free)

@@ -11,6 +11,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from ..model.dofs import free_block, restrict
 from ..solve.modes import normal_modes
 
 
@@ -41,24 +42,24 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     """
     t0 = time.perf_counter()
     free = np.flatnonzero(~fixed)
-    modes = normal_modes(K_lin, M, fixed, count=40, fmax=fmax, shift=-shift_hz, solve=solve)
+    # the free blocks once: the modes, the projections and the reduced stiffness share them
+    Kf, Mf = free_block(K_lin, free), free_block(M, free)
+    modes = normal_modes(Kf, Mf, None, count=40, fmax=fmax, shift=-shift_hz, solve=solve)
     t_modes = time.perf_counter() - t0
-    Phi = modes.shapes[free]
+    Phi = modes.shapes
     columns = [Phi]
     mu = np.zeros(0)
     n_shapes = 0
     if contact is not None and contact[0].shape[0]:
         C, stiffness = contact
         omega2_modes = (2 * np.pi * modes.frequencies) ** 2
-        shapes, mu = contact_shapes(sp.csr_matrix(C)[:, free], stiffness, solve, Phi,
+        shapes, mu = contact_shapes(restrict(C, cols=free), stiffness, solve, Phi,
                                     omega2_modes, tol)
         columns.append(shapes)
         n_shapes = shapes.shape[1]
     if statics.shape[1]:
         columns.append(np.atleast_2d(solve(np.asfortranarray(statics[free])).T).T)
     t_static = time.perf_counter() - t0 - t_modes
-    Mf = M[free][:, free]
-    Kf = K_lin[free][:, free]
     # the static responses without what the modes already hold (twice, for round-off): on a
     # part free to move they are dominated by its rigid motion, 1e10 times their elastic part,
     # which the independence test below would otherwise take for round-off and drop with them

@@ -1,0 +1,59 @@
+"""Block shift-invert Lanczos against a dense eigensolver: every eigenvalue below the bound,
+none missed where they are multiple (a square membrane's doublets), M-orthonormal vectors."""
+import numpy as np
+import pytest
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from transient.solve.lanczos import NotConverged, block_lanczos
+
+
+def membrane(nx=20, seed=0):
+    """A square membrane's stiffness (its eigenvalues are double off the diagonal) and a mass
+    that is lumped on a random diagonal or the identity."""
+    L1 = sp.diags([-np.ones(nx - 1), 2 * np.ones(nx), -np.ones(nx - 1)], [-1, 0, 1])
+    K = (sp.kron(L1, sp.eye(nx)) + sp.kron(sp.eye(nx), L1)).tocsc()
+    if seed is None:
+        return K, sp.identity(nx * nx, format="csr")
+    return K, sp.diags(np.random.default_rng(seed).uniform(0.5, 2.0, nx * nx)).tocsr()
+
+
+def solver(K, M, sigma):
+    lu = spla.splu((K - sigma * M).tocsc())
+    return lambda B: lu.solve(np.asarray(B))
+
+
+@pytest.mark.parametrize("seed", [None, 0])
+@pytest.mark.parametrize("block", [2, 8, 16])
+def test_every_eigenvalue_below_the_bound(seed, block):
+    K, M = membrane(seed=seed)
+    ref = sla.eigh(K.toarray(), M.toarray(), eigvals_only=True)
+    k = 40 + int(np.argmax(np.diff(ref[39:]) > 1e-6 * ref[39]))    # about 40 wanted
+    sigma, lam_max = -0.01, 0.5 * (ref[k - 1] + ref[k])
+    lam, X, steps = block_lanczos(solver(K, M, sigma), M, sigma, lam_max=lam_max, block=block)
+    ref = ref[ref <= lam_max]
+    assert np.sum(lam <= lam_max) == len(ref) and len(lam) > len(ref)
+    assert np.abs(lam[:len(ref)] - ref).max() <= 1e-11 * ref.max()
+    assert np.abs(X.T @ (M @ X) - np.eye(len(lam))).max() <= 1e-12
+    assert np.abs(K @ X - (M @ X) * lam).max() <= 1e-10 * lam.max()
+
+
+def test_the_first_count_pairs():
+    K, M = membrane(seed=1)
+    lam, X, _ = block_lanczos(solver(K, M, -0.01), M, -0.01, count=25, block=8)
+    ref = sla.eigh(K.toarray(), M.toarray(), eigvals_only=True)[:25]
+    assert np.abs(lam[:25] - ref).max() <= 1e-11 * ref.max()
+
+
+def test_a_basis_too_small_is_said():
+    K, M = membrane(seed=2)
+    with pytest.raises(NotConverged, match="eigenpairs converged in a basis of"):
+        block_lanczos(solver(K, M, -0.01), M, -0.01, lam_max=2.0, block=4, max_dim=40)
+
+
+def test_a_space_that_closes_returns_every_pair_exactly():
+    K, M = membrane(nx=6, seed=3)
+    lam, X, _ = block_lanczos(solver(K, M, -0.01), M, -0.01, lam_max=1e9, block=5)
+    ref = sla.eigh(K.toarray(), M.toarray(), eigvals_only=True)
+    assert len(lam) == 36 and np.abs(lam - ref).max() <= 1e-12 * ref.max()

@@ -1,0 +1,29 @@
+"""Sparse blocks on a subset of dofs (the free ones) without SciPy's fancy column indexing."""
+import numpy as np
+import scipy.sparse as sp
+
+
+def restrict(A, rows=None, cols=None):
+    """A[rows][:, cols] as CSR, rows and cols sorted index arrays (None: all).
+
+    The columns are taken by remapping A's column indices, O(nnz): SciPy's column indexing
+    (csr_column_index2) took 0.3-1 s a call on pad_disc, nine calls a setup."""
+    A = sp.csr_matrix(A)
+    if rows is not None and len(rows) != A.shape[0]:
+        A = A[rows]
+    if cols is None or len(cols) == A.shape[1]:
+        return A
+    new = np.full(A.shape[1], -1, np.int64)
+    new[cols] = np.arange(len(cols))
+    mapped = new[A.indices]
+    keep = mapped >= 0
+    counts = np.concatenate([[0], np.cumsum(keep)])
+    out = sp.csr_matrix((A.data[keep], mapped[keep].astype(A.indices.dtype),
+                         counts[A.indptr].astype(A.indptr.dtype)), shape=(A.shape[0], len(cols)))
+    out.has_sorted_indices = A.has_sorted_indices
+    return out
+
+
+def free_block(A, free):
+    """A on the free dofs, rows and columns (free sorted)."""
+    return restrict(A, free, free)
