@@ -1,5 +1,32 @@
-"""Sparse kernels on CSR triplets (indptr, indices, data): products and triangular solves."""
-from ..jit import njit_fast
+"""Sparse kernels on CSR triplets (indptr, indices, data): products, triangular solves, and the
+columns of a CSR matrix taken by a map."""
+import numpy as np
+
+from ..jit import njit, njit_fast
+
+
+@njit
+def csr_take_columns(indptr, indices, data, new):
+    """The CSR triplet of the columns j with new[j] >= 0, renumbered new[j] (in row order)."""
+    m = indptr.shape[0] - 1
+    out_ptr = np.zeros(m + 1, indptr.dtype)
+    for i in range(m):
+        c = 0
+        for k in range(indptr[i], indptr[i + 1]):
+            if new[indices[k]] >= 0:
+                c += 1
+        out_ptr[i + 1] = out_ptr[i] + c
+    out_idx = np.empty(out_ptr[m], indices.dtype)
+    out_val = np.empty(out_ptr[m], data.dtype)
+    for i in range(m):
+        p = out_ptr[i]
+        for k in range(indptr[i], indptr[i + 1]):
+            j = new[indices[k]]
+            if j >= 0:
+                out_idx[p] = j
+                out_val[p] = data[k]
+                p += 1
+    return out_ptr, out_idx, out_val
 
 
 @njit_fast
