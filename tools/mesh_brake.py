@@ -1,0 +1,512 @@
+"""A brake pad on a disc at industrial size: two separate tet10 meshes built by gmsh
+(OpenCASCADE), and a case that mirrors cases/pad_disc.toml with them (issue 17).
+
+The geometry, materials, constraints, loads, sensors, contact and solver settings are those of
+the mirrored case (cases/pad_disc.toml by default, read through transient.case.loading): its
+`annular_disc` and `brake_pad` generator meshes become `kind = "file"` meshes whose Gmsh
+physical groups carry the generators' set names (disc: volume `all`, surfaces `hub`, `outer`,
+`zmin`, `zmax`; pad: volumes `lining`, `backplate`, `all`, surfaces `friction`, `back`, `ends`,
+`inner`, `outer`), so every set a case written for the generators names is in the files. The
+two meshes are separate, so the contact interface is non-conforming; the pad's two layers are
+fragmented into one conforming mesh.
+
+    python tools/mesh_brake.py OUTDIR [--dofs N] [--interface H] [--size H0] [--case CASE]
+                               [--growth G] [--tolerance F] [--high-order-optimize K]
+
+writes OUTDIR/disc.msh, OUTDIR/pad.msh (Gmsh 4.1 binary, tet10) and OUTDIR/brake.toml, and
+prints the nodes, elements and dofs of each mesh against the prediction. Then, for example:
+
+    python -m transient modes OUTDIR/brake.toml
+    python -m transient run OUTDIR/brake.toml --set solver.t_end=0.01
+
+--dofs N (total over both parts, default 1e5) sets the element size h through the measured node
+model below (NODES_PER_MEASURE); --size gives h directly. --interface H meshes the contact faces
+(the disc's top face under the pad, the pad's friction face) at H < h, the size growing away
+from them by --growth per unit distance; h is then solved for with the graded size, so the
+target still holds. The meshes are deterministic (one thread, fixed seed): the same arguments
+give byte-identical files.
+
+    python tools/mesh_brake.py OUTDIR --calibrate 0.012,0.01,...,0.0025
+
+meshes both parts at each uniform size and fits the node model's three constants to the counts
+(how NODES_PER_MEASURE was measured).
+
+What the mirrored case costs (2026-12-02, 2 cores, one of them busy with another job; the run
+to t_end = 0.01, eps 1e-3, where eps = auto falls back from 150k dofs on): 100k dofs 69 s and
+3.6 GB, 150k 108 s and 5.9 GB, 200k 158 s and 8.7 GB, 250k past 11.9 GB; peak memory grows as
+dofs^1.36, and limits.memory's estimate (linear in the cells) passes 250k. At 100k dofs,
+eps = auto finds a jump after 9 exactly compatible shapes and keeps only those. --interface
+multiplies the fine rule's points and the interface dofs, whose product the regularized rows
+hold: 100k dofs with --interface 0.003 passed 11.5 GB before the factorization.
+"""
+import argparse
+import importlib.util
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+DEFAULT_CASE = ROOT / "cases" / "pad_disc.toml"
+
+# Nodes of gmsh's tet10 meshes (Delaunay, gmsh and Netgen optimizers) as a*I3 + b*I2 + c*I1,
+# with I3 the integral of size^-3 over the volume, I2 of size^-2 over the faces (with the pad's
+# internal face) and I1 of size^-1 along the edges of the geometry: V / h^3, A / h^2 and L / h
+# at a uniform size h. A volume term alone does not do: nodes h^3 / V falls from 13.0 to 6.25
+# on the disc and from 40 to 8.0 on the thinner pad between 1.5k and 612k nodes, as the
+# boundary's share falls (and tet10 nodes per tet from 1.9 to 1.49). Fitted by --calibrate
+# 0.012,0.01,0.008,0.007,0.006,0.005,0.0045,0.004,0.0035,0.003,0.0025,0.0022 on both parts (24
+# meshes, 1.5k-612k nodes, gmsh 4.15.2, 2026-12-02): every count within 8.5% (rms 2.7%).
+NODES_PER_MEASURE = (5.534, 2.561, 14.04)
+GROWTH = 0.4       # size increase per unit distance from the contact faces: 1.4 per layer
+SEED = 2026        # Mesh.RandomSeed: the same arguments give the same meshes
+GEOMETRY_TOL = 1e-9
+MAX_REMESH = 2     # meshes made again at most, to meet --dofs within --tolerance
+SAMPLES = 3e5      # at most this many volume samples of the size integrals, per part
+
+
+def fuzz_dumps():
+    """The TOML writer of tools/fuzz_cases.py (stdlib only; tools/ is not a package)."""
+    spec = importlib.util.spec_from_file_location("fuzz_cases", ROOT / "tools" / "fuzz_cases.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.dumps
+
+
+# ----------------------------------------------------------------------------- geometry
+
+
+class Disc:
+    """The annulus of an `annular_disc` mesh spec; its contact face is the pad's footprint on
+    its top face."""
+
+    def __init__(self, params, pad):
+        self.inner, self.outer = params["inner_radius"], params["outer_radius"]
+        self.thickness = params["thickness"]
+        self.center = tuple(params["center"])
+        self.pad = pad
+
+    def build(self, gmsh):
+        """The OCC solid and its physical groups: name -> (dim, entity tags)."""
+        occ = gmsh.model.occ
+        cx, cy, cz = self.center
+        outer = occ.addCylinder(cx, cy, cz, 0, 0, self.thickness, self.outer)
+        inner = occ.addCylinder(cx, cy, cz, 0, 0, self.thickness, self.inner)
+        occ.cut([(3, outer)], [(3, inner)])
+        occ.synchronize()
+        levels = {"zmin": cz, "zmax": cz + self.thickness}
+        radii = {"hub": self.inner, "outer": self.outer}
+        names = classify(gmsh, self.center, levels, radii, other=None)
+        check_surfaces(names, ("hub", "outer", "zmin", "zmax"), "disc")
+        groups = {"all": (3, [v for _, v in gmsh.model.getEntities(3)])}
+        groups.update({k: (2, v) for k, v in names.items()})
+        return groups
+
+    def distance(self, x, y, z):
+        """Distance to the pad's friction face as it lies on the disc's top face."""
+        return self.pad.footprint_distance(x, y, z)
+
+    def samples(self, spacing):
+        cz = self.center[2]
+        return polar_samples(self.center[:2], self.inner, self.outer, 0.0, 2 * math.pi,
+                             [cz, cz + self.thickness], spacing, periodic=True)
+
+
+class Pad:
+    """The lining and backplate of a `brake_pad` mesh spec: an annular sector, two layers."""
+
+    def __init__(self, params):
+        self.inner, self.outer = params["inner_radius"], params["outer_radius"]
+        self.angle = math.radians(params["angle"])
+        self.mid = math.radians(params["center_angle"])
+        self.lining, self.backplate = params["lining_thickness"], params["backplate_thickness"]
+        self.z0 = params["z0"]
+        self.center = tuple(params["center"]) + (0.0,)
+        self.thickness = self.lining + self.backplate
+
+    def build(self, gmsh):
+        occ = gmsh.model.occ
+        cx, cy, _ = self.center
+        layers = []
+        for z, dz in ((self.z0, self.lining), (self.z0 + self.lining, self.backplate)):
+            # a cylinder sector from the x axis, hollowed, then turned to its centre angle
+            sector = occ.addCylinder(cx, cy, z, 0, 0, dz, self.outer, angle=self.angle)
+            core = occ.addCylinder(cx, cy, z - dz, 0, 0, 3 * dz, self.inner)
+            cut, _ = occ.cut([(3, sector)], [(3, core)])
+            occ.rotate(cut, cx, cy, 0, 0, 0, 1, self.mid - 0.5 * self.angle)
+            layers.append(cut)
+        # fragment: one conforming mesh, the layers share the nodes of their common face
+        _, children = occ.fragment(layers[0], layers[1])
+        occ.synchronize()
+        lining = [t for _, t in children[0]]
+        backplate = [t for _, t in children[1]]
+        # the internal face (z0 + lining) is in no group; the radial end faces are 'ends'
+        levels = {"friction": self.z0, None: self.z0 + self.lining,
+                  "back": self.z0 + self.lining + self.backplate}
+        radii = {"inner": self.inner, "outer": self.outer}
+        names = classify(gmsh, self.center, levels, radii, other="ends")
+        check_surfaces(names, ("friction", "back", "ends", "inner", "outer"), "pad")
+        if len(names["ends"]) != 4:
+            raise RuntimeError(f"pad: {len(names['ends'])} end faces, expected 4 (2 per layer)")
+        groups = {"lining": (3, lining), "backplate": (3, backplate),
+                  "all": (3, lining + backplate)}
+        groups.update({k: (2, v) for k, v in names.items()})
+        return groups
+
+    def distance(self, x, y, z):
+        """Distance to the friction face, for a point of the pad (above it)."""
+        return max(z - self.z0, 0.0)
+
+    def footprint_distance(self, x, y, z):
+        """Distance to the friction face from a point below it (in the disc): the in-plane
+        distance to the sector, exact inside its angular range and to the nearer end segment
+        outside it, combined with the depth below z0."""
+        dx, dy = x - self.center[0], y - self.center[1]
+        r = math.hypot(dx, dy)
+        dtheta = (math.atan2(dy, dx) - self.mid + math.pi) % (2 * math.pi) - math.pi
+        half = 0.5 * self.angle
+        if abs(dtheta) <= half:
+            plane = max(self.inner - r, r - self.outer, 0.0)
+        else:
+            end = self.mid + math.copysign(half, dtheta)
+            ux, uy = math.cos(end), math.sin(end)
+            along = min(max(dx * ux + dy * uy, self.inner), self.outer)
+            plane = math.hypot(dx - along * ux, dy - along * uy)
+        return math.hypot(plane, max(self.z0 - z, 0.0))
+
+    def samples(self, spacing):
+        half = 0.5 * self.angle
+        return polar_samples(self.center[:2], self.inner, self.outer, self.mid - half,
+                             self.mid + half, [self.z0, self.z0 + self.lining,
+                                               self.z0 + self.lining + self.backplate],
+                             spacing, periodic=False)
+
+
+def classify(gmsh, center, levels, radii, other):
+    """Surface tags by name: faces of constant z at a level of `levels` (name -> z), cylinders
+    about the axis through center of a radius of `radii`, the rest under `other`."""
+    names = {}
+    for _, tag in gmsh.model.getEntities(2):
+        lo, hi = gmsh.model.getParametrizationBounds(2, tag)
+        uv = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])]
+        x, y, z = gmsh.model.getValue(2, tag, uv)
+        kind = gmsh.model.getType(2, tag)
+        # (OpenCASCADE pads bounding boxes by its tolerance: the normal tells a flat face)
+        if kind == "Plane" and abs(abs(gmsh.model.getNormal(tag, uv)[2]) - 1) < GEOMETRY_TOL:
+            name = [n for n, level in levels.items() if abs(z - level) < GEOMETRY_TOL]
+        elif kind == "Cylinder":
+            r = math.hypot(x - center[0], y - center[1])
+            name = [n for n, radius in radii.items() if abs(r - radius) < GEOMETRY_TOL]
+        else:
+            name = [other]
+        if len(name) != 1:
+            raise RuntimeError(f"surface {tag} ({kind} through {x:.4g}, {y:.4g}, {z:.4g}) is "
+                               "none of the expected faces")
+        names.setdefault(name[0], []).append(tag)
+    return names
+
+
+def check_surfaces(names, expected, part):
+    """Every expected surface found; the unnamed ones (the pad's internal face) dropped."""
+    missing = [n for n in expected if not names.get(n)]
+    if missing:
+        raise RuntimeError(f"{part}: no surface classified as {', '.join(missing)}")
+    names.pop(None, None)
+
+
+def polar_samples(center, r0, r1, t0, t1, levels, spacing, periodic):
+    """Midpoint samples of a polar box (r0-r1, t0-t1, z between levels) and of its faces and
+    edges, cells about `spacing` wide: {3: (points, volumes), 2: (points, areas), 1: (points,
+    lengths)}. The faces are the z-faces at every level (the internal ones too: they are
+    meshed), the cylinders r0 and r1, and the two radial ends unless periodic; the edges are
+    their intersections. The weights sum to the exact volume, area and length."""
+    def cuts(a, b, length):
+        """Midpoints and width of the cells of [a, b], `length` long in metres."""
+        n = max(1, math.ceil(length / spacing))
+        return a + (np.arange(n) + 0.5) * (b - a) / n, (b - a) / n
+
+    r, dr = cuts(r0, r1, r1 - r0)
+    t, dt = cuts(t0, t1, 0.5 * (r0 + r1) * (t1 - t0))
+    zs = [cuts(a, b, b - a) for a, b in zip(levels[:-1], levels[1:])]
+    z = np.concatenate([c for c, _ in zs])
+    dz = np.concatenate([np.full(len(c), d) for c, d in zs])
+
+    def polar(R, T, Z, W):
+        R, T, Z, W = np.broadcast_arrays(R, T, Z, W)
+        pts = np.stack([center[0] + R * np.cos(T), center[1] + R * np.sin(T), Z], axis=-1)
+        return pts.reshape(-1, 3), W.ravel()
+
+    def join(pieces):
+        return (np.vstack([p for p, _ in pieces]), np.concatenate([w for _, w in pieces]))
+
+    ends = [] if periodic else [t0, t1]
+    R, T, Z = np.meshgrid(r, t, z, indexing="ij")
+    volume = polar(R, T, Z, R * dr * dt * np.broadcast_to(dz, Z.shape))
+    faces = [polar(*np.meshgrid(r, t, [lv], indexing="ij"),
+                   np.meshgrid(r, t, [lv], indexing="ij")[0] * dr * dt) for lv in levels]
+    faces += [polar(rr, *np.meshgrid(t, z, indexing="ij"), rr * dt * dz[None, :])
+              for rr in (r0, r1)]
+    faces += [polar(*np.meshgrid(r, [te], z, indexing="ij"), dr * dz[None, None, :])
+              for te in ends]
+    edges = [polar(rr, t, lv, rr * dt) for lv in levels for rr in (r0, r1)]
+    edges += [polar(r, te, lv, dr) for lv in levels for te in ends]
+    edges += [polar(rr, te, z, dz) for rr in (r0, r1) for te in ends]
+    return {3: volume, 2: join(faces), 1: join(edges)}
+
+
+# ----------------------------------------------------------------------------- sizes
+
+
+class Size:
+    """h away from the contact faces, H on them, growing by `growth` per unit distance."""
+
+    def __init__(self, h, interface=None, growth=GROWTH):
+        self.h, self.interface, self.growth = h, interface, growth
+
+    def __call__(self, distance):
+        if self.interface is None:
+            return self.h
+        return min(self.h, self.interface + self.growth * distance)
+
+    def measures(self, part):
+        """(I3, I2, I1): the integrals of size^-3 over the volume, size^-2 over the faces and
+        size^-1 along the edges."""
+        # a uniform size needs no resolution (the sums are exact); a graded one is sampled at
+        # half the interface size where it varies most, within SAMPLES volume cells
+        if self.interface is None:
+            samples = part_samples(part, None)
+            return tuple(np.sum(samples[k][1]) / self.h ** k for k in (3, 2, 1))
+        samples = part_samples(part, 0.5 * self.interface)
+        out = []
+        for k in (3, 2, 1):
+            d, w = samples[k][2], samples[k][1]
+            s = np.minimum(self.h, self.interface + self.growth * d)
+            out.append(float(np.sum(w / s ** k)))
+        return tuple(out)
+
+
+_SAMPLES = {}
+
+
+def part_samples(part, spacing):
+    """The part's samples with their distances to the contact face, computed once per part and
+    spacing (the bisection on h reuses them); None: a coarse set, for exact sums only."""
+    key = (id(part), spacing)
+    if key not in _SAMPLES:
+        spacing = spacing or 0.01
+        # at most SAMPLES volume cells: the spacing grows with the cube root of the excess
+        cells = len(part.samples(spacing)[3][1])
+        if cells > SAMPLES:
+            spacing *= (cells / SAMPLES) ** (1.0 / 3.0)
+        _SAMPLES[key] = {k: (p, w, np.array([part.distance(*x) for x in p]))
+                         for k, (p, w) in part.samples(spacing).items()}
+    return _SAMPLES[key]
+
+
+def predicted_nodes(parts, size, scale=None):
+    """Nodes of each part's tet10 mesh by the measured model a I3 + b I2 + c I1, times the
+    part's measured ratio in `scale` (a mesh made: actual over predicted nodes)."""
+    scale = scale or {}
+    return {name: scale.get(name, 1.0) * float(np.dot(NODES_PER_MEASURE, size.measures(part)))
+            for name, part in parts.items()}
+
+
+def largest_size(parts):
+    """The largest h --dofs may pick: the thickest part's thickness (coarser, every part would
+    be less than one element thick away from the contact)."""
+    return max(p.thickness for p in parts.values())
+
+
+def size_for_dofs(parts, dofs, interface, growth, scale=None):
+    """The h whose predicted tet10 dofs (3 per node, both parts) are `dofs`: bisection on
+    log h, the prediction decreasing in h; at most largest_size (an interface size too fine
+    for the target alone gets it)."""
+    lo, hi = 1e-5, largest_size(parts)
+    for _ in range(60):
+        mid = math.sqrt(lo * hi)
+        n = 3 * sum(predicted_nodes(parts, Size(mid, interface, growth), scale).values())
+        lo, hi = (mid, hi) if n > dofs else (lo, mid)
+    return math.sqrt(lo * hi)
+
+
+# ----------------------------------------------------------------------------- meshing
+
+
+def start_gmsh():
+    import gmsh
+    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    gmsh.option.setNumber("General.Terminal", 0)
+    # one thread and a fixed seed: deterministic meshes
+    gmsh.option.setNumber("General.NumThreads", 1)
+    gmsh.option.setNumber("Mesh.RandomSeed", SEED)
+    gmsh.option.setNumber("Mesh.Algorithm", 6)        # Frontal-Delaunay faces
+    gmsh.option.setNumber("Mesh.Algorithm3D", 1)      # Delaunay volumes (serial)
+    gmsh.option.setNumber("Mesh.Optimize", 1)         # the linear tets' quality
+    # Netgen's optimizer as well: without it gmsh leaves slivers whose four corners lie on one
+    # cylinder (the pad's inner face at 30k dofs, h above the lining's thickness), flat once
+    # their midside nodes go onto the cylinder (det J -2.4e-12). HighOrderOptimize mends them
+    # too, but not the same way twice (37 nodes 0.25 um apart from run to run); Netgen does
+    # the same every time, for 2.5 times gmsh's meshing time.
+    gmsh.option.setNumber("Mesh.OptimizeNetgen", 1)
+    gmsh.option.setNumber("Mesh.SecondOrderLinear", 0)
+    # the size field alone decides: no sizes from points, curvature or boundary extension
+    for option in ("MeshSizeFromPoints", "MeshSizeFromCurvature", "MeshSizeExtendFromBoundary"):
+        gmsh.option.setNumber(f"Mesh.{option}", 0)
+    # msh 4.1 binary: meshio 5.3 reads it (physical groups as cell sets), compact and fast
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.option.setNumber("Mesh.Binary", 1)
+    return gmsh
+
+
+def mesh_part(gmsh, name, part, size, path, high_order_optimize):
+    """Mesh one part in tet10 and write it; returns (nodes, tets, seconds)."""
+    t0 = time.perf_counter()
+    gmsh.model.add(name)
+    for gname, (dim, tags) in part.build(gmsh).items():
+        gmsh.model.addPhysicalGroup(dim, tags, name=gname)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", size.h)
+    if size.interface is not None:
+        gmsh.model.mesh.setSizeCallback(
+            lambda dim, tag, x, y, z, lc: size(part.distance(x, y, z)))
+    gmsh.model.mesh.generate(3)
+    gmsh.model.mesh.setOrder(2)           # midside nodes on the true geometry (cylinders)
+    if high_order_optimize:
+        gmsh.option.setNumber("Mesh.HighOrderOptimize", high_order_optimize)
+        gmsh.model.mesh.optimize("HighOrder")
+    types, _, nodes = gmsh.model.mesh.getElements(3)
+    if list(types) != [11]:               # 11: the 10-node tetrahedron
+        raise RuntimeError(f"{name}: volume element types {list(types)}, expected tet10 (11)")
+    counts = len(np.unique(nodes[0])), len(nodes[0]) // 10
+    gmsh.write(str(path))
+    gmsh.model.remove()
+    return counts + (time.perf_counter() - t0,)
+
+
+def parts_of(case):
+    """{part name: Disc or Pad} of the mirrored case's annular_disc and brake_pad parts."""
+    kinds = {name: part.mesh.kind for name, part in case.parts.items()}
+    discs = [n for n, k in kinds.items() if k == "annular_disc"]
+    pads = [n for n, k in kinds.items() if k == "brake_pad"]
+    if len(discs) != 1 or len(pads) != 1 or len(kinds) != 2:
+        sys.exit(f"{case.path}: expected one annular_disc part and one brake_pad part, "
+                 f"got {kinds}")
+    pad = Pad(case.parts[pads[0]].mesh.params)
+    return {discs[0]: Disc(case.parts[discs[0]].mesh.params, pad), pads[0]: pad}
+
+
+def write_case(source, out, files, summary):
+    """brake.toml: the mirrored case's tables, its generator meshes replaced by the files."""
+    import tomllib
+    data = tomllib.loads(Path(source).read_text())
+    for name, path in files.items():
+        data["parts"][name]["mesh"] = {"kind": "file", "path": path.name}
+    data["title"] = data.get("title", "") + f" (tet10 meshes by gmsh, {summary})"
+    header = (f"# Written by tools/mesh_brake.py from {Path(source).name}, its generator meshes "
+              f"replaced by gmsh tet10 meshes\n# ({summary}); regenerate rather than edit.\n")
+    (out / "brake.toml").write_text(header + fuzz_dumps()(data))
+
+
+def calibrate(gmsh, parts, sizes, outdir, high_order_optimize):
+    """Mesh both parts at each uniform size and fit NODES_PER_MEASURE to the node counts
+    (least squares on the relative errors)."""
+    rows, counts = [], []
+    for h in sizes:
+        for name, part in parts.items():
+            n, e, sec = mesh_part(gmsh, name, part, Size(h), outdir / f"{name}.msh",
+                                  high_order_optimize)
+            rows.append(Size(h).measures(part))
+            counts.append(n)
+            print(f"{name}: h {h:.4g} nodes {n} tets {e} nodes/tet {n / e:.4f} "
+                  f"nodes h^3 / V {n / rows[-1][0]:.4f} ({sec:.1f} s)", flush=True)
+    A, y = np.array(rows), np.array(counts, dtype=float)
+    coef = np.linalg.lstsq(A / y[:, None], np.ones(len(y)), rcond=None)[0]
+    error = 100 * (A @ coef / y - 1)
+    print(f"NODES_PER_MEASURE = ({coef[0]:.4g}, {coef[1]:.4g}, {coef[2]:.4g}): every count "
+          f"within {np.abs(error).max():.1f}% (rms {np.sqrt(np.mean(error ** 2)):.1f}%)")
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("outdir", type=Path)
+    parser.add_argument("--dofs", type=float, default=1e5,
+                        help="target dofs, both parts (default 1e5)")
+    parser.add_argument("--size", type=float, help="element size h [m] (overrides --dofs)")
+    parser.add_argument("--interface", type=float,
+                        help="element size on the contact faces [m] (default: h)")
+    parser.add_argument("--growth", type=float, default=GROWTH,
+                        help=f"size growth per unit distance from the contact faces ({GROWTH})")
+    parser.add_argument("--tolerance", type=float, default=0.1,
+                        help="mesh again when the dofs are off the target by more (0.1)")
+    parser.add_argument("--case", type=Path, default=DEFAULT_CASE, help="case mirrored")
+    parser.add_argument("--high-order-optimize", type=int, default=0, choices=(0, 1, 2, 3, 4),
+                        help="gmsh Mesh.HighOrderOptimize (0: none, the default; the others "
+                        "move nodes differently from run to run)")
+    parser.add_argument("--calibrate", help="comma-separated uniform sizes [m]: fit the node "
+                        "model to the meshes' counts")
+    args = parser.parse_args(argv)
+    from transient.case.loading import load
+    from transient.mesh.meshfile import jacobian_check, read_mesh
+
+    parts = parts_of(load(args.case))
+    args.outdir.mkdir(parents=True, exist_ok=True)
+    if args.calibrate:
+        gmsh = start_gmsh()
+        try:
+            calibrate(gmsh, parts, [float(s) for s in args.calibrate.split(",")], args.outdir,
+                      args.high_order_optimize)
+        finally:
+            gmsh.finalize()
+        return
+    # The node model is within 8.5% on uniform meshes; a graded size makes more nodes than it
+    # says (1.3 times with --interface h / 5), so a mesh off the target by more than
+    # --tolerance is made again with each part's prediction scaled by what its mesh measured.
+    scale, h = {}, args.size
+    for attempt in range(1 + MAX_REMESH):
+        if not args.size:
+            h = size_for_dofs(parts, args.dofs, args.interface, args.growth, scale)
+        interface = args.interface if args.interface is not None and args.interface < h else None
+        size = Size(h, interface, args.growth)
+        predicted = predicted_nodes(parts, size, scale)
+        files, counts = {}, {}
+        gmsh = start_gmsh()
+        try:
+            for name, part in parts.items():
+                files[name] = args.outdir / f"{name}.msh"
+                counts[name] = mesh_part(gmsh, name, part, size, files[name],
+                                         args.high_order_optimize)
+        finally:
+            gmsh.finalize()
+        total = sum(3 * n for n, _, _ in counts.values())
+        off = total / args.dofs - 1
+        capped = not args.size and h >= largest_size(parts) * (1 - 1e-9) and off > 0
+        if capped:
+            print(f"note: the interface size {args.interface:g} m alone makes more than "
+                  f"{args.dofs:.0f} dofs: h is held at {h:.4g} m (the thickest part)")
+        if args.size or capped or abs(off) <= args.tolerance or attempt == MAX_REMESH:
+            break
+        print(f"h = {h:.5g} m gave {total} dofs ({100 * off:+.1f}%): meshing again")
+        scale = {name: scale.get(name, 1.0) * counts[name][0] / predicted[name]
+                 for name in parts}
+    if args.interface is not None and interface is None:
+        print(f"note: --interface {args.interface:g} is not below h = {h:.4g}: a uniform size")
+
+    for name, (n, e, sec) in counts.items():
+        # read back as the package reads it: the counts and Jacobians the case will see
+        mesh = read_mesh(files[name])
+        worst = min(det for _, _, det in jacobian_check(mesh))
+        if mesh.n_nodes != n or worst <= 0:
+            sys.exit(f"{files[name]}: read back with {mesh.n_nodes} nodes (gmsh: {n}), "
+                     f"min det J {worst:.3g}: try --high-order-optimize 1 (not deterministic)")
+        print(f"{name}: {n} nodes, {e} tet10, {3 * n} dofs (predicted {3 * predicted[name]:.0f}); "
+              f"min det J {worst:.3g}; meshed in {sec:.1f} s")
+    target = "" if args.size else f" (target {args.dofs:.0f}: {100 * off:+.1f}%)"
+    refined = f", interface {interface:g} m" if interface else ""
+    print(f"total: {total} dofs{target}; h = {h:.5g} m{refined}")
+    write_case(args.case, args.outdir, files, f"{total} dofs, h = {h:.4g} m{refined}")
+    print(f"wrote {args.outdir / 'brake.toml'}")
+
+
+if __name__ == "__main__":
+    main()
