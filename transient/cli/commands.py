@@ -165,7 +165,8 @@ def cmd_run(args):
                           "timings": result.timings, "energy_drift": result.energy_drift}))
     else:
         print(f"{case.path}: {result.status}, {result.steps} steps of {result.dt:.4g} s "
-              f"(critical {result.dt_critical:.4g} s) to t = {result.t_end:.6g} s")
+              f"(central differences' critical step {result.dt_critical:.4g} s) to "
+              f"t = {result.t_end:.6g} s")
         print("stages: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.stages.items()))
         model = _model_line(result.meta or {})
         if model:

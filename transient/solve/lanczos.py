@@ -23,17 +23,22 @@ import numpy as np
 TOL = 1e-12
 
 
-def m_orthonormalize(W, M, Q, MQ):
-    """W made M-orthogonal to Q (MQ = M Q; twice, for round-off), then M-orthonormal: returns
-    (W, M W, C, R) with W_in = Q C + W R. M W is formed from the projected block itself, not
-    carried through the projections (carried, its error grew by 10x a step). Directions of W
-    that Q spans to 1e-10 of W's M-norm are left out."""
-    C = np.zeros((Q.shape[1], W.shape[1]))
+def m_orthonormalize(W, M, Qs, MQs):
+    """W made M-orthogonal to the blocks Qs (MQs = M Qs; twice, for round-off), then
+    M-orthonormal: returns (W, M W, C, R) with W_in = Q C + W R, Q the blocks side by side.
+    M W is formed from the projected block itself, not carried through the projections
+    (carried, its error grew by 10x a step). Directions of W that Q spans to 1e-10 of W's
+    M-norm are left out."""
+    C = np.zeros((sum(Q.shape[1] for Q in Qs), W.shape[1]))
     first = None
     for _ in range(2):
-        if Q.shape[1]:
-            H = MQ.T @ W
-            W = W - Q @ H
+        if Qs:
+            # block by block: the basis is never copied into one array
+            H = np.vstack([MQ.T @ W for MQ in MQs])
+            start = 0
+            for Q in Qs:
+                W = W - Q @ H[start:start + Q.shape[1]]
+                start += Q.shape[1]
             C += H
             first = H if first is None else first
     MW = M @ W
@@ -66,23 +71,19 @@ def block_lanczos(solve, M, sigma, lam_max=None, count=None, block=16, max_dim=N
     max_dim = min(n, max_dim or n)
     rng = np.random.default_rng(seed)
     X0 = rng.standard_normal((n, min(block, n)))
-    empty = np.zeros((n, 0))
-    Qj, MQj, _, _ = m_orthonormalize(X0, M, empty, empty)
-    # the basis and M times it, columns appended in place (Fortran order: a block is
-    # contiguous), room doubled when full: no copy of the whole basis at every step
-    Q, MQ = _grow(empty, 4 * block), _grow(empty, 4 * block)
-    N, cols, steps = 0, [], 0            # columns used, T's block columns, steps
+    Qj, MQj, _, _ = m_orthonormalize(X0, M, [], [])
+    Qs, MQs = [], []                     # the basis by blocks, and M times it
+    N, cols, steps = 0, [], 0            # columns, T's block columns, steps
     while True:
         b = Qj.shape[1]
-        if N + b > Q.shape[1]:
-            Q, MQ = _grow(Q[:, :N], 2 * (N + b)), _grow(MQ[:, :N], 2 * (N + b))
-        Q[:, N:N + b], MQ[:, N:N + b] = Qj, MQj
+        Qs.append(Qj)
+        MQs.append(MQj)
         N += b
-        W = np.asarray(solve(MQ[:, N - b:N]))
+        W = np.asarray(solve(np.asfortranarray(MQj)))
         if W.ndim == 1:
             W = W[:, None]
         steps += 1
-        Wn, MWn, C, R = m_orthonormalize(W, M, Q[:, :N], MQ[:, :N])
+        Wn, MWn, C, R = m_orthonormalize(W, M, Qs, MQs)
         cols.append((C, R))
         T = _assemble(cols)
         theta, Y = np.linalg.eigh(0.5 * (T + T.T))
@@ -102,7 +103,12 @@ def block_lanczos(solve, M, sigma, lam_max=None, count=None, block=16, max_dim=N
             k = len(theta) if closed else first_open
             lam = sigma + 1.0 / theta[:k]
             order = np.argsort(lam)
-            return lam[order], Q[:, :N] @ Y[:, :k][:, order], steps
+            Y = Y[:, :k][:, order]
+            X, start = np.zeros((n, k)), 0
+            for Q in Qs:
+                X += Q @ Y[start:start + Q.shape[1]]
+                start += Q.shape[1]
+            return lam[order], X, steps
         room = max_dim - N
         if Wn.shape[1] > room and max_dim == n:
             # the space is all but complete: what W adds beyond it is round-off
@@ -111,13 +117,6 @@ def block_lanczos(solve, M, sigma, lam_max=None, count=None, block=16, max_dim=N
             raise NotConverged(f"{first_open} of {need} eigenpairs converged in a basis of "
                                f"{N} vectors")
         Qj, MQj = Wn, MWn
-
-
-def _grow(A, columns):
-    """A copied into a Fortran array of `columns` columns (the rest uninitialized)."""
-    out = np.empty((A.shape[0], columns), order="F")
-    out[:, :A.shape[1]] = A
-    return out
 
 
 def _assemble(cols):
