@@ -8,13 +8,17 @@ import scipy.sparse.linalg as spla
 from transient.solve.lowrank import ContactSolver
 
 
+def spd(n, seed):
+    """A sparse SPD stiffness of n dofs and an identity mass."""
+    A = sp.random(n, n, density=0.05, random_state=seed)
+    return (A + A.T + n * sp.eye(n)).tocsr(), sp.eye(n).tocsr()
+
+
 @pytest.mark.parametrize("m", [5, 60])
 def test_updates_solve_the_updated_system(m):
     rng = np.random.default_rng(m)
     n = 80
-    A = sp.random(n, n, density=0.05, random_state=1)
-    K = (A + A.T + n * sp.eye(n)).tocsr()
-    M = sp.eye(n).tocsr()
+    K, M = spd(n, 1)
     cols = rng.choice(n, 12, replace=False)               # the dofs contact touches
     rows = np.repeat(np.arange(m), 3)
     C = sp.csr_matrix((rng.standard_normal(3 * m), (rows, rng.choice(cols, 3 * m))),
@@ -33,9 +37,7 @@ def test_rows_of_low_rank_run_on_their_row_space():
     """Regularized rows: dense on the touched dofs but of rank rho < k < m."""
     rng = np.random.default_rng(7)
     n, m, k, rho = 80, 60, 20, 6
-    A = sp.random(n, n, density=0.05, random_state=2)
-    K = (A + A.T + n * sp.eye(n)).tocsr()
-    M = sp.eye(n).tocsr()
+    K, M = spd(n, 2)
     cols = np.sort(rng.choice(n, k, replace=False))
     dense = np.zeros((m, n))
     dense[:, cols] = rng.standard_normal((m, rho)) @ rng.standard_normal((rho, k))
@@ -61,9 +63,7 @@ def test_factored_rows_give_the_same_row_space_and_solves():
     at the same rank, and the solves match the direct ones."""
     rng = np.random.default_rng(11)
     n, m, k, r = 90, 70, 24, 10
-    A = sp.random(n, n, density=0.05, random_state=3)
-    K = (A + A.T + n * sp.eye(n)).tocsr()
-    M = sp.eye(n).tocsr()
+    K, M = spd(n, 3)
     cols = np.sort(rng.choice(n, k, replace=False))
     L = rng.standard_normal((m, r))
     L[:, -3:] = L[:, :3] @ rng.standard_normal((3, 3))      # rank r - 3

@@ -17,7 +17,8 @@ from .compatibility import auto_eps, compatibility
 from ..errors import CaseError
 from .interface import InterfaceError, build_interface, build_wall_interface
 from ..model.model import resolve_set
-from .regularize import dual_factors, primal_basis, regularized_rule, row_factors
+from .regularize import (dual_factors, factor_projectors, primal_basis, regularized_rule,
+                         row_factors)
 from .rules import centre_rule
 from ..mesh.selections import set_faces
 
@@ -94,8 +95,7 @@ def build_pair(case, model, name, need_compatibility=False):
         t0 = time.perf_counter()
         if spec.formulation == "dual":
             F1, F2 = dual_factors(comp, eps, interface.fine, spec.project, spec.norm)
-            P1 = F1[0] @ F1[1] if F1 else np.eye(comp.n1)
-            P2 = F2[0] @ F2[1] if F2 else np.eye(comp.n2)
+            P1, P2 = factor_projectors(comp, F1, F2)
             if not greedy:
                 factors = row_factors(interface, rule, F1, F2, model.ndof)
             rule = regularized_rule(rule, P1, P2)

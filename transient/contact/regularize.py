@@ -53,10 +53,14 @@ def dual_factors(comp, eps, fine, project="both", norm="mass"):
     return F1, F2
 
 
+def factor_projectors(comp, F1, F2):
+    """P1, P2 from dual_factors: Q_n Y_n, or the identity for a side not projected."""
+    return (F1[0] @ F1[1] if F1 else np.eye(comp.n1)), (F2[0] @ F2[1] if F2 else np.eye(comp.n2))
+
+
 def dual_projectors(comp, eps, fine, project="both", norm="mass"):
     """P1, P2 of the dual regularization; a side not projected keeps the identity."""
-    F1, F2 = dual_factors(comp, eps, fine, project, norm)
-    return (F1[0] @ F1[1] if F1 else np.eye(comp.n1)), (F2[0] @ F2[1] if F2 else np.eye(comp.n2))
+    return factor_projectors(comp, *dual_factors(comp, eps, fine, project, norm))
 
 
 def row_factors(interface, rule, F1, F2, ndof):
