@@ -1,4 +1,5 @@
-"""Normal modes by shift-invert Lanczos (scipy eigsh) on a sparse factorization."""
+"""Normal modes by block shift-invert Lanczos (lanczos.py) on a sparse factorization; ARPACK
+(scipy eigsh) when the block method stalls."""
 import time
 from dataclasses import dataclass
 
@@ -7,9 +8,11 @@ import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
 from ..model.dofs import free_block
+from .lanczos import NotConverged, block_lanczos
 from .linsolve import factorize
 
 DENSE_LIMIT = 600   # below this many free dofs a dense eigensolver is faster and exact
+BLOCK = 16          # vectors per shift-invert step
 
 
 @dataclass(frozen=True)
@@ -27,7 +30,7 @@ def frequencies_hz(eigenvalues):
 def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto", solve=None):
     """Lowest modes of (K, M) with the fixed dofs clamped.
 
-    count : number of modes when fmax is 0; otherwise the first batch size.
+    count : number of modes when fmax is 0 (otherwise ARPACK's first batch, if it runs).
     fmax : all modes up to this frequency [Hz] (the batch grows until one is above it).
     shift : shift frequency [Hz] of shift-invert, negative values meaning -(2 pi shift)^2, so that
         K - sigma M stays positive definite even with rigid-body modes.
@@ -52,23 +55,35 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
     if solve is None:
         solve = factorize((Kf - sigma * Mf).tocsr(), backend, definite=sigma <= 0)
     timings["factorization"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    lam_max = (2 * np.pi * fmax) ** 2 if fmax > 0 else None
+    name = getattr(solve, "backend", "?")
+    try:
+        lam, vec, _ = block_lanczos(solve, Mf, sigma, lam_max, count, BLOCK)
+    except NotConverged as exc:
+        # a spectrum the block method does not resolve: ARPACK, one vector at a time
+        lam, vec = _arpack(Kf, Mf, sigma, solve, count, fmax)
+        name += f" (ARPACK; block Lanczos: {exc})"
+    timings["eigensolver"] = time.perf_counter() - t0
+    keep = frequencies_hz(lam) <= fmax if fmax > 0 else slice(0, count)
+    lam, vec = lam[keep], vec[:, keep]
+    return _modes(lam, vec, free, ndof, name, timings)
+
+
+def _arpack(Kf, Mf, sigma, solve, count, fmax):
+    """scipy eigsh in batches of count, doubled until one mode is above fmax."""
+    n = Kf.shape[0]
     op = spla.LinearOperator((n, n), matvec=solve, dtype=float)
     v0 = np.random.default_rng(0).standard_normal(n)
     k = count
-    t0 = time.perf_counter()
     while True:
         k = min(k, n - 2)
         lam, vec = spla.eigsh(Kf, k=k, M=Mf, sigma=sigma, OPinv=op, which="LM", v0=v0)
         order = np.argsort(lam)
         lam, vec = lam[order], vec[:, order]
         if fmax <= 0 or frequencies_hz(lam[-1]) > fmax or k >= n - 2:
-            break
+            return lam, vec
         k *= 2
-    timings["eigensolver"] = time.perf_counter() - t0
-    if fmax > 0:
-        keep = frequencies_hz(lam) <= fmax
-        lam, vec = lam[keep], vec[:, keep]
-    return _modes(lam, vec, free, ndof, getattr(solve, "backend", "?"), timings)
 
 
 def _modes(lam, vec, free, ndof, backend, timings):
