@@ -62,8 +62,10 @@ def nnls_gram(column, h, bb, tol, max_points):
     N = len(h)
     cap = min(max_points, N)
     P = np.zeros(0, np.int64)
-    cols = np.empty((N, cap))
-    L = np.zeros((0, 0))
+    cols = np.empty((N, cap), order="F")     # a column per point taken, written whole
+    # the factor in place (its leading k x k block): growing it by np.block copied it whole at
+    # every point taken
+    Lbuf = np.zeros((cap, cap))
     x = np.zeros(0)
     grad = h.copy()
     banned = np.zeros(N, bool)
@@ -82,14 +84,18 @@ def nnls_gram(column, h, bb, tol, max_points):
         if score[j] <= 0:
             break
         g = column(j)
-        l = sla.solve_triangular(L, g[P], lower=True) if len(P) else np.zeros(0)
+        k = len(P)
+        L = Lbuf[:k, :k]
+        l = sla.solve_triangular(L, g[P], lower=True) if k else np.zeros(0)
         d2 = g[j] - l @ l
         if d2 <= 1e-12 * g[j]:
             banned[j] = True          # already in the span of the points taken
             continue
-        cols[:, len(P)] = g
+        cols[:, k] = g
         P = np.append(P, j)
-        L = np.block([[L, np.zeros((len(L), 1))], [l[None], np.sqrt(d2)[None, None]]])
+        Lbuf[k, :k] = l
+        Lbuf[k, k] = np.sqrt(d2)
+        L = Lbuf[:k + 1, :k + 1]
         x = np.append(x, 0.0)
         while True:
             z = sla.cho_solve((L, True), h[P])
@@ -105,7 +111,10 @@ def nnls_gram(column, h, bb, tol, max_points):
                 keep[np.argmin(x)] = False
             P, x = P[keep], x[keep]
             cols[:, :len(P)] = cols[:, np.flatnonzero(keep)]
-            L = np.linalg.cholesky(cols[P, :len(P)])
+            k = len(P)
+            Lbuf[:k, :k] = np.linalg.cholesky(cols[P, :k])
+            Lbuf[:k, k:] = 0.0
+            L = Lbuf[:k, :k]
         grad = h - cols[:, :len(P)] @ x
     res = residual(x) if len(P) else 1.0
     return P, x, float(res)
