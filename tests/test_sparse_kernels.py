@@ -4,7 +4,7 @@ import pytest
 import scipy.sparse as sp
 
 from transient.kernels.newmark import factor_columns
-from transient.kernels.sparse import csr_abs_matvec, csr_matvec, factor_solve
+from transient.kernels.sparse import csr_abs_matvec, csr_dot, csr_matvec, factor_solve
 from transient.solve.linsolve import available, triangular_factors
 
 
@@ -39,3 +39,18 @@ def test_matvecs():
     assert np.allclose(out, A @ x)
     csr_abs_matvec(A.indptr, A.indices, A.data, x, out)
     assert np.allclose(out, abs(A) @ np.abs(x))
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_csr_dot_is_scipys_product_bit_for_bit(threads):
+    import numba
+    A = sp.random(300, 200, density=0.05, random_state=3).tocsr()
+    X = np.random.default_rng(4).standard_normal((200, 37))
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    try:
+        assert np.array_equal(csr_dot(A, X), A @ X)
+        assert np.array_equal(csr_dot(A, np.asfortranarray(X)), A @ X)
+        assert np.array_equal(csr_dot(A, X[:, 0]), A @ X[:, 0])
+    finally:
+        numba.set_num_threads(before)

@@ -64,3 +64,5 @@ njit = _locked(cache=True, nogil=True, error_model="numpy")
 njit_fast = _locked(cache=True, nogil=True, error_model="numpy", fastmath=True)
 njit_parallel = _locked(cache=True, nogil=True, error_model="numpy", fastmath=True,
                         parallel=True)
+# parallel without fastmath: no fused multiply-adds, so the sums are SciPy's to the last bit
+njit_parallel_ieee = _locked(cache=True, nogil=True, error_model="numpy", parallel=True)

@@ -99,7 +99,7 @@ def _prepare(case):
         M = sp.diags(model.lumped_mass).tocsr() if solver.mass == "lumped" else model.M
         red = reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0,
                      cs.solver(contacts.weights * preload.tangent),
-                     critical_tangent(contacts, preload.tangent), stages)
+                     critical_tangent(contacts, preload.tangent), stages, cs.C)
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
         system = reduced_system(red.T, red.omega2, solver.reduction.fmax, solver.damping,
                                 contacts, preload.tangent, patterns, signals, sensors, names,

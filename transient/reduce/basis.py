@@ -11,6 +11,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from ..kernels.sparse import csr_dot
 from ..model.dofs import free_block, restrict
 from ..solve.modes import normal_modes
 
@@ -20,7 +21,12 @@ BY_COLUMNS_BYTES = 1.5e9   # K^-1 E dense (n x k) when the contact points outnum
 
 @dataclass(frozen=True)
 class Basis:
-    T: np.ndarray            # (ndof, n), zero on fixed dofs
+    """The basis T = X A: X (ndof, m) the modes and the static responses (zero on fixed dofs),
+    A (m, n) their M-orthonormal, K-diagonal combinations. Kept as the two factors so that a
+    later change of coordinates W (the sampled contact's) costs one n x m x n product on X
+    instead of two on the ndof rows (T = X A, then T W)."""
+    X: np.ndarray            # (ndof, m)
+    A: np.ndarray            # (m, n)
     omega2: np.ndarray       # (n,) [rad^2/s^2], ascending
     n_modes: int             # normal modes below fmax in the basis
     n_static: int            # static vectors added (before removing dependent directions)
@@ -28,6 +34,18 @@ class Basis:
     n_contact_shapes: int = 0      # contact shapes kept (reduction.statics_tolerance)
     contact_flexibility: np.ndarray = None   # mu of contact_shapes, descending
     n_static_kept: int = 0         # static directions (contact shapes and loads) beyond the modes
+
+    @property
+    def T(self):
+        return self.expand()
+
+    def expand(self, W=None):
+        """T W (ndof, k), T itself when W is None; W (n, k) or (n,)."""
+        return self.X @ (self.A if W is None else self.A @ W)
+
+    def coordinates(self, y):
+        """T^T y for y (ndof,): the reduced load of y, or the coordinates of M u for T^T M T = I."""
+        return self.A.T @ (self.X.T @ y)
 
 
 def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None, tol=0.0):
@@ -37,8 +55,9 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     represent, such as the preload). solve applies (K_lin - sigma M)^-1 on the free dofs,
     sigma = -(2 pi shift_hz)^2: the small shift keeps floating parts solvable.
 
-    contact (C (m, ndof), stiffness (m,)): adds the responses to the contact point loads C^T,
-    only the shapes of them that matter (`contact_shapes`, tol).
+    contact (C, stiffness (m,)): adds the responses to the contact point loads C^T, only the
+    shapes of them that matter (`contact_shapes`, tol); C (m, ndof), or (m, nfree) already
+    restricted to the free dofs (the factorization stage's).
     """
     t0 = time.perf_counter()
     free = np.flatnonzero(~fixed)
@@ -47,14 +66,14 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     modes = normal_modes(Kf, Mf, None, count=40, fmax=fmax, shift=-shift_hz, solve=solve)
     t_modes = time.perf_counter() - t0
     Phi = modes.shapes
-    columns = [Phi]
+    columns = []
     mu = np.zeros(0)
     n_shapes = 0
     if contact is not None and contact[0].shape[0]:
         C, stiffness = contact
+        Cf = C if C.shape[1] == len(free) else restrict(C, cols=free)
         omega2_modes = (2 * np.pi * modes.frequencies) ** 2
-        shapes, mu = contact_shapes(restrict(C, cols=free), stiffness, solve, Phi,
-                                    omega2_modes, tol)
+        shapes, mu = contact_shapes(Cf, stiffness, solve, Phi, omega2_modes, tol)
         columns.append(shapes)
         n_shapes = shapes.shape[1]
     if statics.shape[1]:
@@ -63,10 +82,10 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     # the static responses without what the modes already hold (twice, for round-off): on a
     # part free to move they are dominated by its rigid motion, 1e10 times their elastic part,
     # which the independence test below would otherwise take for round-off and drop with them
-    S = np.hstack(columns[1:]) if len(columns) > 1 else np.zeros((len(free), 0))
-    # M S formed once (n x a few hundred: the setup's costliest sparse product) and carried
-    # through the projections with M Phi, which has only the modes' columns
-    MS, MPhi = Mf @ S, Mf @ Phi
+    S = np.ascontiguousarray(np.hstack(columns)) if columns else np.zeros((len(free), 0))
+    # M S formed once (n x a few hundred: the setup's costliest sparse product, on both cores)
+    # and carried through the projections with M Phi, which has only the modes' columns
+    MS, MPhi = csr_dot(Mf, S), csr_dot(Mf, Phi)
     for _ in range(2):
         P = Phi.T @ MS
         S, MS = S - Phi @ P, MS - MPhi @ P
@@ -77,16 +96,21 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     S, MS = S[:, big] / norms[big], MS[:, big] / norms[big]
     lam, V = np.linalg.eigh(S.T @ MS)
     keep = lam > 1e-12 * max(lam.max(), 1.0) if len(lam) else np.zeros(0, bool)
-    X = np.hstack([Phi, S @ (V[:, keep] / np.sqrt(lam[keep]))])
+    Vs = V[:, keep] / np.sqrt(lam[keep])          # S Vs: M-orthonormal, M-orthogonal to Phi
     n_static_kept = int(keep.sum())
-    Kr = X.T @ (Kf @ X)
+    # X^T K X in blocks, with X = [Phi, S Vs] never formed: S^T K S is the one big product
+    KPhi, KS = csr_dot(Kf, Phi), csr_dot(Kf, S)
+    KPS = (Phi.T @ KS) @ Vs
+    Kr = np.block([[Phi.T @ KPhi, KPS], [KPS.T, Vs.T @ (S.T @ KS) @ Vs]])
     omega2, W = sla.eigh(0.5 * (Kr + Kr.T))
-    T = np.zeros((K_lin.shape[0], len(omega2)))
-    T[free] = X @ W
+    m = Phi.shape[1]
+    X = np.zeros((K_lin.shape[0], m + S.shape[1]))
+    X[free, :m], X[free, m:] = Phi, S
+    A = np.vstack([W[:m], Vs @ W[m:]])
     timings = {"modes": t_modes, "statics": t_static,
                "orthonormalization": time.perf_counter() - t0 - t_modes - t_static}
-    return Basis(T, np.maximum(omega2, 0.0), len(modes.frequencies), statics.shape[1], timings,
-                 n_shapes, mu, n_static_kept)
+    return Basis(X, A, np.maximum(omega2, 0.0), len(modes.frequencies), statics.shape[1],
+                 timings, n_shapes, mu, n_static_kept)
 
 
 def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):

@@ -37,38 +37,38 @@ def candidates(case, pairs, contacts):
 
 
 def reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0, solve, kt_crit,
-           stages):
-    """The reduced model of a case (solver.reduction) on its linearized stiffness K_lin."""
+           stages, rows=None):
+    """The reduced model of a case (solver.reduction) on its linearized stiffness K_lin.
+    rows: the contact rows on the free dofs, when the factorization stage has them."""
     from time import perf_counter
     reduction = case.solver.reduction
     loads = [np.stack(patterns, axis=1)] if patterns and reduction.statics else []
     loads.append(K_lin @ preload.u[:, None])          # its response is the preload itself
-    contact = ((contacts.C, contacts.weights * kt_crit)
+    contact = ((contacts.C if rows is None else rows, contacts.weights * kt_crit)
                if reduction.statics and contacts.n_points else None)
     t0 = perf_counter()
     basis = reduced_basis(K_lin, M, model.fixed, reduction.fmax, np.hstack(loads), solve,
                           case.solver.shift_hz, contact, reduction.statics_tolerance)
     stages["reduction"] = perf_counter() - t0
-    T = basis.T
     # T^T (M u): two sparse products with vectors, not one with the n x r basis
-    q0, v = T.T @ (M @ preload.u), T.T @ (M @ v0)
+    q0, v = basis.coordinates(M @ preload.u), basis.coordinates(M @ v0)
     meta = {"reduced_dofs": len(basis.omega2), "normal_modes": basis.n_modes,
             "contact_shapes": basis.n_contact_shapes,
             # the static directions asked (contact shapes, load patterns, the preload) and kept
             # beyond the modes: those dropped lie in the span of the rest
             "static_shapes": [basis.n_contact_shapes + basis.n_static, basis.n_static_kept],
             "basis_timings": basis.timings,
-            "basis_projection_error": float(np.linalg.norm(T @ q0 - preload.u)
+            "basis_projection_error": float(np.linalg.norm(basis.expand(q0) - preload.u)
                                             / max(np.linalg.norm(preload.u), 1e-300)),
             "free_dofs": int((~model.fixed).sum())}
     mask = candidates(case, pairs, contacts)
     if mask is None:
-        return ReducedModel(T, basis.omega2, q0, v, contacts, pairs, preload, meta)
+        return ReducedModel(basis.T, basis.omega2, q0, v, contacts, pairs, preload, meta)
     t0 = perf_counter()
-    sampled = _sample(case, contacts, mask, basis.omega2, np.asarray(contacts.C @ T), q0,
-                      preload)
+    Cr = contacts.observe(basis.X) @ basis.A
+    sampled = _sample(case, contacts, mask, basis.omega2, Cr, q0, preload)
+    T = basis.expand(sampled.W)
     stages["sampling"] = perf_counter() - t0
-    T = T @ sampled.W
     held = Preload(T @ sampled.q, sampled.gap, sampled.pressure, sampled.tangent,
                    preload.iterations + sampled.iterations, sampled.residual, preload.seconds)
     meta["sampling"] = {"candidates": int(mask.sum()), "points": int(len(sampled.sample.chosen)),
