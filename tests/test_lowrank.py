@@ -50,11 +50,40 @@ def test_rows_of_low_rank_run_on_their_row_space():
     direct = (K + 4.0 * M + C.T @ sp.diags(d) @ C).tocsc()
     assert np.allclose(x, spla.spsolve(direct, b), rtol=1e-9, atol=1e-12)
     known = cs.solver(d).row_space
-    cols_, V, Rm, Z, R = known.cols, known.V, known.Rm, known.Z, known.R
+    cols_, V, Rm, R = known.cols, known.V, known.Rm, known.R
     assert np.allclose(Rm @ V.T, dense[:, cols_])
     B = np.zeros((n, rho))
     B[cols_] = V
-    assert np.allclose(Z @ R(), spla.spsolve(direct, B), rtol=1e-9, atol=1e-12)
+    assert np.allclose(known.responses(R()), spla.spsolve(direct, B), rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("m", [5, 60])
+def test_without_room_for_z_the_solves_are_the_same(m, monkeypatch):
+    """Z = A0^-1 B (n x rank) not held (a mesh where it would not fit): each use solves for it,
+    and the solves, row space and responses are those with Z held."""
+    import transient.solve.lowrank as lowrank
+    rng = np.random.default_rng(3 + m)
+    n, k = 80, 20
+    K, M = spd(n, 4)
+    cols = np.sort(rng.choice(n, k, replace=False))
+    dense = np.zeros((m, n))
+    dense[:, cols] = rng.standard_normal((m, 6)) @ rng.standard_normal((6, k))
+    if m < k:
+        dense[:, cols] = rng.standard_normal((m, k))
+    C = sp.csr_matrix(dense)
+    held = ContactSolver(K, M, C, -4.0)
+    monkeypatch.setattr(lowrank, "MAX_BYTES", 8.0 * n * held.G.shape[0] - 1)
+    solved = ContactSolver(K, M, C, -4.0)
+    assert held.Z is not None and solved.Z is None and solved.lowrank
+    assert np.array_equal(held.G, solved.G)
+    d = rng.uniform(0, 1e2, m)
+    b = rng.standard_normal((n, 3))
+    assert np.allclose(solved.solver(d)(b), held.solver(d)(b), rtol=1e-12, atol=1e-15)
+    assert np.allclose(solved.solver(d)(b[:, 0]), held.solver(d)(b[:, 0]), rtol=1e-12,
+                       atol=1e-15)
+    if m > k:
+        Y = rng.standard_normal((held.G.shape[0], 2))
+        assert np.allclose(solved.responses(Y), held.responses(Y), rtol=1e-12, atol=1e-15)
 
 
 def test_factored_rows_give_the_same_row_space_and_solves():

@@ -66,7 +66,7 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     modes = normal_modes(Kf, Mf, None, count=40, fmax=fmax, shift=-shift_hz, solve=solve)
     t_modes = time.perf_counter() - t0
     Phi = modes.shapes
-    columns = []
+    columns, shapes = [], None
     mu = np.zeros(0)
     n_shapes = 0
     if contact is not None and contact[0].shape[0]:
@@ -82,30 +82,46 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     # the static responses without what the modes already hold (twice, for round-off): on a
     # part free to move they are dominated by its rigid motion, 1e10 times their elastic part,
     # which the independence test below would otherwise take for round-off and drop with them
-    S = np.ascontiguousarray(np.hstack(columns)) if columns else np.zeros((len(free), 0))
-    # M S formed once (n x a few hundred: the setup's costliest sparse product, on both cores)
-    # and carried through the projections with M Phi, which has only the modes' columns
+    # (each n x a few hundred array is the setup's largest at scale: at most three at once)
+    S = np.empty((len(free), sum(c.shape[1] for c in columns)))
+    start, c = 0, None
+    while columns:
+        c = columns.pop(0)
+        S[:, start:start + c.shape[1]] = c
+        start += c.shape[1]
+    shapes = c = None        # the pieces go as they are copied
+    # M S formed once (the costliest sparse product, on both cores) and carried through the
+    # projections with M Phi, which has only the modes' columns
     MS, MPhi = csr_dot(Mf, S), csr_dot(Mf, Phi)
     for _ in range(2):
         P = Phi.T @ MS
-        S, MS = S - Phi @ P, MS - MPhi @ P
+        S -= Phi @ P
+        MS -= MPhi @ P
     # unit M-norm columns, then drop directions the others already span, then diagonalize
     norms = np.sqrt(np.einsum("ij,ij->j", S, MS))
     scale = norms.max() if len(norms) else 0.0
     big = norms > 1e-12 * scale
-    S, MS = S[:, big] / norms[big], MS[:, big] / norms[big]
+    if not np.all(big):
+        S, MS, norms = S[:, big], MS[:, big], norms[big]
+    S /= norms
+    MS /= norms
     lam, V = np.linalg.eigh(S.T @ MS)
+    del MS
     keep = lam > 1e-12 * max(lam.max(), 1.0) if len(lam) else np.zeros(0, bool)
     Vs = V[:, keep] / np.sqrt(lam[keep])          # S Vs: M-orthonormal, M-orthogonal to Phi
     n_static_kept = int(keep.sum())
     # X^T K X in blocks, with X = [Phi, S Vs] never formed: S^T K S is the one big product
     KPhi, KS = csr_dot(Kf, Phi), csr_dot(Kf, S)
     KPS = (Phi.T @ KS) @ Vs
-    Kr = np.block([[Phi.T @ KPhi, KPS], [KPS.T, Vs.T @ (S.T @ KS) @ Vs]])
+    SKS = S.T @ KS
+    del KS
+    Kr = np.block([[Phi.T @ KPhi, KPS], [KPS.T, Vs.T @ SKS @ Vs]])
     omega2, W = sla.eigh(0.5 * (Kr + Kr.T))
     m = Phi.shape[1]
     X = np.zeros((K_lin.shape[0], m + S.shape[1]))
-    X[free, :m], X[free, m:] = Phi, S
+    X[free, :m] = Phi
+    X[free, m:] = S
+    del S
     A = np.vstack([W[:m], Vs @ W[m:]])
     timings = {"modes": t_modes, "statics": t_static,
                "orthonormalization": time.perf_counter() - t0 - t_modes - t_static}
@@ -169,11 +185,11 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
         # the solver, built on these contact rows (lowrank.ContactSolver), has K^-1 E V = Z R
         # already, V a basis of the rows' space, and the rows in it, Cc = Rm: no solves here,
         # no n x k array
-        V, Cc, Z, R = known.V, known.Rm, known.Z, known.R()
-        H = (V.T @ Z[cols]) @ R
+        V, Cc, R = known.V, known.Rm, known.R()
+        H = known.G @ R
 
         def response(Y):
-            return Z @ (R @ Y)
+            return known.responses(R @ Y)
     else:
         V = None
         Cc = sp.csr_matrix(C)[:, cols].toarray()

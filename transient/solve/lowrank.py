@@ -16,7 +16,8 @@ import scipy.sparse as sp
 
 from .linsolve import factorize
 
-MAX_BYTES = 1.5e9     # Z = A0^-1 C^T dense; beyond this, factorize A0 + C^T D C directly
+MAX_BYTES = 1.5e9     # Z = A0^-1 C^T held dense up to this; G (rank^2) too, beyond it the
+#                       dense form A0 + C^T D C is factorized
 BLOCK = 256           # right-hand sides per solve when forming Z (bounds the solver's copies)
 ROW_SPACE_TOL = 1e-12
 
@@ -25,11 +26,13 @@ ROW_SPACE_TOL = 1e-12
 class RowSpace:
     """What a tangent solve on a rich rule's row space already holds: the dofs the rows touch
     (cols), an orthonormal basis V of the rows' space there, the rows in it (Rm, C E = Rm V^T),
-    Z = A0^-1 E V, and R() such that the tangent's responses to the loads E V are Z R."""
+    G = V^T E^T A0^-1 E V, responses(Y) = A0^-1 E V Y (from Z when it is held, else solved),
+    and R() such that the tangent's responses to the loads E V are A0^-1 E V R."""
     cols: np.ndarray
     V: np.ndarray
     Rm: np.ndarray
-    Z: np.ndarray
+    G: np.ndarray
+    responses: object
     R: object
 
 
@@ -74,20 +77,40 @@ class ContactSolver:
             self.Rm, self.V = (row_space(self.C[:, self.cols].toarray()) if factors is None
                                else factored_row_space(*factors, self.cols))
         rank = self.Rm.shape[1] if m and self.by_columns else min(m, k)
-        self.lowrank = m > 0 and 8.0 * n * rank <= MAX_BYTES
+        # Woodbury needs G (rank x rank); Z = A0^-1 B (n x rank) is held when it fits, and
+        # otherwise solved for at each use (two solves per solve instead of one and Z times a
+        # block): memory n x BLOCK instead of n x rank (n rank grows as n^5/3 with the mesh)
+        self.lowrank = m > 0 and 8.0 * rank * rank <= MAX_BYTES
         if not self.lowrank:
             return
-        CT = self.C.T.tocsc()
-        self.Z = np.empty((n, rank), order="F")
+        self.CT = None if self.by_columns else self.C.T.tocsc()
+        self.Z = np.empty((n, rank), order="F") if 8.0 * n * rank <= MAX_BYTES else None
+        self.G = np.empty((rank, rank))
         for start in range(0, rank, BLOCK):
             stop = min(start + BLOCK, rank)
             if self.by_columns:
                 b = np.zeros((n, stop - start), order="F")
                 b[self.cols] = self.V[:, start:stop]
             else:
-                b = np.asfortranarray(CT[:, start:stop].toarray())
-            self.Z[:, start:stop] = np.atleast_2d(self.solve0(b).T).T
-        self.G = self.V.T @ self.Z[self.cols] if self.by_columns else np.asarray(self.C @ self.Z)
+                b = np.asfortranarray(self.CT[:, start:stop].toarray())
+            Zb = np.atleast_2d(self.solve0(b).T).T
+            self.G[:, start:stop] = (self.V.T @ Zb[self.cols] if self.by_columns
+                                     else np.asarray(self.C @ Zb))
+            if self.Z is not None:
+                self.Z[:, start:stop] = Zb
+
+    def responses(self, Y):
+        """Z Y = A0^-1 B Y for Y (rank,) or (rank, k): from Z when held, else one solve."""
+        if self.Z is not None:
+            return self.Z @ Y
+        Y2 = Y[:, None] if Y.ndim == 1 else Y
+        if self.by_columns:
+            b = np.zeros((self.A0.shape[0], Y2.shape[1]), order="F")
+            b[self.cols] = self.V @ Y2
+        else:
+            b = np.asfortranarray(self.CT @ Y2)
+        x = np.atleast_2d(self.solve0(b).T).T
+        return x[:, 0] if Y.ndim == 1 else x
 
     def solver(self, d):
         """solve(b) for (A0 + C^T diag(d) C) x = b; b (n,) or (n, k)."""
@@ -98,7 +121,7 @@ class ContactSolver:
             A = (self.A0 + self.C.T @ sp.diags(d) @ self.C).tocsr()
             solve = factorize(A, self.backend, definite=False)
             return TangentSolve(solve, getattr(solve, "backend", "?"))
-        Z, solve0 = self.Z, self.solve0
+        Z, solve0 = self.responses, self.solve0
         if self.by_columns:
             core = self.Rm.T @ (d[:, None] * self.Rm)
             lu = sla.lu_factor(np.eye(len(core)) + core @ self.G)
@@ -106,11 +129,11 @@ class ContactSolver:
 
             def solve(b):
                 y = solve0(b)
-                return y - Z @ sla.lu_solve(lu, core @ (V.T @ y[cols]))
+                return y - Z(sla.lu_solve(lu, core @ (V.T @ y[cols])))
             # the responses to the loads B = E V without solving again:
             # (A0 + B core B^T)^-1 B = Z R, R = I - (I + core G)^-1 core G; with the solver's
             # rows in that basis, C = Rm B^T
-            known = RowSpace(cols, V, self.Rm, Z,
+            known = RowSpace(cols, V, self.Rm, self.G, Z,
                              lambda: np.eye(len(core)) - sla.lu_solve(lu, core @ self.G))
         else:
             lu = sla.lu_factor(np.eye(len(d)) + d[:, None] * self.G)
@@ -119,7 +142,7 @@ class ContactSolver:
             def solve(b):
                 y = solve0(b)
                 Cy = C @ y
-                return y - Z @ sla.lu_solve(lu, d[:, None] * Cy if Cy.ndim == 2 else d * Cy)
+                return y - Z(sla.lu_solve(lu, d[:, None] * Cy if Cy.ndim == 2 else d * Cy))
             known = None
         return TangentSolve(solve, getattr(self.solve0, "backend", "?") + "+woodbury", known)
 
