@@ -74,6 +74,7 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
         Cf = C if C.shape[1] == len(free) else restrict(C, cols=free)
         omega2_modes = (2 * np.pi * modes.frequencies) ** 2
         shapes, mu = contact_shapes(Cf, stiffness, solve, Phi, omega2_modes, tol)
+        C = Cf = contact = None          # a dense copy at scale: not held through the basis
         columns.append(shapes)
         n_shapes = shapes.shape[1]
     if statics.shape[1]:

@@ -18,7 +18,8 @@ from .linsolve import factorize
 
 MAX_BYTES = 1.5e9     # Z = A0^-1 C^T held dense up to this; G (rank^2) too, beyond it the
 #                       dense form A0 + C^T D C is factorized
-BLOCK = 256           # right-hand sides per solve when forming Z (bounds the solver's copies)
+BLOCK = 128           # right-hand sides per solve when forming Z (bounds the solver's copies: three
+#                       n x BLOCK arrays, 0.4 GB at 140k dofs)
 ROW_SPACE_TOL = 1e-12
 
 
@@ -67,6 +68,7 @@ class ContactSolver:
         self.sigma = sigma
         self.backend = backend
         n, m = K.shape[0], C.shape[0]
+        self.m = m
         self.cols = np.unique(self.C.indices)
         k = len(self.cols)
         self.by_columns = k < m and 8.0 * k * k <= MAX_BYTES
@@ -94,10 +96,19 @@ class ContactSolver:
             else:
                 b = np.asfortranarray(self.CT[:, start:stop].toarray())
             Zb = np.atleast_2d(self.solve0(b).T).T
-            self.G[:, start:stop] = (self.V.T @ Zb[self.cols] if self.by_columns
-                                     else np.asarray(self.C @ Zb))
             if self.Z is not None:
                 self.Z[:, start:stop] = Zb
+            else:
+                self.G[:, start:stop] = (self.V.T @ Zb[self.cols] if self.by_columns
+                                         else np.asarray(self.C @ Zb))
+        if self.Z is not None:
+            # G in one product (as before Z could be left out: the same sums)
+            self.G = (self.V.T @ self.Z[self.cols] if self.by_columns
+                      else np.asarray(self.C @ self.Z))
+        if self.by_columns:
+            # the rows are Rm V^T on cols from here on: the dense copy (points x interface dofs,
+            # the largest array of a regularized fine rule at scale) is not held
+            self.C = None
 
     def responses(self, Y):
         """Z Y = A0^-1 B Y for Y (rank,) or (rank, k): from Z when held, else one solve."""
@@ -115,7 +126,7 @@ class ContactSolver:
     def solver(self, d):
         """solve(b) for (A0 + C^T diag(d) C) x = b; b (n,) or (n, k)."""
         d = np.asarray(d, float)
-        if self.C.shape[0] == 0 or not np.any(d):
+        if self.m == 0 or not np.any(d):
             return TangentSolve(self.solve0, getattr(self.solve0, "backend", "?"))
         if not self.lowrank:
             A = (self.A0 + self.C.T @ sp.diags(d) @ self.C).tocsr()
