@@ -39,8 +39,8 @@ def m_orthonormalize(W, M, Qs, MQs, drop=1e-13):
     C, R) with W = Q C + Wn R, Q the blocks side by side, up to the directions of W that Q
     spans to `drop` of W's M-norm (left out).
 
-    The last block first (most of a Krylov block is its recurrence coefficients), then every
-    block once, and again only for columns that pass lost more than half their norm (DGKS:
+    The last two blocks first (most of a Krylov block is its recurrence coefficients), then
+    every block once, and again only if a pass took more than half of a column's norm (DGKS:
     twice is enough); the basis is read once per pass, block by block (never copied whole).
     The Gram W^T M W resolves directions down to about 1e-8 of its largest eigenvalue only, and
     a block can span far more: the first solves of a floating part are its rigid motion, 1e6
@@ -72,7 +72,8 @@ def m_orthonormalize(W, M, Qs, MQs, drop=1e-13):
             for Q, H in zip(basis, Hs):
                 V = V - Q @ H
             if level == 0 and Qs:
-                C += np.vstack(Hs[:len(Qs)])     # only the first level's columns are W's own
+                # W's coefficients; a later level's on Qs are the round-off of these
+                C += np.vstack(Hs[:len(Qs)])
             MV = M @ V
             G = V.T @ MV
             # projected away this pass, against what is left: again if over half of it went
