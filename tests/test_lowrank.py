@@ -127,3 +127,14 @@ def test_regularized_pairs_carry_their_rows_factored():
     x = np.random.default_rng(0).standard_normal(model.ndof)
     assert np.linalg.norm(contacts.C @ x - L @ (B.T @ x)) <= 1e-12 * np.linalg.norm(contacts.C @ x)
     assert L.shape[1] < contacts.C.shape[0]
+    # released, the set rebuilds its rows from the factors, and its subsets theirs
+    released = contacts.released()
+    assert released.rows is None and released.factors is contacts.factors
+    scale = np.abs(contacts.C.toarray()).max()
+    assert np.abs((released.C - contacts.C).toarray()).max() <= 1e-13 * scale
+    keep = np.arange(0, contacts.n_points, 3)
+    a = contacts.subset(keep, contacts.weights[keep])
+    b = released.subset(keep, contacts.weights[keep])
+    assert b.rows is not None and np.abs((a.C - b.C).toarray()).max() <= 1e-13 * scale
+    T = np.random.default_rng(1).standard_normal((model.ndof, 4))
+    assert np.allclose(released.observe(T), contacts.C @ T, rtol=1e-12, atol=1e-12 * scale)

@@ -86,6 +86,10 @@ def _prepare(case):
         raise CaseError(case.path, "loads", str(exc)) from None
     if preload.iterations == 0:
         del stages["preload"]
+    if cs is not None and cs.C is None and solver.reduction.enabled:
+        # the factorization holds the rows' space (Rm V^T): past here the explicit rows are not
+        # read (the basis takes that space, the sampling and the system C T the factors)
+        contacts = contacts.released()
     t0 = time.perf_counter()
     kw = [contacts.weights[s] * preload.tangent[s] for s in contacts.slices.values()]
     K_lin = (model.K + contact_stiffness(pairs, model.ndof, kw=kw)).tocsr() if pairs else model.K

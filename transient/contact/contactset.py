@@ -1,5 +1,6 @@
 """All contact points of a run stacked: observation rows, initial gaps, weights and laws."""
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from functools import cached_property
 
 import numpy as np
 import scipy.linalg as sla
@@ -11,7 +12,8 @@ from .laws import law_params
 
 @dataclass(frozen=True)
 class ContactSet:
-    C: sp.csr_matrix         # (P, ndof) gap observation of every point, pairs one after another
+    rows: sp.csr_matrix      # (P, ndof) gap observation of every point, pairs one after another;
+    #                          None once released (`released`): C then rebuilds them from factors
     gap0: np.ndarray         # (P,) initial gaps [m]
     weights: np.ndarray      # (P,) w J [m^2]
     code: np.ndarray         # (P,) law code of each point
@@ -19,6 +21,19 @@ class ContactSet:
     slices: dict             # pair name -> slice of its points
     factors: tuple = None    # (L (P, r), B (ndof, r) sparse) with C = L B^T, when every pair's
     #                          rows are factored (regularized rules: contact.pair.row_factors)
+
+    @cached_property
+    def C(self):
+        """(P, ndof) CSR: the rows, or L B^T from the factors when they were released."""
+        return self.rows if self.rows is not None else factored_rows(*self.factors)
+
+    def released(self):
+        """The same set without its explicit rows when the factors hold them: a regularized
+        fine rule's rows are dense (points x interface dofs, about 1 GB at 141k dofs), and past
+        the preload the stages read them only through the factors."""
+        if self.factors is None or self.rows is None:
+            return self
+        return replace(self, rows=None)
 
     @property
     def n_points(self):
@@ -34,7 +49,8 @@ class ContactSet:
         """The points keep (sorted indices) with new weights; pairs stay contiguous."""
         bounds = {name: np.searchsorted(keep, [s.start, s.stop]) for name, s in self.slices.items()}
         factors = None if self.factors is None else (self.factors[0][keep], self.factors[1])
-        return ContactSet(self.C[keep], self.gap0[keep], weights, self.code[keep],
+        rows = self.rows[keep] if self.rows is not None else factored_rows(*factors)
+        return ContactSet(rows, self.gap0[keep], weights, self.code[keep],
                           self.params[keep], {name: slice(int(a), int(b))
                                               for name, (a, b) in bounds.items()}, factors)
 
@@ -51,6 +67,18 @@ class ContactSet:
         g = self.C @ u + self.gap0
         p, kt, _ = self.laws(g)
         return self.C.T @ (self.weights * p), g, p, kt
+
+
+def factored_rows(L, B):
+    """L B^T (P, ndof) as CSR, on the dofs B touches only (L (P, r) dense, B (ndof, r) CSR)."""
+    B = sp.csr_matrix(B)
+    cols = np.flatnonzero(np.diff(B.indptr))
+    dense = L @ B[cols].toarray().T
+    P = dense.shape[0]
+    rows = sp.csr_matrix((dense.ravel(), np.tile(cols, P), np.arange(P + 1) * len(cols)),
+                         shape=(P, B.shape[0]))
+    rows.eliminate_zeros()
+    return rows
 
 
 def stack(pairs, ndof):

@@ -69,9 +69,9 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     columns, shapes = [], None
     mu = np.zeros(0)
     n_shapes = 0
-    if contact is not None and contact[0].shape[0]:
+    if contact is not None and len(contact[1]):
         C, stiffness = contact
-        Cf = C if C.shape[1] == len(free) else restrict(C, cols=free)
+        Cf = C if C is None or C.shape[1] == len(free) else restrict(C, cols=free)
         omega2_modes = (2 * np.pi * modes.frequencies) ** 2
         shapes, mu = contact_shapes(Cf, stiffness, solve, Phi, omega2_modes, tol)
         C = Cf = contact = None          # a dense copy at scale: not held through the basis
@@ -144,14 +144,19 @@ def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):
     u_i, solved for at the end: memory n x block and m x m, not n x m (a fine rule has
     thousands of points).
 
+    C None: the solver's own rows, which its row space (solve.row_space) stands for.
+
     Returns (shapes (n, r), mu (m,) descending).
     """
+    known = getattr(solve, "row_space", None)
+    if C is None:
+        # the solver's own rows (lowrank.ContactSolver), held as their space: Rm V^T on cols
+        return _contact_shapes_by_columns(None, stiffness, solve, Phi, omega2, tol, known.cols)
     m = C.shape[0]
     CT = C.T.tocsc()
     if tol <= 0:
         return np.atleast_2d(solve(np.asfortranarray(CT.toarray())).T).T, np.zeros(0)
     cols = np.unique(sp.csr_matrix(C).indices)
-    known = getattr(solve, "row_space", None)
     # by columns needs K^-1 E (n x k) unless the solver holds the rows' space already
     held = known is not None and np.array_equal(known.cols, cols) and len(known.Rm) == m
     if len(cols) < m and (held or 8.0 * C.shape[1] * len(cols) <= BY_COLUMNS_BYTES):
@@ -180,9 +185,10 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
     shapes are (K^-1 E) X^T u_i. When the solver is a ContactSolver, E is replaced by the
     basis E V of the rows' space it already solved for (Cc = Rm V^T; rho < k columns for a
     regularized rule)."""
-    n, k = C.shape[1], len(cols)
+    n, k = Phi.shape[0], len(cols)
     known = getattr(solve, "row_space", None)
-    if known is not None and np.array_equal(known.cols, cols) and len(known.Rm) == C.shape[0]:
+    if known is not None and np.array_equal(known.cols, cols) and (
+            C is None or len(known.Rm) == C.shape[0]):
         # the solver, built on these contact rows (lowrank.ContactSolver), has K^-1 E V = Z R
         # already, V a basis of the rows' space, and the rows in it, Cc = Rm: no solves here,
         # no n x k array

@@ -39,12 +39,17 @@ def candidates(case, pairs, contacts):
 def reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0, solve, kt_crit,
            stages, rows=None):
     """The reduced model of a case (solver.reduction) on its linearized stiffness K_lin.
-    rows: the contact rows on the free dofs, when the factorization stage has them."""
+    rows: the contact rows on the free dofs, when the factorization stage has them; without
+    them, a solve that holds the rows' space (solve.row_space) stands for them."""
     from time import perf_counter
     reduction = case.solver.reduction
     loads = [np.stack(patterns, axis=1)] if patterns and reduction.statics else []
     loads.append(K_lin @ preload.u[:, None])          # its response is the preload itself
-    contact = ((contacts.C if rows is None else rows, contacts.weights * kt_crit)
+    known = getattr(solve, "row_space", None)
+    if rows is None and not (known is not None and len(known.Rm) == contacts.n_points
+                             and reduction.statics_tolerance > 0):
+        rows = contacts.C        # the contact shapes need the rows themselves
+    contact = ((rows, contacts.weights * kt_crit)
                if reduction.statics and contacts.n_points else None)
     t0 = perf_counter()
     basis = reduced_basis(K_lin, M, model.fixed, reduction.fmax, np.hstack(loads), solve,
