@@ -54,23 +54,16 @@ def m_orthonormalize(W, M, Qs, MQs, drop=1e-13):
     C = np.zeros((sum(sizes), w))
     V = W
     # the recurrence's own blocks first: S M Q_j lies mostly on Q_j and Q_j-1
-    local = sum(sizes[-2:])
     if Qs:
-        H = np.vstack([MQ.T @ V for MQ in MQs[-2:]])
-        start = 0
-        for Q in Qs[-2:]:
-            V = V - Q @ H[start:start + Q.shape[1]]
-            start += Q.shape[1]
-        C[len(C) - local:] += H
+        V, Hs = _project(V, Qs[-2:], MQs[-2:])
+        C[len(C) - sum(sizes[-2:]):] += np.vstack(Hs)
     out, Mout, top0 = [], [], None
     for level in range(2 + int(np.ceil(-2 * np.log10(drop) / 8))):
         basis, Mbasis = Qs + out, MQs + Mout
         for _ in range(3):
             if not basis:
                 break
-            Hs = [MQ.T @ V for MQ in Mbasis]
-            for Q, H in zip(basis, Hs):
-                V = V - Q @ H
+            V, Hs = _project(V, basis, Mbasis)
             if level == 0 and Qs:
                 # W's coefficients; a later level's on Qs are the round-off of these
                 C += np.vstack(Hs[:len(Qs)])
@@ -107,6 +100,15 @@ def m_orthonormalize(W, M, Qs, MQs, drop=1e-13):
     Wn = np.hstack(out) if out else np.zeros((n, 0))
     MWn = np.hstack(Mout) if Mout else np.zeros((n, 0))
     return Wn, MWn, C, MWn.T @ W
+
+
+def _project(V, Qs, MQs):
+    """V without its M-projections on the blocks Qs, classical Gram-Schmidt (every coefficient
+    from the V given); returns (V, the coefficients per block)."""
+    Hs = [MQ.T @ V for MQ in MQs]
+    for Q, H in zip(Qs, Hs):
+        V = V - Q @ H
+    return V, Hs
 
 
 class NotConverged(RuntimeError):

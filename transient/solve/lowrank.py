@@ -87,40 +87,44 @@ class ContactSolver:
             return
         self.CT = None if self.by_columns else self.C.T.tocsc()
         self.Z = np.empty((n, rank), order="F") if 8.0 * n * rank <= MAX_BYTES else None
-        self.G = np.empty((rank, rank))
+        G = None if self.Z is not None else np.empty((rank, rank))
         for start in range(0, rank, BLOCK):
-            stop = min(start + BLOCK, rank)
-            if self.by_columns:
-                b = np.zeros((n, stop - start), order="F")
-                b[self.cols] = self.V[:, start:stop]
-            else:
-                b = np.asfortranarray(self.CT[:, start:stop].toarray())
-            Zb = np.atleast_2d(self.solve0(b).T).T
+            block = slice(start, min(start + BLOCK, rank))
+            Zb = np.atleast_2d(self.solve0(self._loads(block)).T).T
             if self.Z is not None:
-                self.Z[:, start:stop] = Zb
+                self.Z[:, block] = Zb
             else:
-                self.G[:, start:stop] = (self.V.T @ Zb[self.cols] if self.by_columns
-                                         else np.asarray(self.C @ Zb))
-        if self.Z is not None:
-            # G in one product (as before Z could be left out: the same sums)
-            self.G = (self.V.T @ self.Z[self.cols] if self.by_columns
-                      else np.asarray(self.C @ self.Z))
+                G[:, block] = self._rows_of(Zb)
+        # with Z held, G in one product (as before Z could be left out: the same sums)
+        self.G = self._rows_of(self.Z) if self.Z is not None else G
         if self.by_columns:
             # the rows are Rm V^T on cols from here on: the dense copy (points x interface dofs,
             # the largest array of a regularized fine rule at scale) is not held
             self.C = None
+
+    def _loads(self, Y):
+        """B Y (n, k), F-ordered: B = E V by columns, C^T otherwise; Y (rank, k), or a slice
+        of B's columns (taken, not multiplied)."""
+        if isinstance(Y, slice):
+            part = self.V[:, Y] if self.by_columns else self.CT[:, Y].toarray()
+        else:
+            part = self.V @ Y if self.by_columns else self.CT @ Y
+        if not self.by_columns:
+            return np.asfortranarray(part)
+        b = np.zeros((self.A0.shape[0], part.shape[1]), order="F")
+        b[self.cols] = part
+        return b
+
+    def _rows_of(self, Zb):
+        """B^T Zb in the update's coordinates: V^T E^T Zb by columns, C Zb otherwise."""
+        return self.V.T @ Zb[self.cols] if self.by_columns else np.asarray(self.C @ Zb)
 
     def responses(self, Y):
         """Z Y = A0^-1 B Y for Y (rank,) or (rank, k): from Z when held, else one solve."""
         if self.Z is not None:
             return self.Z @ Y
         Y2 = Y[:, None] if Y.ndim == 1 else Y
-        if self.by_columns:
-            b = np.zeros((self.A0.shape[0], Y2.shape[1]), order="F")
-            b[self.cols] = self.V @ Y2
-        else:
-            b = np.asfortranarray(self.CT @ Y2)
-        x = np.atleast_2d(self.solve0(b).T).T
+        x = np.atleast_2d(self.solve0(self._loads(Y2)).T).T
         return x[:, 0] if Y.ndim == 1 else x
 
     def solver(self, d):
