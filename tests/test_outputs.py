@@ -90,8 +90,35 @@ def test_sigint_during_the_setup_leaves_no_file(tmp_path):
         time.sleep(0.02)
     child.send_signal(signal.SIGINT)
     _, err = child.communicate(timeout=120)
-    assert child.returncode == 130 and "Traceback" not in err
+    assert child.returncode == 130 and "Traceback" not in err, (child.returncode, err[-3000:])
     assert not path.exists()
+
+
+@pytest.mark.parametrize("signum, code, said", [(signal.SIGINT, 130, "interrupted"),
+                                                (signal.SIGTERM, 143, "terminated (SIGTERM)")])
+def test_a_stop_swallowed_in_the_setup_ends_it_at_the_next_stage(tmp_path, capsys, monkeypatch,
+                                                                 signum, code, said):
+    # a Ctrl-C landing where its KeyboardInterrupt is swallowed (Numba's cache notification,
+    # a weakref finalizer) used to let the run go on to its end; a SIGTERM killed it outright
+    import transient.stages
+    real, stages_run = transient.stages.build_model, []
+
+    def model_then_a_swallowed_signal(case):
+        model = real(case)
+        try:
+            os.kill(os.getpid(), signum)
+            time.sleep(0)         # the handler runs here, inside the try
+        except KeyboardInterrupt:
+            pass
+        stages_run.append("model")
+        return model
+    monkeypatch.setattr(transient.stages, "build_model", model_then_a_swallowed_signal)
+    monkeypatch.setattr(transient.stages, "build_contact",
+                        lambda *args: stages_run.append("contact"))
+    path = tmp_path / "bar.h5"
+    assert main(["run", BAR, "-o", str(path), "--quiet"]) == code
+    assert capsys.readouterr().err == said + "\n"
+    assert stages_run == ["model"] and not path.exists()
 
 
 def _interrupt_in_numba(*args, **kwargs):

@@ -42,6 +42,14 @@ def interrupted(exc):
     """Whether exc is Ctrl-C: a KeyboardInterrupt, or the SystemError CPython raises from one
     (at times from such a SystemError) that lands while a compiled (Numba) function runs
     Python code of its own."""
+    return stop_reason(exc) is not None
+
+
+def stop_reason(exc):
+    """What stopped a run interrupted by exc ('interrupted', 'terminated (SIGTERM)'), or None
+    when exc is not an interrupt."""
     while isinstance(exc, SystemError):
         exc = exc.__cause__
-    return isinstance(exc, KeyboardInterrupt)
+    if not isinstance(exc, KeyboardInterrupt):
+        return None
+    return str(exc) or "interrupted"

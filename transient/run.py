@@ -66,13 +66,15 @@ def run(case, path, resume=False, progress=None, key="output.file"):
     """
     check_transient(case)
     t_start = time.perf_counter()
-    with writing(path, key, resume):
-        start = _resume(case, path) if resume else _new(case, path)
-        return _loop(case, path, start, progress, t_start)
+    # the stop requests are held from here: over the setup a Ctrl-C ends the run at once, or
+    # at the next stage if it landed where it was swallowed, and leaves no file
+    with stop_requests(at_once=True) as stop, writing(path, key, resume):
+        start = _resume(case, path, stop) if resume else _new(case, path, stop)
+        return _loop(case, path, start, progress, t_start, stop)
 
 
-def _new(case, path):
-    setup = prepare(case)
+def _new(case, path, stop):
+    setup = prepare(case, stop.check)
     system, output = setup.system, case.output
     dt = choose_dt(case, setup)
     n_total = int(round(case.solver.t_end / dt))
@@ -86,6 +88,9 @@ def _new(case, path):
             "dt_critical": system.critical.dt, "scheme": case.solver.scheme,
             "reduced": system.reduced, "steps_planned": n_total, "every": output.every,
             "stages": stages, **setup.meta, **scheme.meta}
+    stop.check()
+    # from the history's first row on, a stop is a request the loop reads between chunks
+    stop.at_once = False
     history = History.create(path, meta, layout(system, output), overwrite=True,
                              expected_rows=n_total // output.every + 1,
                              geometry=setup.geometry, system=system)
@@ -94,13 +99,15 @@ def _new(case, path):
                   Balance(setup.rows0.energy[0]), stages, {**setup.meta, **scheme.meta})
 
 
-def _resume(case, path):
+def _resume(case, path, stop):
     t0 = time.perf_counter()
     r = resumed(path, case)
     scheme = stepper(case, r.system, r.dt, np.asarray(r.blocks, np.int64) if r.system.reduced
                      else None)
     if r.system.reduced:
         scheme = _threaded(scheme, r.system, r.state)
+    stop.check()
+    stop.at_once = False
     history = History.open_for_resume(path)
     stages = {"resume": time.perf_counter() - t0, **scheme.stages}
     return _Start(r.system, r.state, r.step, r.dt, scheme, history, Balance.restore(r.balance),
@@ -112,7 +119,7 @@ def _threaded(scheme, system, state):
                                                    system.n_points))
 
 
-def _loop(case, path, start, progress, t_start):
+def _loop(case, path, start, progress, t_start, stop):
     solver, output, system, state = case.solver, case.output, start.system, start.state
     history, balance, scheme, dt = start.history, start.balance, start.scheme, start.dt
     every = output.every
@@ -124,7 +131,7 @@ def _loop(case, path, start, progress, t_start):
     status, t_kernel = "complete", 0.0
     bar = _progress_bar(progress, n_total, step)
     out = buffer(system, chunk // every, output.contact)
-    with history, stop_requests() as stop:
+    with history:
         try:
             for c in chunks(scheme, state, n_total, chunk, every, out, step):
                 t_kernel += c.seconds

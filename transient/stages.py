@@ -39,14 +39,22 @@ class Setup:
     geometry: dict           # fixed arrays of the history (/geometry)
 
 
-def _timed(stages, name, fn, *args):
-    t0 = time.perf_counter()
-    out = fn(*args)
-    stages[name] = time.perf_counter() - t0
-    return out
+class _Stages(dict):
+    """Stage -> seconds, and the check run between stages (a stop requested meanwhile)."""
+
+    def __init__(self, check=None):
+        super().__init__()
+        self.check = check or (lambda: None)
+
+    def timed(self, name, fn, *args):
+        self.check()
+        t0 = time.perf_counter()
+        out = fn(*args)
+        self[name] = time.perf_counter() - t0
+        return out
 
 
-def prepare(case):
+def prepare(case, check=None):
     """Model, contact, preload, linearization and (optionally) reduction of a case.
 
     The setup's dense algebra runs on one OpenBLAS thread: its calls are many and mid-sized
@@ -55,13 +63,13 @@ def prepare(case):
     one thread, 22-26 s on two). PARDISO (MKL) keeps its threads, which pay for its solves."""
     from threadpoolctl import ThreadpoolController
     with ThreadpoolController().select(internal_api="openblas").limit(limits=1):
-        return _prepare(case)
+        return _prepare(case, _Stages(check))
 
 
-def _prepare(case):
-    solver, stages = case.solver, {}
-    model = _timed(stages, "model", build_model, case)
-    pairs = _timed(stages, "contact", build_contact, case, model) if case.contact else []
+def _prepare(case, stages):
+    solver = case.solver
+    model = stages.timed("model", build_model, case)
+    pairs = stages.timed("contact", build_contact, case, model) if case.contact else []
     contacts = stack(pairs, model.ndof)
     if solver.scheme == "implicit" and not solver.reduction.enabled:
         # Newmark on the full model keeps S^-1 C^T dense: refused now, not after the setup
@@ -76,11 +84,11 @@ def _prepare(case):
     if np.any(constant) or solver.reduction.enabled:
         factors = (None if contacts.factors is None
                    else (contacts.factors[0], contacts.factors[1][free]))
-        cs = _timed(stages, "factorization", ContactSolver, free_block(model.K, free),
+        cs = stages.timed("factorization", ContactSolver, free_block(model.K, free),
                     free_block(model.M, free), restrict(contacts.C, cols=free),
                     -(2 * np.pi * solver.shift_hz) ** 2, solver.linear_solver, factors)
     try:
-        preload = _timed(stages, "preload", solve_preload, model.K, model.fixed, constant,
+        preload = stages.timed("preload", solve_preload, model.K, model.fixed, constant,
                          contacts, cs, solver.newton.tolerance, solver.newton.max_iter)
     except PreloadError as exc:
         raise CaseError(case.path, "loads", str(exc)) from None
@@ -95,6 +103,7 @@ def _prepare(case):
     K_lin = (model.K + contact_stiffness(pairs, model.ndof, kw=kw)).tocsr() if pairs else model.K
     if pairs:
         stages["linearization"] = time.perf_counter() - t0
+    stages.check()
     v0 = initial_velocity(case, model)
     signals = compile_signals([load.signal for load in case.loads.values()])
     sensors = model.sensors if case.output.sensors else model.sensors[:0]
@@ -111,7 +120,7 @@ def _prepare(case):
         state = State.zeros(system.n, contacts.n_points)
         state.q[:], state.v[:] = red.q0, red.v0
     else:
-        system = _timed(stages, "time_step", full_system, K_lin, model.lumped_mass,
+        system = stages.timed("time_step", full_system, K_lin, model.lumped_mass,
                         None if solver.lumped else model.M, solver.damping, contacts,
                         preload.tangent, free, patterns, signals, sensors, names,
                         case.output.field)
@@ -127,7 +136,8 @@ def _prepare(case):
         # K - sigma M: the preload's Newton, shift-invert and the static responses
         meta["factorizations"] = {"stiffness": why(getattr(cs.solve0, "backend", "?"),
                                                    solver.linear_solver)}
-    return Setup(system, state, rows0, stages, meta, _geometry(case, system, pairs))
+    stages.check()
+    return Setup(system, state, rows0, dict(stages), meta, _geometry(case, system, pairs))
 
 
 def _contact_meta(pairs, contacts, preload):

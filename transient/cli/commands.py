@@ -6,7 +6,7 @@ from pathlib import Path
 
 from ..case.checks import check_transient, check_two_surfaces
 from ..case.loading import load
-from ..errors import CaseError, FactorizationError, interrupted
+from ..errors import CaseError, FactorizationError, stop_reason
 from .parser import build_parser
 from .plotting import cmd_export, cmd_plot
 
@@ -257,10 +257,12 @@ def main(argv=None):
               "beyond the structure's", file=sys.stderr)
         return 2
     except (KeyboardInterrupt, SystemError) as exc:
-        if not interrupted(exc):
+        reason = stop_reason(exc)
+        if not reason:
             raise
-        print("interrupted", file=sys.stderr)
-        return 130
+        # a SIGTERM taken over the setup ends it as Ctrl-C does, under its own name and code
+        print(reason, file=sys.stderr)
+        return 143 if reason.startswith("terminated") else 130
     except BrokenPipeError:
         # the reader of the output went away (`transient info F | head`): nothing to report
         sys.stderr.close()

@@ -89,23 +89,39 @@ def fastest_threads(stepper, state, n_sensors, m, steps=20):
     return min(times, key=times.get)
 
 
+class StopRequests(list):
+    """The reasons a run was asked to stop (SIGINT, SIGTERM), in order. Over the setup
+    (`at_once`) a Ctrl-C raises KeyboardInterrupt where it lands, as Python's own handler
+    does, and is also kept here: an interrupt landing in a callback that swallows it (Numba's
+    cache notification, a weakref finalizer) is then raised by `check` between stages. Over
+    the time loop the request is only kept, and the loop stops after the chunk in hand."""
+    at_once = False
+
+    def check(self):
+        """Raise KeyboardInterrupt if a stop was requested (between stages of the setup)."""
+        if self:
+            raise KeyboardInterrupt(self[0])
+
+
 @contextmanager
-def stop_requests():
-    """Turn SIGINT and SIGTERM into a request the loop reads between chunks: the run stops
-    after the chunk in hand, with its checkpoint written. A KeyboardInterrupt raised wherever
-    the interpreter happens to be can be swallowed (in a weakref or h5py callback) and the run
-    would go on. A second Ctrl-C interrupts at once. Off the main thread (a worker of a
-    campaign) signals are not ours to take."""
-    stop = []
+def stop_requests(at_once=False):
+    """Turn SIGINT and SIGTERM into a StopRequests the run reads between its stages and its
+    chunks: the loop stops after the chunk in hand, with its checkpoint written. A
+    KeyboardInterrupt raised wherever the interpreter happens to be can be swallowed (in a
+    weakref or h5py callback) and the run would go on. A second Ctrl-C interrupts at once.
+    Off the main thread (a worker of a campaign) signals are not ours to take."""
+    stop = StopRequests()
+    stop.at_once = at_once
     if threading.current_thread() is not threading.main_thread():
         yield stop
         return
 
     def request(signum, frame):
-        if stop and signum == signal.SIGINT:
-            raise KeyboardInterrupt
+        again = bool(stop)
         stop.append("interrupted" if signum == signal.SIGINT else
                     f"terminated ({signal.Signals(signum).name})")
+        if signum == signal.SIGINT and (again or stop.at_once):
+            raise KeyboardInterrupt
 
     previous = {sig: signal.signal(sig, request) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:

@@ -79,22 +79,27 @@ def writing(path, key, resume=False):
     if existed and not is_history(path):
         raise CaseError(path, key, "exists and is not a history written by transient: not "
                         "overwritten (choose another output file)")
+    handle, locked, done = None, False, False
     try:
-        handle = open(path, "ab")
-    except (OSError, ValueError) as exc:        # ValueError: a NUL in the name
-        raise CaseError(path, key, f"cannot write: {getattr(exc, 'strerror', None) or exc}") \
-            from None
-    try:
-        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        handle.close()
-        raise CaseError(path, key, "another run is writing this history") from None
-    done = False
-    try:
+        try:
+            handle = open(path, "ab")
+        except (OSError, ValueError) as exc:        # ValueError: a NUL in the name
+            raise CaseError(path, key, "cannot write: "
+                            f"{getattr(exc, 'strerror', None) or exc}") from None
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            raise CaseError(path, key, "another run is writing this history") from None
+        locked = True
         yield path
         done = True
     finally:
-        if not done and not existed and path.exists() and path.stat().st_size == 0:
+        # an interrupt may land anywhere in here: the file this made goes with it, but never
+        # one that another run holds (still empty in its setup)
+        if (locked or handle is None) and not done and not existed and path.exists() \
+                and path.stat().st_size == 0:
             path.unlink()
-        fcntl.flock(handle, fcntl.LOCK_UN)
-        handle.close()
+        if locked:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+        if handle is not None:
+            handle.close()

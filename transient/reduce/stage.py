@@ -69,6 +69,7 @@ def reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0, solve,
     mask = candidates(case, pairs, contacts)
     if mask is None:
         return ReducedModel(basis.T, basis.omega2, q0, v, contacts, pairs, preload, meta)
+    stages.check()
     t0 = perf_counter()
     Cr = contacts.observe(basis.X) @ basis.A
     sampled = _sample(case, contacts, mask, basis.omega2, Cr, q0, preload)
