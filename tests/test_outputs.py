@@ -40,6 +40,7 @@ def refused(capsys, args):
     ("nodir/x.h5", "cannot write"),
     ("adir", "is a directory"),
     ("/proc/transient_test.h5", "cannot write"),
+    ("/proc/self/status", "cannot write"),     # there, empty, not ours to remove
     ("/dev/null", "is not a history"),
     ("fifo", "is not a history"),
 ])

@@ -88,9 +88,7 @@ def _new(case, path, stop):
             "dt_critical": system.critical.dt, "scheme": case.solver.scheme,
             "reduced": system.reduced, "steps_planned": n_total, "every": output.every,
             "stages": stages, **setup.meta, **scheme.meta}
-    stop.check()
-    # from the history's first row on, a stop is a request the loop reads between chunks
-    stop.at_once = False
+    stop.to_loop()
     history = History.create(path, meta, layout(system, output), overwrite=True,
                              expected_rows=n_total // output.every + 1,
                              geometry=setup.geometry, system=system)
@@ -106,8 +104,7 @@ def _resume(case, path, stop):
                      else None)
     if r.system.reduced:
         scheme = _threaded(scheme, r.system, r.state)
-    stop.check()
-    stop.at_once = False
+    stop.to_loop()
     history = History.open_for_resume(path)
     stages = {"resume": time.perf_counter() - t0, **scheme.stages}
     return _Start(r.system, r.state, r.step, r.dt, scheme, history, Balance.restore(r.balance),

@@ -102,6 +102,12 @@ class StopRequests(list):
         if self:
             raise KeyboardInterrupt(self[0])
 
+    def to_loop(self):
+        """End of the setup: raise a stop requested in it; from here on a stop is a request
+        the loop reads between chunks (the history's first row comes next)."""
+        self.check()
+        self.at_once = False
+
 
 @contextmanager
 def stop_requests(at_once=False):

@@ -79,6 +79,7 @@ def writing(path, key, resume=False):
     if existed and not is_history(path):
         raise CaseError(path, key, "exists and is not a history written by transient: not "
                         "overwritten (choose another output file)")
+    absent = not path.exists()
     handle, locked, done = None, False, False
     try:
         try:
@@ -95,9 +96,10 @@ def writing(path, key, resume=False):
         done = True
     finally:
         # an interrupt may land anywhere in here: the file this made goes with it, but never
-        # one that another run holds (still empty in its setup)
-        if (locked or handle is None) and not done and not existed and path.exists() \
-                and path.stat().st_size == 0:
+        # one that another run holds (still empty in its setup), nor one that was there
+        # before and could not be opened (a name under /proc)
+        if (locked or (handle is None and absent)) and not done and not existed \
+                and path.exists() and path.stat().st_size == 0:
             path.unlink()
         if locked:
             fcntl.flock(handle, fcntl.LOCK_UN)
