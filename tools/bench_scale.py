@@ -13,7 +13,6 @@ the dofs grow by about f.
 """
 import argparse
 import json
-import math
 import sys
 import tempfile
 from pathlib import Path

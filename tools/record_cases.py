@@ -6,9 +6,10 @@ imported is the one on the child's path: set PYTHONPATH to record another checko
 every series of its history (sensors, energy terms, contact gaps and pressures if stored) in
 one .npz per case. `compare` reads two such directories and prints, per case and series, the
 largest difference relative to the series' peak, and whether the two are bit for bit equal.
-The long case runs for a short time only (--long-t-end).
+The long case runs for a short time only (--long-t-end). `--set` passes overrides to every
+case: a load scaled by 1 + 2e-16 shows how far round-off alone moves a case's history.
 
-    python tools/record_cases.py record DIR [--long-t-end 0.02] [--cases a,b]
+    python tools/record_cases.py record DIR [--long-t-end 0.02] [--cases a,b] [--set K=V ...]
     python tools/record_cases.py compare DIR_A DIR_B [--json]
 """
 import argparse
@@ -26,7 +27,7 @@ ROOT = Path(__file__).resolve().parent.parent
 LONG = "pad_disc_long"
 
 
-def record(out, long_t_end, names):
+def record(out, long_t_end, names, overrides=()):
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     cases = sorted((ROOT / "cases").glob("*.toml"))
@@ -40,6 +41,7 @@ def record(out, long_t_end, names):
         if names and case.stem not in names:
             continue
         sets = ["--set", f"solver.t_end={long_t_end!r}"] if case.stem == LONG else []
+        sets += [a for o in overrides for a in ("--set", o)]
         with tempfile.TemporaryDirectory() as tmp:
             h5 = Path(tmp) / "run.h5"
             done = subprocess.run([sys.executable, "-m", "transient", "run", str(case), "-o",
@@ -90,13 +92,14 @@ def main(argv=None):
     p.add_argument("out")
     p.add_argument("--long-t-end", type=float, default=0.02)
     p.add_argument("--cases", default="")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     p = sub.add_parser("compare")
     p.add_argument("a")
     p.add_argument("b")
     p.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     if args.command == "record":
-        record(args.out, args.long_t_end, [n for n in args.cases.split(",") if n])
+        record(args.out, args.long_t_end, [n for n in args.cases.split(",") if n], args.set)
         return
     result = compare(args.a, args.b)
     if args.json:
