@@ -112,29 +112,47 @@ def test_factored_rows_give_the_same_row_space_and_solves():
 
 
 def test_regularized_pairs_carry_their_rows_factored():
-    """The factors a regularized pair carries are its observation rows (pad_disc, coarse)."""
+    """A regularized pair holds its rows as factors only (its rule's C1, C2 are None): the
+    rows, their subsets, C T, the contact force and the interface stiffness they give are those
+    of the explicit projected rows C1 P1 T1 - C2 P2 T2 (pad_disc, coarse)."""
     from pathlib import Path
 
     from transient.case.loading import load
     from transient.contact.contactset import stack
-    from transient.contact.pair import build_contact
+    from transient.contact.pair import build_contact, contact_stiffness
+    from transient.contact.regularize import regularized_rule
     from transient.model import build_model
     case = load(Path(__file__).resolve().parent.parent / "cases" / "pad_disc.toml",
                 ["parts.disc.mesh.divisions=[4,48,1]", "parts.pad.mesh.divisions=[3,8,1,1]"])
     model = build_model(case)
-    contacts = stack(build_contact(case, model), model.ndof)
+    pairs = build_contact(case, model)
+    (pair,) = pairs
+    assert pair.rule.C1 is None and pair.rule.C2 is None
+    # the explicit rows, from the fine rule and the projectors P_n = Q_n Y_n
+    (Q1, Y1), (Q2, Y2) = pair.projections
+    explicit = sp.csr_matrix(pair.interface.observation(
+        regularized_rule(pair.interface.fine, Q1 @ Y1, Q2 @ Y2), model.ndof))
+    contacts = stack(pairs, model.ndof)
+    assert contacts.rows is None
     L, B = contacts.factors
-    x = np.random.default_rng(0).standard_normal(model.ndof)
-    assert np.linalg.norm(contacts.C @ x - L @ (B.T @ x)) <= 1e-12 * np.linalg.norm(contacts.C @ x)
-    assert L.shape[1] < contacts.C.shape[0]
-    # released, the set rebuilds its rows from the factors, and its subsets theirs
-    released = contacts.released()
-    assert released.rows is None and released.factors is contacts.factors
-    scale = np.abs(contacts.C.toarray()).max()
-    assert np.abs((released.C - contacts.C).toarray()).max() <= 1e-13 * scale
+    assert L.shape[1] < contacts.n_points
+    scale = np.abs(explicit.toarray()).max()
+    assert np.abs((contacts.C - explicit).toarray()).max() <= 1e-13 * scale
     keep = np.arange(0, contacts.n_points, 3)
-    a = contacts.subset(keep, contacts.weights[keep])
-    b = released.subset(keep, contacts.weights[keep])
-    assert b.rows is not None and np.abs((a.C - b.C).toarray()).max() <= 1e-13 * scale
-    T = np.random.default_rng(1).standard_normal((model.ndof, 4))
-    assert np.allclose(released.observe(T), contacts.C @ T, rtol=1e-12, atol=1e-12 * scale)
+    sub = contacts.subset(keep, contacts.weights[keep])
+    assert sub.rows is not None and np.abs((sub.C - explicit[keep]).toarray()).max() <= \
+        1e-13 * scale
+    rng = np.random.default_rng(1)
+    T = rng.standard_normal((model.ndof, 4))
+    assert np.allclose(contacts.observe(T), explicit @ T, rtol=1e-12, atol=1e-12 * scale)
+    u = 1e-7 * rng.standard_normal(model.ndof)
+    f, g, p, kt = contacts.force(u)
+    g_ref = explicit @ u + contacts.gap0
+    p_ref = contacts.laws(g_ref)[0]
+    assert np.allclose(g, g_ref, rtol=1e-12, atol=1e-12 * np.abs(g_ref).max())
+    f_ref = explicit.T @ (contacts.weights * p_ref)
+    assert np.allclose(f, f_ref, rtol=1e-10, atol=1e-11 * np.abs(f_ref).max())
+    kw = rng.uniform(0.5, 2.0, contacts.n_points) * contacts.weights * pair.k
+    K = contact_stiffness(pairs, model.ndof, kw=[kw]).toarray()
+    K_ref = (explicit.T @ sp.diags(kw) @ explicit).toarray()
+    assert np.abs(K - K_ref).max() <= 1e-11 * np.abs(K_ref).max()

@@ -85,19 +85,16 @@ def _prepare(case, stages):
         factors = (None if contacts.factors is None
                    else (contacts.factors[0], contacts.factors[1][free]))
         cs = stages.timed("factorization", ContactSolver, free_block(model.K, free),
-                    free_block(model.M, free), restrict(contacts.C, cols=free),
-                    -(2 * np.pi * solver.shift_hz) ** 2, solver.linear_solver, factors)
+                          free_block(model.M, free),
+                          None if contacts.rows is None else restrict(contacts.C, cols=free),
+                          -(2 * np.pi * solver.shift_hz) ** 2, solver.linear_solver, factors)
     try:
         preload = stages.timed("preload", solve_preload, model.K, model.fixed, constant,
-                         contacts, cs, solver.newton.tolerance, solver.newton.max_iter)
+                               contacts, cs, solver.newton.tolerance, solver.newton.max_iter)
     except PreloadError as exc:
         raise CaseError(case.path, "loads", str(exc)) from None
     if preload.iterations == 0:
         del stages["preload"]
-    if cs is not None and cs.C is None and solver.reduction.enabled:
-        # the factorization holds the rows' space (Rm V^T): past here the explicit rows are not
-        # read (the basis takes that space, the sampling and the system C T the factors)
-        contacts = contacts.released()
     t0 = time.perf_counter()
     kw = [contacts.weights[s] * preload.tangent[s] for s in contacts.slices.values()]
     K_lin = (model.K + contact_stiffness(pairs, model.ndof, kw=kw)).tocsr() if pairs else model.K

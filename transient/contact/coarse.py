@@ -150,6 +150,8 @@ def select(candidates, fine, B1, B2, m=0, tol=1e-8, weighting="nearest"):
 
 
 def subset_rule(rule, idx, weights):
+    """The rule on its points idx with new weights (rows None stay None: held as factors)."""
     return replace(rule, points=rule.points[idx], weights=weights, normals=rule.normals[idx],
                    gap0=rule.gap0[idx], face1=rule.face1[idx], face2=rule.face2[idx],
-                   C1=rule.C1[idx], C2=rule.C2[idx])
+                   C1=None if rule.C1 is None else rule.C1[idx],
+                   C2=None if rule.C2 is None else rule.C2[idx])

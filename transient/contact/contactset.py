@@ -1,5 +1,5 @@
 """All contact points of a run stacked: observation rows, initial gaps, weights and laws."""
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -8,12 +8,13 @@ import scipy.sparse as sp
 
 from ..kernels.laws import evaluate
 from .laws import law_params
+from .regularize import factored_rows
 
 
 @dataclass(frozen=True)
 class ContactSet:
     rows: sp.csr_matrix      # (P, ndof) gap observation of every point, pairs one after another;
-    #                          None once released (`released`): C then rebuilds them from factors
+    #                          None when the factors hold them: C then builds them on demand
     gap0: np.ndarray         # (P,) initial gaps [m]
     weights: np.ndarray      # (P,) w J [m^2]
     code: np.ndarray         # (P,) law code of each point
@@ -24,16 +25,9 @@ class ContactSet:
 
     @cached_property
     def C(self):
-        """(P, ndof) CSR: the rows, or L B^T from the factors when they were released."""
+        """(P, ndof) CSR: the rows, or L B^T from the factors (formed on the first call: only
+        the full system and the rows' fallbacks ask for them)."""
         return self.rows if self.rows is not None else factored_rows(*self.factors)
-
-    def released(self):
-        """The same set without its explicit rows when the factors hold them: a regularized
-        fine rule's rows are dense (points x interface dofs, about 1 GB at 141k dofs), and past
-        the preload the stages read them only through the factors."""
-        if self.factors is None or self.rows is None:
-            return self
-        return replace(self, rows=None)
 
     @property
     def n_points(self):
@@ -63,22 +57,17 @@ class ContactSet:
         return L @ np.asarray(B.T @ T)
 
     def force(self, u):
-        """Contact force C^T (w p) [N] at displacement u, with gaps, pressures and tangents."""
-        g = self.C @ u + self.gap0
+        """Contact force C^T (w p) [N] at displacement u, with gaps, pressures and tangents
+        (through the factors when held: L (B^T u) and B (L^T w p))."""
+        if self.factors is None:
+            g = self.C @ u + self.gap0
+        else:
+            L, B = self.factors
+            g = L @ (B.T @ u) + self.gap0
         p, kt, _ = self.laws(g)
-        return self.C.T @ (self.weights * p), g, p, kt
-
-
-def factored_rows(L, B):
-    """L B^T (P, ndof) as CSR, on the dofs B touches only (L (P, r) dense, B (ndof, r) CSR)."""
-    B = sp.csr_matrix(B)
-    cols = np.flatnonzero(np.diff(B.indptr))
-    dense = L @ B[cols].toarray().T
-    P = dense.shape[0]
-    rows = sp.csr_matrix((dense.ravel(), np.tile(cols, P), np.arange(P + 1) * len(cols)),
-                         shape=(P, B.shape[0]))
-    rows.eliminate_zeros()
-    return rows
+        wp = self.weights * p
+        f = self.C.T @ wp if self.factors is None else B @ (L.T @ wp)
+        return f, g, p, kt
 
 
 def stack(pairs, ndof):
@@ -88,21 +77,25 @@ def stack(pairs, ndof):
                           np.zeros(0, np.int64), np.zeros((0, 4)), {})
     rows, gap0, w, code, params, slices = [], [], [], [], [], {}
     start = 0
+    factored = all(pair.factors is not None for pair in pairs)
     for pair in pairs:
         n = pair.rule.n_points
         c, prm = law_params(pair.spec.law, pair.k)
-        rows.append(sp.csr_matrix(pair.observation(ndof)))
+        if not factored:
+            rows.append(sp.csr_matrix(pair.observation(ndof)))
         gap0.append(pair.rule.gap0)
         w.append(pair.rule.weights)
         code.append(np.full(n, c, np.int64))
         params.append(np.tile(prm, (n, 1)))
         slices[pair.name] = slice(start, start + n)
         start += n
-    C = sp.vstack(rows).tocsr()
-    C.eliminate_zeros()
-    factors = None
-    if all(pair.factors is not None for pair in pairs):
+    C, factors = None, None
+    if factored:
+        # the rows are held as factors only: dense points x interface dofs otherwise
         factors = (sla.block_diag(*[pair.factors[0] for pair in pairs]),
                    sp.hstack([pair.factors[1] for pair in pairs]).tocsr())
+    else:
+        C = sp.vstack(rows).tocsr()
+        C.eliminate_zeros()
     return ContactSet(C, np.concatenate(gap0), np.concatenate(w), np.concatenate(code),
                       np.vstack(params), slices, factors)

@@ -7,9 +7,10 @@ A stage runs only when the pair needs it: the fine rule without regularization d
 eigendecomposition; `need_compatibility` forces it (for `transient compat`).
 """
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 
 from .coarse import select, side_bases
@@ -17,8 +18,8 @@ from .compatibility import auto_eps, compatibility
 from ..errors import CaseError
 from .interface import InterfaceError, build_interface, build_wall_interface
 from ..model.model import resolve_set
-from .regularize import (dual_factors, factor_projectors, primal_basis, regularized_rule,
-                         row_factors)
+from .regularize import (dual_factors, factor_projectors, factored_rows, primal_basis,
+                         regularized_rule, row_factors)
 from .rules import centre_rule
 from ..mesh.selections import set_faces
 
@@ -38,14 +39,19 @@ class ContactPair:
     coarse: object            # CoarseRule of the greedy rule, else None
     timings: dict             # stage -> seconds, in the order run
     candidates: int = 0       # sampled rule: the fine points it was sampled from
-    factors: tuple = None     # (L, B): the rule's observation is L B^T (regularize.row_factors)
+    factors: tuple = None     # (L, B): the rule's observation is L B^T (regularize.row_factors);
+    #                           the rule's C1, C2 are then None
+    projections: tuple = None  # with factors: (Q1, Y1), (Q2, Y2) of the sides' projectors
 
     @property
     def k(self):
         return self.spec.k
 
     def observation(self, ndof):
-        """(P, ndof) gap observation of the pair's rule in model dofs."""
+        """(P, ndof) gap observation of the pair's rule in model dofs (formed from the factors
+        when the pair holds them: only for what needs the explicit rows)."""
+        if self.factors is not None:
+            return factored_rows(*self.factors)
         return self.interface.observation(self.rule, ndof)
 
 
@@ -76,6 +82,7 @@ def build_pair(case, model, name, need_compatibility=False):
     timings["interface"] = time.perf_counter() - t0
 
     comp, eps, eps_source, primal, coarse, factors = None, None, "", None, None, None
+    projections = None
     greedy = spec.rule == "greedy"
     if spec.regularized or need_compatibility:
         t0 = time.perf_counter()
@@ -95,11 +102,16 @@ def build_pair(case, model, name, need_compatibility=False):
         t0 = time.perf_counter()
         if spec.formulation == "dual":
             F1, F2 = dual_factors(comp, eps, interface.fine, spec.project, spec.norm)
-            P1, P2 = factor_projectors(comp, F1, F2)
             if not greedy:
                 factors = row_factors(interface, rule, F1, F2, model.ndof)
-            rule = regularized_rule(rule, P1, P2)
-            fine = regularized_rule(interface.fine, P1, P2) if greedy else None
+            if factors is None:
+                P1, P2 = factor_projectors(comp, F1, F2)
+                rule = regularized_rule(rule, P1, P2)
+                fine = regularized_rule(interface.fine, P1, P2) if greedy else None
+            else:
+                # the projected rows C_n P_n (points x interface dofs, dense) are never
+                # formed: the factors hold them (the largest arrays of a setup at scale)
+                rule, projections = replace(rule, C1=None, C2=None), (F1, F2)
         else:
             primal = primal_basis(interface, comp, eps, model.ndof)
             fine = interface.fine
@@ -118,7 +130,7 @@ def build_pair(case, model, name, need_compatibility=False):
         rule = coarse.rule
         timings["coarse_rule"] = time.perf_counter() - t0
     return ContactPair(name, spec, interface, comp, eps, eps_source, rule, primal, coarse,
-                       timings, factors=factors)
+                       timings, factors=factors, projections=projections)
 
 
 def build_contact(case, model, need_compatibility=False):
@@ -136,21 +148,29 @@ def contact_stiffness(pairs, ndof, active=None, kw=None):
     """
     K = sp.csr_matrix((ndof, ndof))
     for i, pair in enumerate(pairs):
-        rule = pair.rule
-        kw_i = pair.k * rule.weights if kw is None else kw[i]
+        kw_i = pair.k * pair.rule.weights if kw is None else kw[i]
         if active is not None:
             kw_i = kw_i * active[i]
-        B = sp.hstack([sp.csr_matrix(rule.C1), -sp.csr_matrix(rule.C2)]).tocsr()
-        if B.nnz > DENSE_FILL * B.shape[0] * B.shape[1]:
-            # regularized rows are dense: BLAS, not a sparse product of dense-filled matrices
-            Bd = B.toarray()
-            A = sp.csr_matrix((Bd.T * kw_i) @ Bd)
-        else:
-            A = (B.T @ sp.diags(kw_i) @ B).tocsr()
         D = sp.vstack([pair.interface.side1.dof_map(ndof),
                        pair.interface.side2.dof_map(ndof)]).tocsr()
-        K = K + (D.T @ A @ D).tocsr()
+        K = K + (D.T @ _normal_stiffness(pair, kw_i) @ D).tocsr()
     return K
+
+
+def _normal_stiffness(pair, kw):
+    """[C1, -C2]^T diag(kw) [C1, -C2] on the interface normal dofs (N1 + N2 square)."""
+    if pair.factors is not None:
+        # [C1 P1, -C2 P2] = L Y with Y = diag(Y1, Y2) (r x N1 + N2): Y^T (L^T D L) Y, r x r
+        # algebra instead of the dense points x N rows (pad_disc: 7734 points, rank 599)
+        L, (F1, F2) = pair.factors[0], pair.projections
+        Y = sla.block_diag(F1[1], F2[1])
+        return sp.csr_matrix(Y.T @ ((L.T * kw) @ L) @ Y)
+    B = sp.hstack([sp.csr_matrix(pair.rule.C1), -sp.csr_matrix(pair.rule.C2)]).tocsr()
+    if B.nnz > DENSE_FILL * B.shape[0] * B.shape[1]:
+        # regularized rows are dense: BLAS, not a sparse product of dense-filled matrices
+        Bd = B.toarray()
+        return sp.csr_matrix((Bd.T * kw) @ Bd)
+    return (B.T @ sp.diags(kw) @ B).tocsr()
 
 
 def contact_preload(pairs, ndof, active=None):

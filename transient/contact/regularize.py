@@ -78,6 +78,18 @@ def row_factors(interface, rule, F1, F2, ndof):
     return L, B
 
 
+def factored_rows(L, B):
+    """L B^T (P, ndof) as CSR, on the dofs B touches only (L (P, r) dense, B (ndof, r) CSR)."""
+    B = sp.csr_matrix(B)
+    cols = np.flatnonzero(np.diff(B.indptr))
+    dense = L @ B[cols].toarray().T
+    P = dense.shape[0]
+    rows = sp.csr_matrix((dense.ravel(), np.tile(cols, P), np.arange(P + 1) * len(cols)),
+                         shape=(P, B.shape[0]))
+    rows.eliminate_zeros()
+    return rows
+
+
 def regularized_rule(rule, P1, P2):
     """The rule with its observation projected: C1 P1, C2 P2 (dense rows as CSR)."""
     return replace(rule, C1=sp.csr_matrix(rule.C1 @ P1), C2=sp.csr_matrix(rule.C2 @ P2))

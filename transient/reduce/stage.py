@@ -111,6 +111,7 @@ def _sampled_pairs(pairs, rich, keep, contacts):
         if len(local) == s.stop - s.start:
             out.append(p)
             continue
+        factors = None if p.factors is None else (p.factors[0][local], p.factors[1])
         out.append(replace(p, rule=subset_rule(p.rule, local, contacts.weights[new]),
-                           candidates=s.stop - s.start))
+                           candidates=s.stop - s.start, factors=factors))
     return out

@@ -14,6 +14,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from ..contact.regularize import factored_rows
 from .linsolve import factorize
 
 MAX_BYTES = 1.5e9     # Z = A0^-1 C^T held dense up to this; G (rank^2) too, beyond it the
@@ -50,6 +51,7 @@ class TangentSolve:
 
 class ContactSolver:
     """Factorization of A0 = K - sigma M on the free dofs, updated by contact tangents.
+    C: the contact rows on the free dofs (P, n), or None when factors hold them.
 
     The update C^T D C has rank at most min(m, rank C). With more points than the k dofs the
     rows touch (a fine rule: 7734 points on the pad_disc interface), C is written Rm B^T with
@@ -64,14 +66,20 @@ class ContactSolver:
 
     def __init__(self, K, M, C, sigma, backend="auto", factors=None):
         self.A0 = (K - sigma * M).tocsr() if sigma else K.tocsr()
-        self.C = C.tocsr()
         self.sigma = sigma
         self.backend = backend
-        n, m = K.shape[0], C.shape[0]
+        if C is None:
+            # the rows as factors only: their dofs are those B touches
+            L, B = factors[0], sp.csr_matrix(factors[1])
+            m, self.cols, self.C = L.shape[0], np.flatnonzero(np.diff(B.indptr)), None
+        else:
+            self.C = C.tocsr()
+            m, self.cols = C.shape[0], np.unique(self.C.indices)
+        n, k = K.shape[0], len(self.cols)
         self.m = m
-        self.cols = np.unique(self.C.indices)
-        k = len(self.cols)
         self.by_columns = k < m and 8.0 * k * k <= MAX_BYTES
+        if C is None and not self.by_columns:
+            self.C = factored_rows(*factors)
         self.solve0 = factorize(self.A0, backend, definite=sigma <= 0)
         if m and self.by_columns:
             # the gate is on what Z holds, rho columns: regularized rows span far fewer
@@ -84,6 +92,8 @@ class ContactSolver:
         # block): memory n x BLOCK instead of n x rank (n rank grows as n^5/3 with the mesh)
         self.lowrank = m > 0 and 8.0 * rank * rank <= MAX_BYTES
         if not self.lowrank:
+            if self.C is None:
+                self.C = factored_rows(*factors)      # A0 + C^T D C is formed
             return
         self.CT = None if self.by_columns else self.C.T.tocsc()
         self.Z = np.empty((n, rank), order="F") if 8.0 * n * rank <= MAX_BYTES else None
