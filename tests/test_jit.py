@@ -51,3 +51,27 @@ def test_kernels_compile_under_the_lock_once_per_signature(tmp_path, monkeypatch
     assert len(taken) == 1
     assert twice(1.5) == 3.0
     assert len(taken) == 2
+
+
+def test_spinning_sets_mkls_blocktime_for_the_block_only():
+    """Under MKL's OpenMP runtime the kernel's threads spin between the steps' parallel
+    regions inside the block, and the runtime's own setting comes back after it."""
+    import pytest
+    from transient.solve.linsolve import available, factorize
+    if "pardiso" not in available():
+        pytest.skip("no PARDISO: MKL's OpenMP runtime is not loaded, spinning does nothing")
+    import numpy as np
+    import scipy.sparse as sp
+    factorize(sp.eye(4).tocsr(), "pardiso")(np.ones(4))      # loads libiomp5
+    lib = jit._iomp()
+    assert lib is not None
+    lib.kmp_set_blocktime(7)
+    with jit.spinning():
+        assert lib.kmp_get_blocktime() == jit.SPIN_MS
+    assert lib.kmp_get_blocktime() == 7
+    try:
+        with jit.spinning():
+            raise KeyboardInterrupt
+    except KeyboardInterrupt:
+        pass
+    assert lib.kmp_get_blocktime() == 7

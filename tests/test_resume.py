@@ -146,3 +146,35 @@ def test_resume_with_a_case_that_changes_results_is_refused_by_name(tmp_path, ca
     # a longer t_end is what resume is for
     assert main(["run", case, "-o", str(path), "--resume", "--quiet", "--set",
                  "solver.t_end=1.2e-4"]) == 0
+
+
+def test_thread_choice_follows_the_last_chunks_and_retries_the_other():
+    """One or all threads, whichever ran its last chunk faster per step; the other one is
+    retried every PROBE-th chunk; a run without row blocks keeps the stepper's setting."""
+    import numba
+    import numpy as np
+
+    from transient.dynamics.chunks import PROBE, ThreadChoice
+    from transient.dynamics.schemes import Stepper
+    many = numba.get_num_threads()
+    full = ThreadChoice(Stepper("explicit", 1e-6, None))
+    assert full.counts == (0,) and full.next() == 0
+    if many == 1:
+        return
+    stepper = Stepper("explicit", 1e-6, None, blocks=np.array([0, 200, 400], np.int64))
+    choice = ThreadChoice(stepper)
+    first = choice.next()
+    assert first == many                          # each tried once, all threads first
+    choice.record(first, 3.0, 1000)               # slow: 3 ms per step
+    assert choice.next() == 1
+    choice.record(1, 1.0, 1000)
+    seen = []
+    for _ in range(2 * PROBE):
+        seen.append(choice.next())
+        choice.record(seen[-1], 1.0 if seen[-1] == 1 else 0.5, 1000)
+    # the probe of chunk PROBE finds all threads faster now: the run follows them
+    assert seen[PROBE - 3] == many and all(c == many for c in seen[PROBE - 2:2 * PROBE - 3])
+    assert seen[2 * PROBE - 3] == 1               # the next probe
+    summary = choice.summary()
+    assert set(summary) == {str(many), "1"} and sum(s for s, _ in summary.values()) == \
+        1000 * (2 + 2 * PROBE)

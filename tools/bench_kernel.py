@@ -13,7 +13,9 @@ step needs with NumPy/BLAS (C @ q, np.exp on m values, C.T @ p, timed in a Pytho
 about 1 us of call overhead per product is part of the roofline; BLAS threads as configured);
 explicit_reduced on one row block and one Numba thread, and on one block per Numba thread
 (dynamics.chunks.threaded_blocks); exponential_reduced with 0 and 1 corrections (1 and 2 contact passes per step),
-on whichever blocks run faster. Issue target: explicit at or below the roofline at n = 300,
+on whichever blocks run faster. The threads run as in `transient run`: the OpenMP runtime is
+the one its setup leaves serving Numba (MKL's libiomp5 when PARDISO factorized first), and two
+threads spin between the steps' contact passes (`jit.spinning`). Issue target: explicit at or below the roofline at n = 300,
 m = 1000, within 1.2x at every size.
 
 accuracy: 40 modes 100 Hz - 5 kHz plus 4 at 20 - 80 kHz, m = 200, gap swing 0.5 / lambda, over
@@ -41,7 +43,7 @@ import json
 import os
 import time
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numba
 import numpy as np
@@ -136,11 +138,12 @@ def reduced(s):
                          damp=s.damp, C=s.C)
 
 
-def stepper(s, scheme, dt, blocks, corrections=0, propagate=False):
+def stepper(s, scheme, dt, blocks, corrections=0, propagate=False, threads=0):
     """run(n_steps, every) integrating from the initial state -> (status, steps done, sensor
     outputs, kernel seconds); scheme: explicit, newmark or exponential (with its corrections
     and corrector, as solver.corrections and solver.corrector = propagated). The steppers are
-    those of `transient run` (dynamics.schemes)."""
+    those of `transient run` (dynamics.schemes), called as it calls them on `threads` Numba
+    threads (with more than one, spinning between the steps' parallel regions)."""
     system = reduced(s)
     if scheme == "explicit":
         step = schemes.explicit(system, dt, blocks)
@@ -149,6 +152,7 @@ def stepper(s, scheme, dt, blocks, corrections=0, propagate=False):
     else:
         step = schemes.exponential(system, dt, corrections,
                                    "propagated" if propagate else "evaluated", None, blocks)
+    step = replace(step, threads=threads)
 
     def run(n_steps, every):
         # the smallest gaps (explicit) and the previous forces (exponential) start afresh
@@ -184,10 +188,9 @@ def numba_threads(k):
         numba.set_num_threads(before)
 
 
-def kernel_step(run, threads):
+def kernel_step(run):
     def timer(steps):
-        with numba_threads(threads):
-            status, done, _, seconds = run(steps, steps)
+        status, done, _, seconds = run(steps, steps)
         if status != OK or done != steps:
             raise RuntimeError(f"kernel stopped with status {status} after {done} steps")
         return seconds / steps
@@ -204,10 +207,11 @@ def roofline_row(n, m, repeat, target_s, seed):
         blocks["threads"] = (threaded, numba.get_num_threads())
     timers = {"roofline": lambda steps: blas_step(s, steps)}
     for label, (b, threads) in blocks.items():
-        timers[f"explicit_{label}"] = kernel_step(stepper(s, "explicit", dt, b), threads)
+        timers[f"explicit_{label}"] = kernel_step(stepper(s, "explicit", dt, b,
+                                                          threads=threads))
         for c in (0, 1):
             timers[f"exponential{c}_{label}"] = kernel_step(
-                stepper(s, "exponential", dt, b, c), threads)
+                stepper(s, "exponential", dt, b, c, threads=threads))
     for timer in timers.values():
         timer(20)                                     # compilation, caches
     # steps per measurement: about target_s each (threads stalled by a busy machine run slow)
@@ -408,7 +412,17 @@ def plot_accuracy(result, path):
     fig.savefig(path, dpi=120, bbox_inches="tight")
 
 
+def production_runtime():
+    """Load the OpenMP runtime `transient run` ends up with before Numba's pool starts: its
+    factorization stage runs PARDISO (MKL's libiomp5) before the kernel's first parallel
+    region. Without PARDISO installed the run, like this, has libgomp."""
+    from transient.solve.linsolve import available, factorize
+    if "pardiso" in available():
+        factorize(sp.eye(4).tocsr(), "pardiso")(np.ones(4))
+
+
 def main():
+    production_runtime()
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="mode", required=True)
     roof = sub.add_parser("roofline")

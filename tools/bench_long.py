@@ -56,7 +56,8 @@ def main(argv=None):
            "t_end": info["t_end"], "reduced_dofs": meta.get("reduced_dofs"),
            "contact_points": meta.get("n_points"), "timings": info["timings"],
            "stages": meta["stages"], "energy_drift": info["energy_drift"],
-           "kernel_us_per_step": 1e6 * info["timings"]["kernel"] / meta["steps_planned"]}
+           "kernel_us_per_step": 1e6 * info["timings"]["kernel"] / meta["steps_planned"],
+           "kernel_threads": info["timings"].get("kernel_threads")}
     if args.json:
         print(json.dumps(row))
         return
@@ -65,7 +66,8 @@ def main(argv=None):
           f"{row['contact_points']} contact points")
     print(f"wall {wall:.1f} s, peak RSS {peak / 1e9:.2f} GB; setup "
           f"{info['timings']['setup']:.1f} s, kernel {info['timings']['kernel']:.1f} s "
-          f"({row['kernel_us_per_step']:.1f} us/step), energy drift {info['energy_drift']:.2e}")
+          f"({row['kernel_us_per_step']:.1f} us/step; threads: [steps, median us/step] "
+          f"{row['kernel_threads']}), energy drift {info['energy_drift']:.2e}")
     print("stages: " + ", ".join(f"{k} {v:.2f} s" for k, v in row["stages"].items()))
 
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from . import __version__
 from .case.checks import check_transient
-from .dynamics.chunks import buffer, chunks, fastest_threads, stop_requests, threaded_blocks
+from .dynamics.chunks import ThreadChoice, buffer, chunks, stop_requests, threaded_blocks
 from .dynamics.energy import Balance
 from .errors import RunAborted
 from .io.history import CASE_TEXT, History
@@ -80,8 +80,7 @@ def _new(case, path, stop):
     n_total = int(round(case.solver.t_end / dt))
     scheme = stepper(case, system, dt)
     if system.reduced:
-        scheme = _threaded(replace(scheme, blocks=threaded_blocks(system.n_points)), system,
-                           setup.state)
+        scheme = replace(scheme, blocks=threaded_blocks(system.n_points))
     stages = {**setup.stages, **scheme.stages}
     meta = {CASE_TEXT: case.text, "case_path": str(Path(case.path).resolve()),
             "overrides": list(case.overrides), "version": __version__, "dt": dt,
@@ -102,18 +101,11 @@ def _resume(case, path, stop):
     r = resumed(path, case)
     scheme = stepper(case, r.system, r.dt, np.asarray(r.blocks, np.int64) if r.system.reduced
                      else None)
-    if r.system.reduced:
-        scheme = _threaded(scheme, r.system, r.state)
     stop.to_loop()
     history = History.open_for_resume(path)
     stages = {"resume": time.perf_counter() - t0, **scheme.stages}
     return _Start(r.system, r.state, r.step, r.dt, scheme, history, Balance.restore(r.balance),
                   stages, r.meta)
-
-
-def _threaded(scheme, system, state):
-    return replace(scheme, threads=fastest_threads(scheme, state, system.sensors.shape[0],
-                                                   system.n_points))
 
 
 def _loop(case, path, start, progress, t_start, stop):
@@ -128,9 +120,10 @@ def _loop(case, path, start, progress, t_start, stop):
     status, t_kernel = "complete", 0.0
     bar = _progress_bar(progress, n_total, step)
     out = buffer(system, chunk // every, output.contact)
+    threads = ThreadChoice(scheme)
     with history:
         try:
-            for c in chunks(scheme, state, n_total, chunk, every, out, step):
+            for c in chunks(scheme, state, n_total, chunk, every, out, step, threads):
                 t_kernel += c.seconds
                 if len(c.rows.time):
                     history.append(series(system, output, c.rows))
@@ -153,7 +146,8 @@ def _loop(case, path, start, progress, t_start, stop):
             status = "aborted: interrupted"
         finally:
             bar.close()
-        timings = _timings(start.stages, t_kernel, t_start)
+        timings = {**_timings(start.stages, t_kernel, t_start),
+                   "kernel_threads": threads.summary()}
         history.finish(status, timings)
     # what the history holds: its last row, and the steps its checkpoint reached
     return RunResult(str(path), status, step, t_stored, dt, system.critical.dt, start.stages,

@@ -33,22 +33,27 @@ def buffer(system, rows, store_contact):
     return Rows.empty(rows, system.sensors.shape[0], system.n_points if store_contact else 0)
 
 
-def chunks(stepper, state, n_total, chunk, every, out, step=0):
+def chunks(stepper, state, n_total, chunk, every, out, step=0, threads=None):
     """Advance state to n_total steps, chunk steps per kernel call, one row stored every
     `every` steps into out (a buffer of chunk // every rows); stops after a chunk whose status
-    is not OK. A chunk that went non-finite keeps only the rows before the first with
+    is not OK. threads: a ThreadChoice that sets each call's Numba threads (else the
+    stepper's). A chunk that went non-finite keeps only the rows before the first with
     anything not finite, and the state's time is that of its last row kept."""
     while step < n_total:
         n = min(chunk, n_total - step)
+        count = threads.next() if threads is not None else stepper.threads
+        call = replace(stepper, threads=count) if count != stepper.threads else stepper
         t0 = time.perf_counter()
         try:
-            status, done = stepper(state, n, every, out)
+            status, done = call(state, n, every, out)
         except SystemError as exc:
             # Ctrl-C landing in the kernel's dispatcher: the loop's interrupt all the same
             if interrupted(exc):
                 raise KeyboardInterrupt from None
             raise
         seconds = time.perf_counter() - t0
+        if threads is not None:
+            threads.record(count, seconds, done)
         # a kernel stopping on a non-finite state has not stored that step
         rows = (done - (status == NOT_FINITE)) // every
         finite = all(np.all(np.isfinite(x[:rows])) for x in out.arrays) and \
@@ -70,23 +75,48 @@ def threaded_blocks(m):
     return np.linspace(0, m, nb + 1).astype(np.int64)
 
 
-def fastest_threads(stepper, state, n_sensors, m, steps=20):
-    """The Numba thread count that runs the stepper's blocks fastest here and now: one, or
-    all (threads stall when the machine's cores are busy). Both run the same blocks, so the
-    choice changes the speed only, never the numbers."""
-    if len(stepper.blocks) <= 2:
-        return 1
-    times = {}
-    for threads in (1, numba.get_num_threads()):
-        trial = replace(stepper, threads=threads)
-        best = np.inf
-        for _ in range(2):       # the first call may compile
-            out = Rows.empty(steps, n_sensors, m)
-            t0 = time.perf_counter()
-            trial(state.copy(), steps, 1, out)
-            best = min(best, time.perf_counter() - t0)
-        times[threads] = best
-    return min(times, key=times.get)
+PROBE = 8     # chunks between two retries of the thread count not in use
+
+
+class ThreadChoice:
+    """The Numba thread count of each chunk of a reduced run: one, or all (one row block
+    each), whichever ran its last chunk faster per step, the other retried every PROBE-th
+    chunk. On a shared machine the winner changes from one second to the next: a core taken
+    away stalls every step's parallel contact pass (pad_disc_long's stepper on two threads ran
+    28-32 or 51-71 us per step in alternate 200-step trials, on one 33-49). Both counts run
+    the same blocks, so the choice changes the speed only, never the numbers. The chunks'
+    timings choose: no trial steps are spent before the run."""
+
+    def __init__(self, stepper):
+        many = numba.get_num_threads()
+        reduced = stepper.blocks is not None and len(stepper.blocks) > 2
+        self.counts = (many, 1) if reduced and many > 1 else (stepper.threads,)
+        self.seconds = {c: [] for c in self.counts}       # per step, chunk by chunk
+        self.steps = dict.fromkeys(self.counts, 0)
+        self.calls = 0
+
+    def next(self):
+        """The thread count of the next chunk."""
+        self.calls += 1
+        untried = [c for c in self.counts if not self.seconds[c]]
+        if untried:
+            return untried[0]
+        # the last chunk of each: on a shared machine the past says little (the first chunk
+        # on two threads pays for the team's start)
+        best = min(self.counts, key=lambda c: self.seconds[c][-1])
+        if self.calls % PROBE == 0:
+            return next((c for c in self.counts if c != best), best)
+        return best
+
+    def record(self, threads, seconds, steps):
+        if steps:
+            self.seconds[threads].append(seconds / steps)
+            self.steps[threads] += steps
+
+    def summary(self):
+        """{threads: [steps run, median us per step]} for the history's timings."""
+        return {str(c): [self.steps[c], round(1e6 * float(np.median(self.seconds[c])), 2)
+                         if self.seconds[c] else None] for c in self.counts}
 
 
 class StopRequests(list):

@@ -12,6 +12,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..errors import CaseError
+from ..jit import spinning
 from ..kernels import exponential as exponential_kernels, newmark, stepping
 from .state import Rows
 from ..solve.linsolve import (FactorizationError, csr_triplet, factorize,
@@ -37,7 +38,10 @@ class Stepper:
         before = numba.get_num_threads()
         numba.set_num_threads(self.threads)
         try:
-            return self.advance(state, n_steps, every, rows, self.blocks)
+            if self.threads == 1:
+                return self.advance(state, n_steps, every, rows, self.blocks)
+            with spinning():
+                return self.advance(state, n_steps, every, rows, self.blocks)
         finally:
             numba.set_num_threads(before)
 
