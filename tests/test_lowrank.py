@@ -156,3 +156,33 @@ def test_regularized_pairs_carry_their_rows_factored():
     K = contact_stiffness(pairs, model.ndof, kw=[kw]).toarray()
     K_ref = (explicit.T @ sp.diags(kw) @ explicit).toarray()
     assert np.abs(K - K_ref).max() <= 1e-11 * np.abs(K_ref).max()
+
+
+def test_pardiso_analysis_says_what_the_factorization_takes(capsys):
+    """The symbolic analysis reports the factors a factorization then holds: nonzeros at least
+    those of the upper triangle (no fewer than the matrix), memory and flops positive; and
+    tools/bench_factor.py reports it with the model's memory for a shipped case."""
+    import json
+    import sys
+    from pathlib import Path
+
+    from transient.solve.linsolve import available, pardiso_analysis
+    if "pardiso" not in available():
+        pytest.skip("PARDISO not installed")
+    n = 400
+    A = sp.diags([-np.ones(n - 1), 2.0 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1]).tocsr()
+    A = sp.kron(sp.eye(20), A) + sp.kron(sp.diags([-np.ones(19), -np.ones(19)], [-1, 1]),
+                                           sp.eye(n)) + 2.0 * sp.eye(20 * n)
+    r = pardiso_analysis(A.tocsr())
+    assert sp.triu(A).nnz <= r["factor_nnz"] <= (20 * n) ** 2 / 2
+    assert 0 < r["factor_gb"] <= r["peak_gb"] and r["gflop"] >= 0
+    root = Path(__file__).resolve().parent.parent
+    sys.path.insert(0, str(root / "tools"))
+    try:
+        import bench_factor
+        bench_factor.main([str(root / "cases" / "two_bars.toml"), "--factor", "--json"])
+    finally:
+        sys.path.remove(str(root / "tools"))
+    row = json.loads(capsys.readouterr().out)
+    assert row["free_dofs"] > 0 and row["factor_nnz"] >= row["free_dofs"]
+    assert row["peak_rss_gb"] >= row["model_peak_rss_gb"] > 0

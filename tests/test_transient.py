@@ -139,6 +139,9 @@ def test_stages_only_what_the_scene_needs(tmp_path):
     with h5py.File(out, "r") as f:
         stages = json.loads(f.attrs["stages"])
         assert set(stages) == set(result.stages)
+        # the process's peak memory after each stage: where the setup's peak was reached
+        peaks = json.loads(f.attrs["peak_rss_gb"])
+        assert set(stages) <= set(peaks) and list(peaks.values()) == sorted(peaks.values())
         assert "contact/impact/gap" not in f          # not requested: not stored
         assert "geometry" not in f and "field" not in f
 

@@ -84,7 +84,8 @@ def spinning(ms=SPIN_MS):
     slept between passes: 88-104 us per step on two threads against 35-37 on one, and 27-30
     with 200 ms (pad_disc_long's stepper, load 0.1). The setting is restored after the block:
     between chunks the history's writes do not compete with spinning threads. Under libgomp
-    alone (no MKL) this does nothing."""
+    (no MKL, or Numba's pool started before MKL's first threaded call: MKL then takes libgomp
+    too) this does nothing."""
     lib = _iomp()
     if lib is None:
         yield

@@ -10,7 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .case.signals import compile_signals
-from .case.sizes import check_steps
+from .case.sizes import check_steps, peak_rss_gb
 from .contact.contactset import stack
 from .contact.pair import build_contact, contact_stiffness
 from .dynamics import schemes
@@ -40,11 +40,17 @@ class Setup:
 
 
 class _Stages(dict):
-    """Stage -> seconds, and the check run between stages (a stop requested meanwhile)."""
+    """Stage -> seconds, the process's peak memory when each ended (`peaks`, GB), and the check
+    run between stages (a stop requested meanwhile)."""
 
     def __init__(self, check=None):
         super().__init__()
         self.check = check or (lambda: None)
+        self.peaks = {}
+
+    def __setitem__(self, name, seconds):
+        super().__setitem__(name, seconds)
+        self.peaks[name] = peak_rss_gb()
 
     def timed(self, name, fn, *args):
         self.check()
@@ -129,6 +135,7 @@ def _prepare(case, stages):
     rows0 = schemes.initial_acceleration(system, state, case.output.contact,
                                          system.M if consistent else None)
     meta.update(_contact_meta(pairs, contacts, preload))
+    meta["peak_rss_gb"] = dict(stages.peaks)
     if cs is not None:
         # K - sigma M: the preload's Newton, shift-invert and the static responses
         meta["factorizations"] = {"stiffness": why(getattr(cs.solve0, "backend", "?"),

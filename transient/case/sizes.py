@@ -4,6 +4,7 @@ read for a mesh file), and the steps a run will make. Past a bound (limits.memor
 machine's memory by default; limits.steps) the case is refused with the keys that drive it.
 """
 import math
+import resource
 
 from ..errors import CaseError
 
@@ -13,6 +14,12 @@ TETS_PER_HEX = 6          # the generators split each hex in six tets (Kuhn)
 # setup's multiple of them (factorization, basis, contact): 3.45 GB measured for pad_disc's
 # 14.6 M entries, 240 bytes each
 BYTES_PER_ENTRY = 240
+
+
+def peak_rss_gb():
+    """This process's peak resident memory so far [GB] (Linux ru_maxrss, in KiB): read after
+    each stage, the stage where it jumps is the one that set the peak."""
+    return round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e9, 3)
 
 
 def generated_cells(mesh):

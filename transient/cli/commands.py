@@ -172,13 +172,24 @@ def cmd_run(args):
         if model:
             print(model)
         print(f"kernel {result.timings['kernel']:.2f} s, total {result.timings['total']:.2f} s,"
-              f" energy drift {result.energy_drift:.2e}; history: {result.path}")
+              f"{_peak_line(result.meta or {})} energy drift {result.energy_drift:.2e}; "
+              f"history: {result.path}")
     if result.status != "complete":
         print(f"error: run {result.status}", file=sys.stderr)
         if result.status.endswith("interrupted"):
             return 130
         return 143 if "terminated" in result.status else 3
     return 0
+
+
+def _peak_line(meta):
+    """' setup peak memory X GB (in STAGE),': the first stage that reached the setup's peak."""
+    peaks = meta.get("peak_rss_gb") or {}
+    if not peaks:
+        return ""
+    top = max(peaks.values())
+    stage = next(name for name, gb in peaks.items() if gb == top)
+    return f" setup peak memory {top:.2f} GB (in {stage}),"
 
 
 def cmd_info(args):

@@ -11,6 +11,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from ..case.sizes import peak_rss_gb
 from ..kernels.sparse import csr_dot
 from ..model.dofs import free_block, restrict
 from ..solve.modes import normal_modes
@@ -34,6 +35,7 @@ class Basis:
     n_contact_shapes: int = 0      # contact shapes kept (reduction.statics_tolerance)
     contact_flexibility: np.ndarray = None   # mu of contact_shapes, descending
     n_static_kept: int = 0         # static directions (contact shapes and loads) beyond the modes
+    peaks: dict = None             # the process's peak memory after each of timings' parts [GB]
 
     @property
     def T(self):
@@ -65,6 +67,7 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     Kf, Mf = free_block(K_lin, free), free_block(M, free)
     modes = normal_modes(Kf, Mf, None, count=40, fmax=fmax, shift=-shift_hz, solve=solve)
     t_modes = time.perf_counter() - t0
+    peaks = {"modes": peak_rss_gb()}
     Phi = modes.shapes
     columns, shapes = [], None
     mu = np.zeros(0)
@@ -80,6 +83,7 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     if statics.shape[1]:
         columns.append(np.atleast_2d(solve(np.asfortranarray(statics[free])).T).T)
     t_static = time.perf_counter() - t0 - t_modes
+    peaks["statics"] = peak_rss_gb()
     # the static responses without what the modes already hold (twice, for round-off): on a
     # part free to move they are dominated by its rigid motion, 1e10 times their elastic part,
     # which the independence test below would otherwise take for round-off and drop with them
@@ -126,8 +130,9 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     A = np.vstack([W[:m], Vs @ W[m:]])
     timings = {"modes": t_modes, "statics": t_static,
                "orthonormalization": time.perf_counter() - t0 - t_modes - t_static}
+    peaks["orthonormalization"] = peak_rss_gb()
     return Basis(X, A, np.maximum(omega2, 0.0), len(modes.frequencies), statics.shape[1],
-                 timings, n_shapes, mu, n_static_kept)
+                 timings, n_shapes, mu, n_static_kept, peaks)
 
 
 def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):

@@ -62,7 +62,7 @@ def reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0, solve,
             # the static directions asked (contact shapes, load patterns, the preload) and kept
             # beyond the modes: those dropped lie in the span of the rest
             "static_shapes": [basis.n_contact_shapes + basis.n_static, basis.n_static_kept],
-            "basis_timings": basis.timings,
+            "basis_timings": basis.timings, "basis_peak_rss_gb": basis.peaks,
             "basis_projection_error": float(np.linalg.norm(basis.expand(q0) - preload.u)
                                             / max(np.linalg.norm(preload.u), 1e-300)),
             "free_dofs": int((~model.fixed).sum())}

@@ -93,7 +93,7 @@ class _Pardiso:
     """
     backend = "pardiso"
 
-    def __init__(self, A, mtype):
+    def __init__(self, A, mtype, phase=12):
         import pypardiso
         self._lib = pypardiso.PyPardisoSolver().libmkl
         fn = self._lib.pardiso
@@ -119,7 +119,9 @@ class _Pardiso:
         # run after run, whatever the load (a preload or a basis must not move in its last
         # bits from one run to the next)
         self.iparm[33] = max(1, int(self._lib.mkl_get_max_threads()))
-        self._call(12, np.zeros(self.n), np.zeros(self.n))
+        if phase == 11:
+            self.iparm[17] = self.iparm[18] = -1     # report the factors' nonzeros and MFLOP
+        self._call(phase, np.zeros(self.n), np.zeros(self.n))
 
     def _call(self, phase, b, x):
         err = ctypes.c_int32(0)
@@ -149,6 +151,21 @@ class _Pardiso:
             self._call(-1, np.zeros(1), np.zeros(1))
         except Exception:
             pass
+
+
+def pardiso_analysis(A, definite=True):
+    """PARDISO's symbolic analysis of A alone (phase 11, the ordering the factorization uses):
+    what factorizing it would take, without allocating the factors. Returns factor_nnz,
+    factor_gb (held through the solves), peak_gb (analysis, factorization and solve) and
+    gflop (the factorization's)."""
+    solver = _Pardiso(sp.csr_matrix(A), 2 if definite else -2, phase=11)
+    ip = solver.iparm
+    # 1-based iparm(15) analysis peak, (16) permanent, (17) factorization and solve, in KiB;
+    # (18) the factors' nonzeros, (19) MFLOP
+    kib = 1024 / 1e9
+    return {"factor_nnz": int(ip[17]), "factor_gb": kib * int(ip[16]),
+            "peak_gb": kib * max(int(ip[14]), int(ip[15]) + int(ip[16])),
+            "gflop": int(ip[18]) / 1e3}
 
 
 def triangular_factors(A, backend="auto"):
