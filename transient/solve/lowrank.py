@@ -134,7 +134,12 @@ class ContactSolver:
         if self.Z is not None:
             return self.Z @ Y
         Y2 = Y[:, None] if Y.ndim == 1 else Y
-        x = np.atleast_2d(self.solve0(self._loads(Y2)).T).T
+        # BLOCK columns at a time: the loads and the solver's own copies are n x BLOCK, not
+        # n x k (the kept contact shapes: 515 at 500k dofs, 2 GB each, three at once)
+        x = np.empty((self.A0.shape[0], Y2.shape[1]))
+        for start in range(0, Y2.shape[1], BLOCK):
+            block = slice(start, min(start + BLOCK, Y2.shape[1]))
+            x[:, block] = np.atleast_2d(self.solve0(self._loads(Y2[:, block])).T).T
         return x[:, 0] if Y.ndim == 1 else x
 
     def solver(self, d):
