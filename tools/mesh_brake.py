@@ -31,13 +31,13 @@ give byte-identical files.
 meshes both parts at each uniform size and fits the node model's three constants to the counts
 (how NODES_PER_MEASURE was measured).
 
-What the mirrored case costs (2026-12-02, 2 cores, one of them busy with another job; the run
-to t_end = 0.01, eps 1e-3, where eps = auto falls back from 150k dofs on): 100k dofs 69 s and
-3.6 GB, 150k 108 s and 5.9 GB, 200k 158 s and 8.7 GB, 250k past 11.9 GB; peak memory grows as
-dofs^1.36, and limits.memory's estimate (linear in the cells) passes 250k. At 100k dofs,
-eps = auto finds a jump after 9 exactly compatible shapes and keeps only those. --interface
-multiplies the fine rule's points and the interface dofs, whose product the regularized rows
-hold: 100k dofs with --interface 0.003 passed 11.5 GB before the factorization.
+What the mirrored case costs (2026-12-02, 2 cores, load about 0.5; the run to t_end = 0.01,
+eps 1e-3): 200k dofs 62 s and 5.4 GB, 500k 305-322 s and 13.8 GB (the factorization stage
+10.0 GB of it: PARDISO's factors 4 GB). At 1M dofs, `tools/bench_factor.py OUT/brake.toml
+--set limits.memory=100e9` predicts 1.0e9 nonzeros and 8.5 GB in the factors on a model of
+5.9 GB; the setup as it stands would take about 34 GB, and limits.memory's estimate (46 GB)
+refuses the case at load. --interface multiplies the fine rule's points and the interface
+dofs.
 """
 import argparse
 import importlib.util
