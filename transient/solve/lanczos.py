@@ -28,6 +28,8 @@ NotConverged instead of growing (normal_modes then runs ARPACK).
 """
 import numpy as np
 
+from ..kernels.sparse import csr_dot
+
 TOL = 1e-12
 STALL = 8         # steps without a pair converging more before the basis is said stalled
 OUTLIER = 1e3     # theta ratio beyond which a pair is not the scale of another's residual
@@ -67,7 +69,7 @@ def m_orthonormalize(W, M, Qs, MQs, drop=1e-13):
             if level == 0 and Qs:
                 # W's coefficients; a later level's on Qs are the round-off of these
                 C += np.vstack(Hs[:len(Qs)])
-            MV = M @ V
+            MV = _times(M, V)
             G = V.T @ MV
             # projected away this pass, against what is left: again if over half of it went
             # (the M-norm before the pass is what is left plus what went, ||H||^2)
@@ -75,7 +77,7 @@ def m_orthonormalize(W, M, Qs, MQs, drop=1e-13):
             if np.all(went <= np.diag(G)):
                 break
         if not basis:
-            MV = M @ V
+            MV = _times(M, V)
             G = V.T @ MV
         lam, U = np.linalg.eigh(0.5 * (G + G.T))
         if top0 is None:
@@ -97,8 +99,7 @@ def m_orthonormalize(W, M, Qs, MQs, drop=1e-13):
         if np.all(strong) or lam[~strong].max() <= drop ** 2 * top0:
             break
         V = V @ U[:, ~strong]
-    Wn = np.hstack(out) if out else np.zeros((n, 0))
-    MWn = np.hstack(Mout) if Mout else np.zeros((n, 0))
+    Wn, MWn = _joined(out, n), _joined(Mout, n)
     return Wn, MWn, C, MWn.T @ W
 
 
@@ -109,6 +110,16 @@ def _project(V, Qs, MQs):
     for Q, H in zip(Qs, Hs):
         V = V - Q @ H
     return V, Hs
+
+
+def _joined(blocks, n):
+    """The blocks side by side; one block as it is (a copy of n x b per step otherwise)."""
+    return blocks[0] if len(blocks) == 1 else np.hstack(blocks) if blocks else np.zeros((n, 0))
+
+
+def _times(M, V):
+    """M V on both cores (csr_dot: SciPy's sums, bit for bit) when M is CSR."""
+    return csr_dot(M, V) if M.format == "csr" else M @ V
 
 
 class NotConverged(RuntimeError):
