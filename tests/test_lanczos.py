@@ -99,3 +99,19 @@ def test_a_basis_that_stops_converging_is_said():
         return X * (1 + 1e-6 * rng.standard_normal(X.shape))
     with pytest.raises(NotConverged, match="stalled"):
         block_lanczos(noisy, M, -0.01, count=30, block=4)
+
+
+def test_a_looser_tolerance_keeps_the_eigenvalues():
+    """tol 1e-9 (the setup's, reduce.basis.MODES_TOL) stops earlier with the same eigenvalues:
+    they converge as the square of the residual, so only the vectors carry the looser bound."""
+    K, M = membrane(nx=30, seed=1)
+    ref = sla.eigh(K.toarray(), M.toarray(), eigvals_only=True)
+    lam_max = 0.5 * (ref[39] + ref[40]) if ref[40] - ref[39] > 1e-6 * ref[39] else ref[39] * 1.0001
+    ref = ref[ref <= lam_max]
+    tight = block_lanczos(solver(K, M, -0.01), M, -0.01, lam_max=lam_max, block=8)
+    lam, X, steps = block_lanczos(solver(K, M, -0.01), M, -0.01, lam_max=lam_max, block=8,
+                                  tol=1e-9)
+    assert steps < tight[2]
+    assert np.abs(lam[:len(ref)] - ref).max() <= 1e-12 * ref.max()
+    assert np.abs(X.T @ (M @ X) - np.eye(len(lam))).max() <= 1e-12
+    assert np.abs(K @ X - (M @ X) * lam).max() <= 1e-7 * lam.max()

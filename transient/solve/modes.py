@@ -8,7 +8,7 @@ import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
 from ..model.dofs import free_block
-from .lanczos import NotConverged, block_lanczos
+from .lanczos import TOL, NotConverged, block_lanczos
 from .linsolve import factorize
 
 DENSE_LIMIT = 600   # below this many free dofs a dense eigensolver is faster and exact
@@ -27,7 +27,8 @@ def frequencies_hz(eigenvalues):
     return np.sign(eigenvalues) * np.sqrt(np.abs(eigenvalues)) / (2 * np.pi)
 
 
-def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto", solve=None):
+def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto", solve=None,
+                 tol=TOL):
     """Lowest modes of (K, M) with the fixed dofs clamped.
 
     count : number of modes when fmax is 0 (otherwise ARPACK's first batch, if it runs).
@@ -36,6 +37,7 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
         K - sigma M stays positive definite even with rigid-body modes.
     solve : optional callable applying (K - sigma M)^-1 on the free dofs (a factorization made
         elsewhere, e.g. lowrank.ContactSolver); otherwise K - sigma M is factorized here.
+    tol : the block Lanczos' residual tolerance, relative to the largest theta (lanczos.TOL).
     """
     ndof = K.shape[0]
     free = np.arange(ndof) if fixed is None else np.flatnonzero(~np.asarray(fixed))
@@ -59,7 +61,7 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
     lam_max = (2 * np.pi * fmax) ** 2 if fmax > 0 else None
     name = getattr(solve, "backend", "?")
     try:
-        lam, vec, _ = block_lanczos(solve, Mf, sigma, lam_max, count, BLOCK)
+        lam, vec, _ = block_lanczos(solve, Mf, sigma, lam_max, count, BLOCK, tol=tol)
     except NotConverged as exc:
         # a spectrum the block method does not resolve: ARPACK, one vector at a time
         lam, vec = _arpack(Kf, Mf, sigma, solve, count, fmax)
