@@ -48,7 +48,10 @@ def csr_matmat(indptr, indices, data, X, Y):
 
 
 def csr_dot(A, X):
-    """A @ X for a SciPy CSR A and a dense X (n,) or (n, s), by csr_matmat."""
+    """A @ X for a SciPy sparse A and a dense X (n,) or (n, s): by csr_matmat (both cores,
+    SciPy's sums bit for bit) when A is CSR, by SciPy otherwise."""
+    if A.format != "csr":
+        return A @ X
     X = np.asarray(X, dtype=np.float64)
     if X.ndim == 1:
         return csr_dot(A, X[:, None])[:, 0]

@@ -69,7 +69,7 @@ def m_orthonormalize(W, M, Qs, MQs, drop=1e-13):
             if level == 0 and Qs:
                 # W's coefficients; a later level's on Qs are the round-off of these
                 C += np.vstack(Hs[:len(Qs)])
-            MV = _times(M, V)
+            MV = csr_dot(M, V)
             G = V.T @ MV
             # projected away this pass, against what is left: again if over half of it went
             # (the M-norm before the pass is what is left plus what went, ||H||^2)
@@ -77,7 +77,7 @@ def m_orthonormalize(W, M, Qs, MQs, drop=1e-13):
             if np.all(went <= np.diag(G)):
                 break
         if not basis:
-            MV = _times(M, V)
+            MV = csr_dot(M, V)
             G = V.T @ MV
         lam, U = np.linalg.eigh(0.5 * (G + G.T))
         if top0 is None:
@@ -115,11 +115,6 @@ def _project(V, Qs, MQs):
 def _joined(blocks, n):
     """The blocks side by side; one block as it is (a copy of n x b per step otherwise)."""
     return blocks[0] if len(blocks) == 1 else np.hstack(blocks) if blocks else np.zeros((n, 0))
-
-
-def _times(M, V):
-    """M V on both cores (csr_dot: SciPy's sums, bit for bit) when M is CSR."""
-    return csr_dot(M, V) if M.format == "csr" else M @ V
 
 
 class NotConverged(RuntimeError):
