@@ -23,6 +23,7 @@ from .kernels.codes import ENERGY_TERMS, NO_CONVERGENCE, NOT_FINITE, OK
 from .model import build_model
 from .model.dofs import free_block, restrict
 from .reduce.stage import reduce
+from .solve import blas
 from .solve.linsolve import why
 from .solve.lowrank import ContactSolver
 from .solve.preload import PreloadError, solve_preload
@@ -66,9 +67,9 @@ def prepare(case, check=None):
     The setup's dense algebra runs on one OpenBLAS thread: its calls are many and mid-sized
     (eigh of a few thousand, products of n x a few hundred), where two threads on this 2-core
     machine were 2.8 times slower over the setup of pad_disc_long (an 2668^2 eigh: 4.1 s on
-    one thread, 22-26 s on two). PARDISO (MKL) keeps its threads, which pay for its solves."""
-    from threadpoolctl import ThreadpoolController
-    with ThreadpoolController().select(internal_api="openblas").limit(limits=1):
+    one thread, 22-26 s on two). PARDISO (MKL) keeps its threads, which pay for its solves.
+    The large products of sections that solve nothing run on every core (solve.blas)."""
+    with blas.one_thread():
         return _prepare(case, _Stages(check))
 
 

@@ -14,6 +14,7 @@ import scipy.sparse as sp
 from ..case.sizes import peak_rss_gb
 from ..kernels.sparse import csr_dot
 from ..model.dofs import free_block, restrict
+from ..solve import blas
 from ..solve.modes import normal_modes
 
 
@@ -103,43 +104,45 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
         S[:, start:start + c.shape[1]] = c
         start += c.shape[1]
     shapes = c = None        # the pieces go as they are copied
-    # M S formed once (the costliest sparse product, on both cores) and carried through the
-    # projections with M Phi, which has only the modes' columns
-    MS, MPhi = csr_dot(Mf, S), csr_dot(Mf, Phi)
-    for _ in range(2):
-        P = Phi.T @ MS
-        # by column blocks: Phi P whole would be a third n x s array (the setup's peak at 500k
-        # dofs); each entry's sum over the modes is the same either way
-        for start in range(0, P.shape[1], COLUMN_BLOCK):
-            block = slice(start, start + COLUMN_BLOCK)
-            S[:, block] -= Phi @ P[:, block]
-            MS[:, block] -= MPhi @ P[:, block]
-    # unit M-norm columns, then drop directions the others already span, then diagonalize
-    norms = np.sqrt(np.einsum("ij,ij->j", S, MS))
-    scale = norms.max() if len(norms) else 0.0
-    big = norms > 1e-12 * scale
-    if not np.all(big):
-        S, MS, norms = S[:, big], MS[:, big], norms[big]
-    S /= norms
-    MS /= norms
-    lam, V = np.linalg.eigh(S.T @ MS)
-    del MS
-    keep = lam > 1e-12 * max(lam.max(), 1.0) if len(lam) else np.zeros(0, bool)
-    Vs = V[:, keep] / np.sqrt(lam[keep])          # S Vs: M-orthonormal, M-orthogonal to Phi
-    n_static_kept = int(keep.sum())
-    # X^T K X in blocks, with X = [Phi, S Vs] never formed: S^T K S is the one big product
-    KPhi, KS = csr_dot(Kf, Phi), csr_dot(Kf, S)
-    KPS = (Phi.T @ KS) @ Vs
-    SKS = S.T @ KS
-    del KS
-    Kr = np.block([[Phi.T @ KPhi, KPS], [KPS.T, Vs.T @ SKS @ Vs]])
-    omega2, W = sla.eigh(0.5 * (Kr + Kr.T))
-    m = Phi.shape[1]
-    X = np.zeros((K_lin.shape[0], m + S.shape[1]))
-    X[free, :m] = Phi
-    X[free, m:] = S
-    del S
-    A = np.vstack([W[:m], Vs @ W[m:]])
+    # no solve from here on: the products and eighs of a few hundred columns on every core
+    with blas.every_core():
+        # M S formed once (the costliest sparse product, on both cores) and carried through the
+        # projections with M Phi, which has only the modes' columns
+        MS, MPhi = csr_dot(Mf, S), csr_dot(Mf, Phi)
+        for _ in range(2):
+            P = Phi.T @ MS
+            # by column blocks: Phi P whole would be a third n x s array (the setup's peak at 500k
+            # dofs); each entry's sum over the modes is the same either way
+            for start in range(0, P.shape[1], COLUMN_BLOCK):
+                block = slice(start, start + COLUMN_BLOCK)
+                S[:, block] -= Phi @ P[:, block]
+                MS[:, block] -= MPhi @ P[:, block]
+        # unit M-norm columns, then drop directions the others already span, then diagonalize
+        norms = np.sqrt(np.einsum("ij,ij->j", S, MS))
+        scale = norms.max() if len(norms) else 0.0
+        big = norms > 1e-12 * scale
+        if not np.all(big):
+            S, MS, norms = S[:, big], MS[:, big], norms[big]
+        S /= norms
+        MS /= norms
+        lam, V = np.linalg.eigh(S.T @ MS)
+        del MS
+        keep = lam > 1e-12 * max(lam.max(), 1.0) if len(lam) else np.zeros(0, bool)
+        Vs = V[:, keep] / np.sqrt(lam[keep])          # S Vs: M-orthonormal, M-orthogonal to Phi
+        n_static_kept = int(keep.sum())
+        # X^T K X in blocks, with X = [Phi, S Vs] never formed: S^T K S is the one big product
+        KPhi, KS = csr_dot(Kf, Phi), csr_dot(Kf, S)
+        KPS = (Phi.T @ KS) @ Vs
+        SKS = S.T @ KS
+        del KS
+        Kr = np.block([[Phi.T @ KPhi, KPS], [KPS.T, Vs.T @ SKS @ Vs]])
+        omega2, W = sla.eigh(0.5 * (Kr + Kr.T))
+        m = Phi.shape[1]
+        X = np.zeros((K_lin.shape[0], m + S.shape[1]))
+        X[free, :m] = Phi
+        X[free, m:] = S
+        del S
+        A = np.vstack([W[:m], Vs @ W[m:]])
     timings = {"modes": t_modes, "statics": t_static,
                "orthonormalization": time.perf_counter() - t0 - t_modes - t_static}
     peaks["orthonormalization"] = peak_rss_gb()
@@ -235,4 +238,8 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
     mu, Q = np.linalg.eigh(root @ XtX @ root)
     mu, Q = np.maximum(mu[::-1], 0.0), Q[:, ::-1]
     kept = mu >= tol
-    return response(XtX @ (root @ (Q[:, kept] / np.sqrt(mu[kept])))), mu
+    Y = XtX @ (root @ (Q[:, kept] / np.sqrt(mu[kept])))
+    if V is not None and not known.held:
+        return response(Y), mu          # solves
+    with blas.every_core():             # a product with Z or K^-1 E, no solve
+        return response(Y), mu

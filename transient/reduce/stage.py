@@ -8,6 +8,7 @@ import numpy as np
 
 from ..contact.coarse import subset_rule
 from ..errors import CaseError
+from ..solve import blas
 from ..solve.preload import Preload
 from .basis import reduced_basis
 from .sampling import ReducedPreloadError, sample_contact
@@ -71,9 +72,10 @@ def reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0, solve,
         return ReducedModel(basis.T, basis.omega2, q0, v, contacts, pairs, preload, meta)
     stages.check()
     t0 = perf_counter()
-    Cr = contacts.observe(basis.X) @ basis.A
-    sampled = _sample(case, contacts, mask, basis.omega2, Cr, q0, preload)
-    T = basis.expand(sampled.W)
+    with blas.every_core():      # dense algebra on the reduced coordinates, no solve
+        Cr = contacts.observe(basis.X) @ basis.A
+        sampled = _sample(case, contacts, mask, basis.omega2, Cr, q0, preload)
+        T = basis.expand(sampled.W)
     stages["sampling"] = perf_counter() - t0
     held = Preload(T @ sampled.q, sampled.gap, sampled.pressure, sampled.tangent,
                    preload.iterations + sampled.iterations, sampled.residual, preload.seconds)

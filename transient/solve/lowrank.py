@@ -15,12 +15,14 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..contact.regularize import factored_rows
+from . import blas
 from .linsolve import factorize
 
 MAX_BYTES = 1.5e9     # Z = A0^-1 C^T held dense up to this; G (rank^2) too, beyond it the
 #                       dense form A0 + C^T D C is factorized
 BLOCK = 128           # right-hand sides per solve when forming Z (bounds the solver's copies: three
-#                       n x BLOCK arrays, 0.4 GB at 140k dofs)
+#                       n x BLOCK arrays, 0.4 GB at 140k dofs; on pad_disc_long's interface loads
+#                       as fast per column as 300 or all 599 at once)
 ROW_SPACE_TOL = 1e-12
 
 
@@ -29,13 +31,15 @@ class RowSpace:
     """What a tangent solve on a rich rule's row space already holds: the dofs the rows touch
     (cols), an orthonormal basis V of the rows' space there, the rows in it (Rm, C E = Rm V^T),
     G = V^T E^T A0^-1 E V, responses(Y) = A0^-1 E V Y (from Z when it is held, else solved),
-    and R() such that the tangent's responses to the loads E V are A0^-1 E V R."""
+    and R() such that the tangent's responses to the loads E V are A0^-1 E V R. held: Z is
+    held, so responses are products, not solves."""
     cols: np.ndarray
     V: np.ndarray
     Rm: np.ndarray
     G: np.ndarray
     responses: object
     R: object
+    held: bool = False
 
 
 @dataclass(frozen=True)
@@ -153,8 +157,12 @@ class ContactSolver:
             return TangentSolve(solve, getattr(solve, "backend", "?"))
         Z, solve0 = self.responses, self.solve0
         if self.by_columns:
-            core = self.Rm.T @ (d[:, None] * self.Rm)
-            lu = sla.lu_factor(np.eye(len(core)) + core @ self.G)
+            with blas.every_core():
+                # Rm^T D Rm as X^T X, X = D^1/2 Rm, when no d is negative: NumPy hands a
+                # product of an array with its own transpose to syrk (half the flops)
+                X = np.sqrt(d)[:, None] * self.Rm if np.all(d >= 0) else None
+                core = X.T @ X if X is not None else self.Rm.T @ (d[:, None] * self.Rm)
+                lu = sla.lu_factor(np.eye(len(core)) + core @ self.G)
             cols, V = self.cols, self.V
 
             def solve(b):
@@ -164,7 +172,8 @@ class ContactSolver:
             # (A0 + B core B^T)^-1 B = Z R, R = I - (I + core G)^-1 core G; with the solver's
             # rows in that basis, C = Rm B^T
             known = RowSpace(cols, V, self.Rm, self.G, Z,
-                             lambda: np.eye(len(core)) - sla.lu_solve(lu, core @ self.G))
+                             lambda: np.eye(len(core)) - sla.lu_solve(lu, core @ self.G),
+                             self.Z is not None)
         else:
             lu = sla.lu_factor(np.eye(len(d)) + d[:, None] * self.G)
             C = self.C
@@ -182,11 +191,12 @@ def factored_row_space(L, B, cols, tol=ROW_SPACE_TOL):
     B[cols] = Q R, C E = (L R^T) Q^T, and the eigenvectors X of (L R^T)^T (L R^T) (r x r)
     above tol give V = Q X and Rm = L R^T X, the same cut as row_space (its k x k Gram has
     the same nonzero eigenvalues). The columns of B need not be independent."""
-    Q, R = np.linalg.qr(B[cols].toarray())
-    LR = L @ R.T
-    lam, X = np.linalg.eigh(LR.T @ LR)
-    X = X[:, lam > tol * max(lam.max(), 1e-300)]
-    return LR @ X, Q @ X
+    with blas.every_core():         # products of a few hundred columns (an r x r eigh)
+        Q, R = np.linalg.qr(B[cols].toarray())
+        LR = L @ R.T
+        lam, X = np.linalg.eigh(LR.T @ LR)
+        X = X[:, lam > tol * max(lam.max(), 1e-300)]
+        return LR @ X, Q @ X
 
 
 def row_space(Cc, tol=ROW_SPACE_TOL):

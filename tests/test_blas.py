@@ -1,0 +1,39 @@
+"""The setup's OpenBLAS thread counts: one thread by default, every core inside every_core, and
+the same products either way to round-off."""
+import os
+
+import numpy as np
+from threadpoolctl import threadpool_info
+
+from transient.solve import blas
+
+
+def openblas_threads():
+    return [i["num_threads"] for i in threadpool_info() if i["internal_api"] == "openblas"]
+
+
+def test_every_core_raises_the_threads_and_gives_them_back():
+    cores = len(os.sched_getaffinity(0))
+    with blas.one_thread():
+        assert set(openblas_threads()) == {1}
+        with blas.every_core():
+            # OpenBLAS caps the count at the pool it started with (OMP_NUM_THREADS)
+            assert all(1 <= t <= cores for t in openblas_threads())
+            inside = openblas_threads()
+        assert set(openblas_threads()) == {1}
+    if cores > 1 and os.environ.get("OMP_NUM_THREADS", "") in ("", str(cores)):
+        assert max(inside) > 1
+
+
+def test_products_on_every_core_equal_one_thread_to_round_off():
+    rng = np.random.default_rng(0)
+    A, B = rng.standard_normal((3000, 300)), rng.standard_normal((300, 200))
+    with blas.one_thread():
+        one, gram1 = A @ B, A.T @ A
+        with blas.every_core():
+            every, gram = A @ B, A.T @ A
+            again = A @ B
+    np.testing.assert_allclose(every, one, rtol=0, atol=1e-12 * np.abs(one).max())
+    np.testing.assert_allclose(gram, gram1, rtol=0, atol=1e-12 * np.abs(gram1).max())
+    assert np.array_equal(gram, gram.T)          # syrk: symmetric to the last bit
+    assert np.array_equal(again, every)          # the same split, the same sums
