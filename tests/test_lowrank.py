@@ -90,6 +90,38 @@ def test_without_room_for_z_the_solves_are_the_same(m, monkeypatch):
                            atol=1e-15)
 
 
+@pytest.mark.parametrize("path", ["rows", "row-space", "negative-d", "dense", "no-contact"])
+def test_the_tangent_stiffness_is_k_plus_the_update(path, monkeypatch):
+    """TangentSolve.stiffness applies K + C^T diag(d) C (the setup's K_lin on the free dofs)
+    without forming it, whichever form the solver holds the rows in, and tocsr forms it."""
+    import transient.solve.lowrank as lowrank
+    rng = np.random.default_rng(11)
+    n, k = 80, 20
+    K, M = spd(n, 5)
+    cols = np.sort(rng.choice(n, k, replace=False))
+    m = 5 if path == "rows" else 0 if path == "no-contact" else 60
+    dense = np.zeros((m, n))
+    dense[:, cols] = rng.standard_normal((m, 6)) @ rng.standard_normal((6, k))
+    if path == "dense":
+        monkeypatch.setattr(lowrank, "MAX_BYTES", 1.0)     # A0 + C^T D C factorized
+    C = sp.csr_matrix(dense)
+    cs = ContactSolver(K, M, C, -4.0)
+    assert cs.by_columns == (path in ("row-space", "negative-d"))
+    assert cs.lowrank == (path not in ("dense", "no-contact"))
+    d = rng.uniform(0, 1e2, m)
+    if path == "negative-d":
+        d[:3] *= -1.0            # a softening tangent: no D^1/2
+    stiffness = cs.solver(d).stiffness
+    K_lin = (K + C.T @ sp.diags(d) @ C).toarray()
+    X = rng.standard_normal((n, 4))
+    scale = np.abs(K_lin).max()
+    assert np.allclose(stiffness @ X, K_lin @ X, rtol=1e-12, atol=1e-12 * scale * n)
+    assert np.allclose(stiffness @ X[:, 1], K_lin @ X[:, 1], rtol=1e-12,
+                       atol=1e-12 * scale * n)
+    assert np.allclose(stiffness.toarray(), K_lin, rtol=1e-12, atol=1e-12 * scale)
+    assert stiffness.shape == (n, n)
+
+
 def test_factored_rows_give_the_same_row_space_and_solves():
     """Rows given as L B^T (regularized rules) with dependent columns of L, as the two sides'
     compatible shapes give: the row space from the r x r algebra is the dense rows' one, cut

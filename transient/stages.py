@@ -103,8 +103,14 @@ def _prepare(case, stages):
     if preload.iterations == 0:
         del stages["preload"]
     t0 = time.perf_counter()
-    kw = [contacts.weights[s] * preload.tangent[s] for s in contacts.slices.values()]
-    K_lin = (model.K + contact_stiffness(pairs, model.ndof, kw=kw)).tocsr() if pairs else model.K
+    if solver.reduction.enabled:
+        # the tangent solve and K_lin on the free dofs, as an operator (lowrank.TangentStiffness)
+        tangent = cs.solver(contacts.weights * preload.tangent)
+        K_lin = tangent.stiffness
+    else:
+        kw = [contacts.weights[s] * preload.tangent[s] for s in contacts.slices.values()]
+        K_lin = ((model.K + contact_stiffness(pairs, model.ndof, kw=kw)).tocsr() if pairs
+                 else model.K)
     if pairs:
         stages["linearization"] = time.perf_counter() - t0
     stages.check()
@@ -114,8 +120,7 @@ def _prepare(case, stages):
     names = tuple(model.sensor_names) if case.output.sensors else ()
     if solver.reduction.enabled:
         M = sp.diags(model.lumped_mass).tocsr() if solver.mass == "lumped" else model.M
-        red = reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0,
-                     cs.solver(contacts.weights * preload.tangent),
+        red = reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0, tangent,
                      critical_tangent(contacts, preload.tangent), stages, cs.C)
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
         system = reduced_system(red.T, red.omega2, solver.reduction.fmax, solver.damping,

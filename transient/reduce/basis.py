@@ -60,6 +60,8 @@ class Basis:
 
 def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None, tol=0.0):
     """Basis of the modes of (K_lin, M) up to fmax [Hz] and the responses to static loads.
+    K_lin: sparse on the model dofs, or the tangent on the free dofs as an operator
+    (lowrank.TangentStiffness, what the setup passes).
 
     statics (ndof, s): load vectors (load patterns, and K_lin u for a displacement u to
     represent, such as the preload). solve applies (K_lin - sigma M)^-1 on the free dofs,
@@ -72,7 +74,8 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     t0 = time.perf_counter()
     free = np.flatnonzero(~fixed)
     # the free blocks once: the modes, the projections and the reduced stiffness share them
-    Kf, Mf = free_block(K_lin, free), free_block(M, free)
+    Kf = free_block(K_lin, free) if sp.issparse(K_lin) else K_lin
+    Mf = free_block(M, free)
     modes = normal_modes(Kf, Mf, None, count=40, fmax=fmax, shift=-shift_hz, solve=solve,
                          tol=MODES_TOL)
     t_modes = time.perf_counter() - t0
@@ -131,14 +134,14 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
         Vs = V[:, keep] / np.sqrt(lam[keep])          # S Vs: M-orthonormal, M-orthogonal to Phi
         n_static_kept = int(keep.sum())
         # X^T K X in blocks, with X = [Phi, S Vs] never formed: S^T K S is the one big product
-        KPhi, KS = csr_dot(Kf, Phi), csr_dot(Kf, S)
+        KPhi, KS = (csr_dot(Kf, Phi), csr_dot(Kf, S)) if sp.issparse(Kf) else (Kf @ Phi, Kf @ S)
         KPS = (Phi.T @ KS) @ Vs
         SKS = S.T @ KS
         del KS
         Kr = np.block([[Phi.T @ KPhi, KPS], [KPS.T, Vs.T @ SKS @ Vs]])
         omega2, W = sla.eigh(0.5 * (Kr + Kr.T))
         m = Phi.shape[1]
-        X = np.zeros((K_lin.shape[0], m + S.shape[1]))
+        X = np.zeros((len(fixed), m + S.shape[1]))
         X[free, :m] = Phi
         X[free, m:] = S
         del S

@@ -5,6 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..model.dofs import free_block
@@ -41,7 +42,9 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
     """
     ndof = K.shape[0]
     free = np.arange(ndof) if fixed is None else np.flatnonzero(~np.asarray(fixed))
-    Kf = free_block(K, free)
+    # K may be an operator on the free dofs (lowrank.TangentStiffness): the shift-invert
+    # needs only its solves, the dense eigensolver and ARPACK its matrix or products
+    Kf = free_block(K, free) if sp.issparse(K) else K
     Mf = free_block(M, free)
     n = len(free)
     sigma = np.sign(shift) * (2 * np.pi * shift) ** 2
@@ -55,7 +58,8 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
 
     t0 = time.perf_counter()
     if solve is None:
-        solve = factorize((Kf - sigma * Mf).tocsr(), backend, definite=sigma <= 0)
+        Ks = Kf if sp.issparse(Kf) else Kf.tocsr()
+        solve = factorize((Ks - sigma * Mf).tocsr(), backend, definite=sigma <= 0)
     timings["factorization"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     lam_max = (2 * np.pi * fmax) ** 2 if fmax > 0 else None
@@ -77,10 +81,12 @@ def _arpack(Kf, Mf, sigma, solve, count, fmax):
     n = Kf.shape[0]
     op = spla.LinearOperator((n, n), matvec=solve, dtype=float)
     v0 = np.random.default_rng(0).standard_normal(n)
+    A = Kf if sp.issparse(Kf) else spla.LinearOperator(Kf.shape, matvec=Kf.__matmul__,
+                                                         dtype=float)
     k = count
     while True:
         k = min(k, n - 2)
-        lam, vec = spla.eigsh(Kf, k=k, M=Mf, sigma=sigma, OPinv=op, which="LM", v0=v0)
+        lam, vec = spla.eigsh(A, k=k, M=Mf, sigma=sigma, OPinv=op, which="LM", v0=v0)
         order = np.argsort(lam)
         lam, vec = lam[order], vec[:, order]
         if fmax <= 0 or frequencies_hz(lam[-1]) > fmax or k >= n - 2:
