@@ -1,5 +1,6 @@
 """Command line: `transient SUBCOMMAND CASE [--set KEY.PATH=VALUE ...] [--json]`."""
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -280,5 +281,18 @@ def main(argv=None):
         return 0
 
 
+def console(argv=None):
+    """main as a process: its code is the process's exit status. A stop (130, 143) leaves
+    through os._exit once the output is flushed and every history closed (main has returned):
+    CPython kills itself with SIGINT at exit, status -2 instead of 130, when a KeyboardInterrupt
+    once left code it ran through PyRun_* (an import's), even when caught after (seen in CI)."""
+    code = main(argv)
+    if code in (130, 143):
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    return code
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(console())
