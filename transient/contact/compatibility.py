@@ -12,6 +12,8 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from ..solve import blas
+
 ROUND_OFF = 1e-13   # normalized singular values below this are zero to round-off
 
 
@@ -54,7 +56,8 @@ def compatibility(rule, k):
     t0 = time.perf_counter()
     A = gap_energy(rule, k)
     t1 = time.perf_counter()
-    sigma, shapes = sla.eigh(A, driver="evd")
+    with blas.every_core():      # nothing else runs: 2747^2 (4x pad_disc) 3.6 -> 2.2 s
+        sigma, shapes = sla.eigh(A, driver="evd")
     timings = {"gap_energy": t1 - t0, "eigendecomposition": time.perf_counter() - t1}
     return Compatibility(k, sigma, shapes, rule.C1.shape[1], rule.C2.shape[1], timings)
 
