@@ -123,9 +123,9 @@ def _prepare(case, stages):
         red = reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0, tangent,
                      critical_tangent(contacts, preload.tangent), stages, cs.C)
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
-        system = reduced_system(red.T, red.omega2, solver.reduction.fmax, solver.damping,
-                                contacts, preload.tangent, patterns, signals, sensors, names,
-                                case.output.field)
+        system = reduced_system(red.X, red.AW, red.omega2, solver.reduction.fmax,
+                                solver.damping, contacts, preload.tangent, patterns, signals,
+                                sensors, names, case.output.field)
         state = State.zeros(system.n, contacts.n_points)
         state.q[:], state.v[:] = red.q0, red.v0
     else:

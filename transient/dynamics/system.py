@@ -40,7 +40,7 @@ class ReducedSystem(System):
     omega2: np.ndarray = None    # (n,) [rad^2/s^2]
     damp: np.ndarray = None      # (n,) modal damping coefficients 2 zeta omega + Rayleigh [1/s]
     C: np.ndarray = None         # (m, n) contact rows C T, dense
-    T: np.ndarray = None         # (ndof, n) the basis, zero on fixed dofs
+    T: np.ndarray = None         # (ndof, n) the basis, zero on fixed dofs (field output only)
     reduced = True
 
 
@@ -69,9 +69,11 @@ def patterns_matrix(vectors, n):
     return np.ascontiguousarray(np.array(vectors, dtype=float).reshape(len(vectors), n))
 
 
-def reduced_system(T, omega2, fmax, damping, contacts, tangent, patterns, signals, sensors,
-                   sensor_names, field):
-    """The reduced system on the basis T (ndof, n) with eigenvalues omega2.
+def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, signals,
+                   sensors, sensor_names, field):
+    """The reduced system on the basis T = X AW (X (ndof, m), AW (m, n)) with eigenvalues
+    omega2. T itself (ndof x n, the setup's largest product at scale: 4x pad_disc's 198 GFLOP)
+    is formed only for field output; the contact rows, sensors and loads come from X.
 
     damping: DampingSpec; modes above fmax [Hz] take the residual ratio on top of the modal.
     patterns: load vectors on the model's dofs; sensors (s, ndof) their observation.
@@ -80,13 +82,14 @@ def reduced_system(T, omega2, fmax, damping, contacts, tangent, patterns, signal
     above = omega > 2 * np.pi * fmax
     ratio = damping.modal + damping.residual * above
     damp = 2 * ratio * omega + damping.alpha + damping.beta * omega2
-    Cr = np.ascontiguousarray(contacts.observe(T))
+    Cr = np.ascontiguousarray(contacts.observe(X) @ AW)
     n = len(omega2)
-    S = _observation(sensors @ T, n, field, dense=True)
-    return ReducedSystem(contacts, tangent, patterns_matrix([T.T @ p for p in patterns], n),
+    S = _observation((sensors @ X) @ AW, n, field, dense=True)
+    return ReducedSystem(contacts, tangent,
+                         patterns_matrix([AW.T @ (X.T @ p) for p in patterns], n),
                          signals, S, sensor_names, n if field else 0,
                          critical.reduced(omega2, Cr, contacts, tangent), omega2=omega2,
-                         damp=damp, C=Cr, T=T)
+                         damp=damp, C=Cr, T=X @ AW if field else None)
 
 
 def full_system(K_lin, lumped, M, damping, contacts, tangent, free, patterns, signals, sensors,

@@ -16,7 +16,8 @@ from .sampling import ReducedPreloadError, sample_contact
 
 @dataclass(frozen=True)
 class ReducedModel:
-    T: np.ndarray            # (ndof, n) the basis, T^T M T = I
+    X: np.ndarray            # (ndof, m) and
+    AW: np.ndarray           # (m, n): the basis T = X AW, T^T M T = I (T formed only if needed)
     omega2: np.ndarray       # (n,) eigenvalues of T^T K_lin T (contact at the preload included)
     q0: np.ndarray           # (n,) the preload in reduced coordinates
     v0: np.ndarray           # (n,) the initial velocity there
@@ -75,21 +76,23 @@ def reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0, solve,
             "free_dofs": int((~model.fixed).sum())}
     mask = candidates(case, pairs, contacts)
     if mask is None:
-        return ReducedModel(basis.T, basis.omega2, q0, v, contacts, pairs, preload, meta)
+        return ReducedModel(basis.X, basis.A, basis.omega2, q0, v, contacts, pairs, preload,
+                            meta)
     stages.check()
     t0 = perf_counter()
     with blas.every_core():      # dense algebra on the reduced coordinates, no solve
         Cr = contacts.observe(basis.X) @ basis.A
         sampled = _sample(case, contacts, mask, basis.omega2, Cr, q0, preload)
-        T = basis.expand(sampled.W)
+        AW = basis.A @ sampled.W
     stages["sampling"] = perf_counter() - t0
-    held = Preload(T @ sampled.q, sampled.gap, sampled.pressure, sampled.tangent,
+    held = Preload(basis.X @ (AW @ sampled.q), sampled.gap, sampled.pressure, sampled.tangent,
                    preload.iterations + sampled.iterations, sampled.residual, preload.seconds)
     meta["sampling"] = {"candidates": int(mask.sum()), "points": int(len(sampled.sample.chosen)),
                         "residual": sampled.sample.residual,
                         "band_modes": sampled.sample.band,
                         "preload_iterations": sampled.iterations}
-    return ReducedModel(T, sampled.omega2, sampled.q, sampled.W.T @ v, sampled.contacts,
+    return ReducedModel(basis.X, AW, sampled.omega2, sampled.q, sampled.W.T @ v,
+                        sampled.contacts,
                         _sampled_pairs(pairs, contacts, sampled.keep, sampled.contacts), held,
                         meta)
 
