@@ -210,7 +210,8 @@ class ContactSolver:
                 # product of an array with its own transpose to syrk (half the flops)
                 X = np.sqrt(d)[:, None] * self.Rm if np.all(d >= 0) else None
                 core = X.T @ X if X is not None else self.Rm.T @ (d[:, None] * self.Rm)
-                lu = sla.lu_factor(np.eye(len(core)) + core @ self.G)
+            # the rank x rank LU on one thread: on two, 3-4x slower (pad_disc_long, 599^2)
+            lu = sla.lu_factor(np.eye(len(core)) + core @ self.G)
             cols, V = self.cols, self.V
 
             def solve(b):
