@@ -67,7 +67,8 @@ def prepare(case, check=None):
     The setup's dense algebra runs on one OpenBLAS thread: its calls are many and mid-sized
     (eigh of a few thousand, products of n x a few hundred), where two threads on this 2-core
     machine were 2.8 times slower over the setup of pad_disc_long (an 2668^2 eigh: 4.1 s on
-    one thread, 22-26 s on two). PARDISO (MKL) keeps its threads, which pay for its solves.
+    one thread, 22-26 s on two, though 2.8 -> 1.7 s alone: the slowdown is contention with
+    PARDISO's and Numba's threads). PARDISO (MKL) keeps its threads, which pay for its solves.
     The large products of sections that solve nothing run on every core (solve.blas)."""
     with blas.one_thread():
         return _prepare(case, _Stages(check))
@@ -104,9 +105,8 @@ def _prepare(case, stages):
         del stages["preload"]
     t0 = time.perf_counter()
     if solver.reduction.enabled:
-        # the tangent solve and K_lin on the free dofs, as an operator (lowrank.TangentStiffness)
+        # the tangent solve, which also applies K_lin on the free dofs (tangent.stiffness)
         tangent = cs.solver(contacts.weights * preload.tangent)
-        K_lin = tangent.stiffness
     else:
         kw = [contacts.weights[s] * preload.tangent[s] for s in contacts.slices.values()]
         K_lin = ((model.K + contact_stiffness(pairs, model.ndof, kw=kw)).tocsr() if pairs
@@ -120,7 +120,7 @@ def _prepare(case, stages):
     names = tuple(model.sensor_names) if case.output.sensors else ()
     if solver.reduction.enabled:
         M = sp.diags(model.lumped_mass).tocsr() if solver.mass == "lumped" else model.M
-        red = reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0, tangent,
+        red = reduce(case, model, M, pairs, contacts, preload, patterns, v0, tangent,
                      critical_tangent(contacts, preload.tangent), stages, cs.C)
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
         system = reduced_system(red.X, red.AW, red.omega2, solver.reduction.fmax,

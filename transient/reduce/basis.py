@@ -5,6 +5,7 @@ The stiffness used is K_lin = K + C^T diag(w k_t*) C, linearized at the preload:
 coordinates q = T q_r, T^T M T = I and T^T K_lin T = diag(omega^2).
 """
 import time
+from contextlib import nullcontext
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,6 +16,7 @@ from ..case.sizes import peak_rss_gb
 from ..kernels.sparse import csr_dot
 from ..model.dofs import free_block, restrict
 from ..solve import blas
+from ..solve.lowrank import TangentStiffness
 from ..solve.modes import normal_modes
 
 
@@ -74,7 +76,7 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     t0 = time.perf_counter()
     free = np.flatnonzero(~fixed)
     # the free blocks once: the modes, the projections and the reduced stiffness share them
-    Kf = free_block(K_lin, free) if sp.issparse(K_lin) else K_lin
+    Kf = TangentStiffness(free_block(K_lin, free)) if sp.issparse(K_lin) else K_lin
     Mf = free_block(M, free)
     modes = normal_modes(Kf, Mf, None, count=40, fmax=fmax, shift=-shift_hz, solve=solve,
                          tol=MODES_TOL)
@@ -134,7 +136,7 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
         Vs = V[:, keep] / np.sqrt(lam[keep])          # S Vs: M-orthonormal, M-orthogonal to Phi
         n_static_kept = int(keep.sum())
         # X^T K X in blocks, with X = [Phi, S Vs] never formed: S^T K S is the one big product
-        KPhi, KS = (csr_dot(Kf, Phi), csr_dot(Kf, S)) if sp.issparse(Kf) else (Kf @ Phi, Kf @ S)
+        KPhi, KS = Kf @ Phi, Kf @ S
         KPS = (Phi.T @ KS) @ Vs
         SKS = S.T @ KS
         del KS
@@ -241,8 +243,6 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
     mu, Q = np.linalg.eigh(root @ XtX @ root)
     mu, Q = np.maximum(mu[::-1], 0.0), Q[:, ::-1]
     kept = mu >= tol
-    Y = XtX @ (root @ (Q[:, kept] / np.sqrt(mu[kept])))
-    if V is not None and not known.held:
-        return response(Y), mu          # solves
-    with blas.every_core():             # a product with Z or K^-1 E, no solve
-        return response(Y), mu
+    solves = V is not None and not known.held       # else a product with Z or K^-1 E
+    with nullcontext() if solves else blas.every_core():
+        return response(XtX @ (root @ (Q[:, kept] / np.sqrt(mu[kept])))), mu

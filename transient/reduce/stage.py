@@ -38,20 +38,18 @@ def candidates(case, pairs, contacts):
     return mask
 
 
-def reduce(case, model, M, K_lin, pairs, contacts, preload, patterns, v0, solve, kt_crit,
-           stages, rows=None):
-    """The reduced model of a case (solver.reduction) on its linearized stiffness K_lin (sparse
-    on the model dofs, or lowrank.TangentStiffness on the free ones).
+def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_crit, stages,
+           rows=None):
+    """The reduced model of a case (solver.reduction) on its linearized stiffness K_lin, the
+    tangent solve's (solve: lowrank.TangentSolve; solve.stiffness is K_lin on the free dofs).
     rows: the contact rows on the free dofs, when the factorization stage has them; without
     them, a solve that holds the rows' space (solve.row_space) stands for them."""
     from time import perf_counter
     reduction = case.solver.reduction
     loads = [np.stack(patterns, axis=1)] if patterns and reduction.statics else []
-    # K_lin u, whose response is the preload itself (K_lin: on the free dofs when an operator)
-    free = ~model.fixed
+    K_lin, free = solve.stiffness, ~model.fixed
     Ku = np.zeros((model.ndof, 1))
-    Ku[free] = K_lin @ preload.u[free][:, None] if K_lin.shape[0] < model.ndof else (
-        K_lin @ preload.u[:, None])[free]
+    Ku[free] = K_lin @ preload.u[free][:, None]     # its response is the preload itself
     loads.append(Ku)
     known = getattr(solve, "row_space", None)
     if rows is None and not (known is not None and len(known.Rm) == contacts.n_points

@@ -11,17 +11,15 @@ The section, not a timing, decides, so the arithmetic is the same run after run:
 a product by blocks of its result, each summed whole by one thread. Two threads sum some entries
 in another order than one thread does, a difference of round-off (1e-16 of the entries).
 """
+import functools
 import os
 from contextlib import contextmanager
 
-_controller = []
 
-
+@functools.cache
 def _openblas():
-    if not _controller:
-        from threadpoolctl import ThreadpoolController
-        _controller.append(ThreadpoolController().select(internal_api="openblas"))
-    return _controller[0]
+    from threadpoolctl import ThreadpoolController
+    return ThreadpoolController().select(internal_api="openblas")
 
 
 @contextmanager

@@ -15,8 +15,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..contact.regularize import factored_rows
-from . import blas
 from ..kernels.sparse import csr_dot
+from . import blas
 from .linsolve import factorize
 
 MAX_BYTES = 1.5e9     # Z = A0^-1 C^T held dense up to this; G (rank^2) too, beyond it the

@@ -58,8 +58,7 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
 
     t0 = time.perf_counter()
     if solve is None:
-        Ks = Kf if sp.issparse(Kf) else Kf.tocsr()
-        solve = factorize((Ks - sigma * Mf).tocsr(), backend, definite=sigma <= 0)
+        solve = factorize((Kf.tocsr() - sigma * Mf).tocsr(), backend, definite=sigma <= 0)
     timings["factorization"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     lam_max = (2 * np.pi * fmax) ** 2 if fmax > 0 else None
