@@ -59,6 +59,21 @@ def sets(*overrides):
     ("run", BAR, ["solver.t_end=" + "[" * 3000 + "]" * 3000], ""),
     ("compat", BAR, [], "contact.wall.wall_point"),
     ("plot", BAR, [], "contact.wall.wall_point"),
+    ("cea", PAD, ["contact.pad_disc.friction.speeds=[0.0,1.0]"],
+     "contact.pad_disc.friction.values"),
+    ("cea", PAD, ["contact.pad_disc.friction.speeds=[1.0,0.5]",
+                  "contact.pad_disc.friction.values=[0.4,0.3]"],
+     "contact.pad_disc.friction.speeds"),
+    ("cea", PAD, ["contact.pad_disc.friction.mu=0.4", "contact.pad_disc.friction.speeds=[1.0]",
+                  "contact.pad_disc.friction.values=[0.4]"], "contact.pad_disc.friction.mu"),
+    ("cea", PAD, ["contact.pad_disc.friction.mu=0.4", "motion.disc.omega=0.0"],
+     "contact.pad_disc.friction.mu"),
+    ("cea", PAD, ["contact.pad_disc.friction.v_eps=0.0"], "contact.pad_disc.friction.v_eps"),
+    ("run", PAD, ["contact.pad_disc.friction.mu=0.4"], "contact.pad_disc.friction.mu"),
+    ("cea", PAD, ["motion.disc.axis=[0,0,0]"], "motion.disc.axis"),
+    ("cea", PAD, ['motion.disc.part="rotor"'], "motion.disc.part"),
+    ("cea", PAD, ['motion.belt.kind="translation"', 'motion.belt.part="disc"',
+                  "motion.belt.velocity=[1.0,0.0,0.0]"], "motion.belt.part"),
 ])
 def test_bad_input_is_one_line_naming_the_key(tmp_path, capsys, command, case, overrides, key):
     args = [command] + (["compat", case, "--out", str(tmp_path)] if command == "plot" else

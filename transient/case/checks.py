@@ -9,6 +9,7 @@ def check(case):
     """Raise CaseError on the first combination of keys that no stage admits (every case)."""
     _references(case)
     _contact(case)
+    _friction(case)
     _signals(case)
     _directions(case)
     check_generated(case)
@@ -19,6 +20,11 @@ def check_transient(case):
     run by the commands that integrate in time, before their first stage."""
     _sampled(case)
     _solver(case)
+    for name, c in case.contact.items():
+        if c.friction.active:
+            _fail(case, f"contact.{name}.friction.mu", "the transient schemes do not "
+                  "integrate friction yet: `transient cea` gives its complex modes; set mu = 0 "
+                  "(and no table) for a run")
     if case.solver.t_end <= 0.0:
         _fail(case, "solver.t_end", "expected > 0 for a transient: the time simulated after "
               "the preload")
@@ -66,6 +72,13 @@ def _references(case):
         _known(case, f"sensors.{name}.part", sensor.part, parts, "part")
     for name, initial in case.initial.items():
         _known(case, f"initial.{name}.part", initial.part, parts, "part")
+    moved = {}
+    for name, motion in case.motion.items():
+        _known(case, f"motion.{name}.part", motion.part, parts, "part")
+        if motion.part in moved:
+            _fail(case, f"motion.{name}.part", f"part '{motion.part}' already moves by "
+                  f"motion.{moved[motion.part]}: one motion per part")
+        moved[motion.part] = name
 
 
 def check_two_surfaces(case, name):
@@ -90,6 +103,8 @@ def _directions(case):
     vectors = [(f"contact.{n}.wall_normal", c.wall_normal) for n, c in case.contact.items()
                if c.wall]
     vectors += [(f"sensors.{n}.direction", s.direction) for n, s in case.sensors.items()]
+    vectors += [(f"motion.{n}.axis", m.axis) for n, m in case.motion.items()
+                if m.kind == "rotation"]
     for part, spec in case.parts.items():
         for name, sel in spec.sets.items():
             for field in ("normal", "axis"):
@@ -120,6 +135,29 @@ def _contact(case):
         if c.rule == "greedy" and not c.regularized:
             _fail(case, f"{key}.regularized", "the greedy rule selects points on the "
                   "regularized observation: set regularized = true")
+
+
+def _friction(case):
+    """A friction table is well formed, and friction has a sliding to act along."""
+    moving = {m.part for m in case.motion.values()
+              if any(x != 0.0 for x in (m.velocity if m.kind == "translation" else (m.omega,)))}
+    for name, c in case.contact.items():
+        f, key = c.friction, f"contact.{name}.friction"
+        if len(f.values) != len(f.speeds):
+            _fail(case, f"{key}.values", f"expected {len(f.speeds)} values, one per speed of "
+                  f"{key}.speeds, got {len(f.values)}")
+        if f.speeds:
+            if any(b <= a for a, b in zip(f.speeds, f.speeds[1:])):
+                _fail(case, f"{key}.speeds", "expected increasing speeds")
+            if f.mu != 0.0:
+                _fail(case, f"{key}.mu", "give mu or the table speeds / values, not both")
+        if not f.active:
+            continue
+        parts = {_part_of(c.surface1)} | ({_part_of(c.surface2)} if not c.wall else set())
+        if not parts & moving:
+            _fail(case, f"{key}.mu", f"friction needs sliding: no [motion] moves "
+                  f"{' or '.join(sorted(parts))} (a rotation of the disc, a translation of "
+                  "a belt)")
 
 
 def _sampled(case):

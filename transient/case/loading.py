@@ -27,6 +27,7 @@ class Case:
     contact: dict        # name -> ContactSpec
     sensors: dict        # name -> SensorSpec
     initial: dict        # name -> InitialSpec
+    motion: dict         # name -> MotionSpec
     solver: SolverSpec
     output: OutputSpec
     limits: LimitsSpec

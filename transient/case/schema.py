@@ -207,6 +207,42 @@ CONTACT = Table("a contact pair: two face sets of two parts, gap observed on the
     "norm": Value("choice", "norm of the pseudo-inverse of the dual projection: mass "
                   "(interface mass C^T W C) or identity (the paper's)", "mass",
                   choices=("mass", "identity")),
+    "friction": Table("Coulomb friction along the sliding that a [motion] of one of the two "
+                      "parts imposes: traction mu p times the regularized sign of the sliding "
+                      "velocity, observed through the same rule (and regularization) as the "
+                      "gap", {
+        "mu": Value("float", "friction coefficient (0: no friction; with a speeds table, "
+                    "leave it 0)", 0.0, minimum=0.0, maximum=10.0),
+        "speeds": Value("floats", "sliding speeds of a table mu(v), increasing, >= 0 (a "
+                        "falling characteristic; constant beyond its ends)", [], "m/s",
+                        minimum=0.0),
+        "values": Value("floats", "friction coefficients at those speeds", [], minimum=0.0,
+                        maximum=10.0),
+        "regularization": Value("choice", "smooth sign of the sliding velocity v: tanh(v / "
+                                "v_eps) (the default: exactly Coulomb once v > 20 v_eps) or "
+                                "atan ((2 / pi) atan(v / v_eps): a tail of 2 v_eps / (pi v) "
+                                "below Coulomb at any speed)", "tanh",
+                                choices=("tanh", "atan")),
+        "v_eps": Value("float", "slip velocity of the regularization: the law's slope at rest "
+                       "is mu p w / v_eps, a viscous damper that bounds an explicit step",
+                       1e-3, "m/s", open_min=0.0),
+    }, optional=True),
+})
+
+MOTION = Variant("rigid motion imposed on a part's material (its mesh stays: the sliding seen "
+                 "by the contact, as a disc rotating under a pad; no inertial terms of the "
+                 "motion are added)", {
+    "rotation": {
+        "part": Value("str", "part set in rotation"),
+        "axis": Value("floats", "direction of the axis (right-handed with omega)", length=3),
+        "point": _vec3("a point of the axis"),
+        "omega": Value("float", "angular speed", unit="rad/s", minimum=-1e6, maximum=1e6),
+    },
+    "translation": {
+        "part": Value("str", "part moving (a belt)"),
+        "velocity": Value("floats", "velocity", unit="m/s", length=3, minimum=-1e6,
+                          maximum=1e6),
+    },
 })
 
 SENSOR = Table("displacement observed at a point", {
@@ -330,6 +366,7 @@ CASE = Table("a case", {
     "contact": Named("contact pairs by name", CONTACT),
     "sensors": Named("sensors by name", SENSOR),
     "initial": Named("initial velocities by name", INITIAL),
+    "motion": Named("rigid motions imposed on parts by name (the sliding of friction)", MOTION),
     "solver": SOLVER,
     "output": OUTPUT,
     "limits": LIMITS,

@@ -62,6 +62,29 @@ class LawSpec:
 
 
 @dataclass(frozen=True)
+class FrictionSpec:
+    mu: float
+    speeds: tuple            # a table mu(v) when given [m/s]
+    values: tuple
+    regularization: str      # tanh, atan
+    v_eps: float             # [m/s]
+
+    @property
+    def active(self):
+        return self.mu > 0.0 or any(v > 0.0 for v in self.values)
+
+
+@dataclass(frozen=True)
+class MotionSpec:
+    kind: str                # rotation, translation
+    part: str
+    axis: tuple = ()
+    point: tuple = ()
+    omega: float = 0.0       # [rad/s]
+    velocity: tuple = ()     # [m/s]
+
+
+@dataclass(frozen=True)
 class ContactSpec:
     name: str
     surface1: str
@@ -83,6 +106,7 @@ class ContactSpec:
     formulation: str
     project: str
     norm: str
+    friction: FrictionSpec
 
     @property
     def wall(self):
@@ -215,8 +239,10 @@ def build(data):
         "constraints": {n: _make(ConstraintSpec, t) for n, t in data["constraints"].items()},
         "loads": {n: _make(LoadSpec, t, signal=dict(t["signal"]))
                   for n, t in data["loads"].items()},
-        "contact": {n: _make(ContactSpec, t, name=n, law=_make(LawSpec, t["law"]))
+        "contact": {n: _make(ContactSpec, t, name=n, law=_make(LawSpec, t["law"]),
+                             friction=_make(FrictionSpec, t["friction"]))
                     for n, t in data["contact"].items()},
+        "motion": {n: _make(MotionSpec, t) for n, t in data["motion"].items()},
         "sensors": {n: _make(SensorSpec, t) for n, t in data["sensors"].items()},
         "initial": {n: _make(InitialSpec, t) for n, t in data["initial"].items()},
         "solver": _make(SolverSpec, solver, modes=_make(ModesSpec, solver["modes"]),

@@ -53,6 +53,36 @@ def cmd_modes(args):
     return 0
 
 
+def cmd_cea(args):
+    from ..cea.stage import analyse
+    t0 = time.perf_counter()
+    case = load(args.case, args.overrides)
+    result = analyse(case)
+    modes = result.modes
+    total = time.perf_counter() - t0
+    if args.json:
+        print(json.dumps({"modes": modes.table(), "ndof": result.ndof,
+                          "reduced": result.reduced, "fmax_hz": result.fmax,
+                          "stages": result.stages, "total": total}))
+        return 0
+    friction = {n: c.friction for n, c in case.contact.items() if c.friction.active}
+    what = (f"reduced model {result.reduced} dofs" if result.reduced
+            else "full model (shift-invert Arnoldi)")
+    print(f"{case.path}: {result.ndof} free dofs, {what}, complex modes to "
+          f"{result.fmax:g} Hz; " + (", ".join(
+              f"contact {n}: mu = {f.mu:g}" if not f.speeds else f"contact {n}: mu(v) table"
+              for n, f in friction.items()) or "no friction"))
+    print(f"{'mode':>5} {'frequency [Hz]':>16} {'real [1/s]':>14} {'damping ratio':>14}")
+    for i, row in enumerate(modes.table(), 1):
+        mark = "  unstable" if row["unstable"] else ""
+        print(f"{i:>5} {row['frequency_hz']:16.6g} {row['real']:14.5g} "
+              f"{row['damping_ratio']:14.4e}{mark}")
+    print(f"{int(modes.unstable.sum())} unstable mode(s) below {result.fmax:g} Hz")
+    print("stages: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.stages.items())
+          + f"; total {total:.2f} s")
+    return 0
+
+
 def _pair_summary(pair):
     out = {"pair": pair.name, "rule": pair.spec.rule, "regularized": pair.spec.regularized,
            "k": pair.k, "points": pair.rule.n_points, "area": pair.rule.area, "eps": pair.eps,
@@ -251,7 +281,8 @@ def cmd_bench(args):
     return 0
 
 
-COMMANDS = {"run": cmd_run, "info": cmd_info, "modes": cmd_modes, "compat": cmd_compat,
+COMMANDS = {"run": cmd_run, "info": cmd_info, "modes": cmd_modes, "cea": cmd_cea,
+            "compat": cmd_compat,
             "bench": cmd_bench, "plot": cmd_plot, "export": cmd_export}
 
 

@@ -19,6 +19,10 @@ def build_parser():
     p = sub.add_parser("modes", help="normal modes of the case's model")
     _case_args(p)
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p = sub.add_parser("cea", help="complex eigenvalue analysis: the modes of the structure "
+                       "linearized at steady sliding with friction, which of them grow")
+    _case_args(p)
+    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p = sub.add_parser("run", help="transient: preload, then time integration to solver.t_end, "
                        "streamed to an HDF5 history")
     _case_args(p)

@@ -7,8 +7,26 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..kernels.laws import evaluate
+from .friction import steady, tangential_rows
 from .laws import law_params
 from .regularize import factored_rows
+
+
+@dataclass(frozen=True)
+class FrictionSet:
+    """The friction of every point at steady sliding (contact.friction): the tangential
+    observations and the law linearized there (zero on the points of pairs without friction)."""
+    along: sp.csr_matrix     # (P, ndof) rows Ct along the sliding, or (ndof, r) Bt with
+    across: sp.csr_matrix    # Ct = L Bt^T when the contact set is factored; Cc across
+    speed: np.ndarray        # (P,) sliding speed V [m/s]
+    m: np.ndarray            # (P,) traction per unit pressure mu(V) sgn_reg(V)
+    dm: np.ndarray           # (P,) its slope in the sliding speed [s/m]
+    turn: np.ndarray         # (P,) m / V: the damping across per unit pressure [s/m]
+
+    def subset(self, keep, factored):
+        rows = (lambda R: R) if factored else (lambda R: R[keep])
+        return FrictionSet(rows(self.along), rows(self.across), self.speed[keep],
+                           self.m[keep], self.dm[keep], self.turn[keep])
 
 
 @dataclass(frozen=True)
@@ -22,6 +40,7 @@ class ContactSet:
     slices: dict             # pair name -> slice of its points
     factors: tuple = None    # (L (P, r), B (ndof, r) sparse) with C = L B^T, when every pair's
     #                          rows are factored (regularized rules: contact.pair.row_factors)
+    friction: FrictionSet = None   # None when no pair has friction
 
     @cached_property
     def C(self):
@@ -44,9 +63,12 @@ class ContactSet:
         bounds = {name: np.searchsorted(keep, [s.start, s.stop]) for name, s in self.slices.items()}
         factors = None if self.factors is None else (self.factors[0][keep], self.factors[1])
         rows = self.rows[keep] if self.rows is not None else factored_rows(*factors)
+        friction = (None if self.friction is None
+                    else self.friction.subset(keep, factors is not None))
         return ContactSet(rows, self.gap0[keep], weights, self.code[keep],
                           self.params[keep], {name: slice(int(a), int(b))
-                                              for name, (a, b) in bounds.items()}, factors)
+                                              for name, (a, b) in bounds.items()}, factors,
+                          friction)
 
     def observe(self, T):
         """C T (P, k) for a dense T (ndof, k): from the factors when held, L (B^T T), which
@@ -55,6 +77,31 @@ class ContactSet:
             return np.asarray(self.C @ T)
         L, B = self.factors
         return L @ np.asarray(B.T @ T)
+
+    def observe_tangential(self, T):
+        """(Ct T, Cc T): the tangential observations along and across the sliding of a dense
+        T (ndof, k)."""
+        f = self.friction
+        if self.factors is None:
+            return np.asarray(f.along @ T), np.asarray(f.across @ T)
+        L = self.factors[0]
+        return L @ np.asarray(f.along.T @ T), L @ np.asarray(f.across.T @ T)
+
+    def tangential(self):
+        """(Ct, Cc) as CSR rows (P, ndof) (formed from the factors when held)."""
+        f = self.friction
+        if self.factors is None:
+            return f.along, f.across
+        return factored_rows(self.factors[0], f.along), factored_rows(self.factors[0], f.across)
+
+    def tangential_load(self, y):
+        """Ct^T y (ndof, ...): the force on the dofs of tractions y (P, ...) along the sliding."""
+        f = self.friction
+        return f.along.T @ y if self.factors is None else f.along @ (self.factors[0].T @ y)
+
+    def friction_force(self, p):
+        """The force on the dofs of the friction tractions at steady sliding, Ct^T (w p m)."""
+        return self.tangential_load(self.weights * p * self.friction.m)
 
     def force(self, u):
         """Contact force C^T (w p) [N] at displacement u, with gaps, pressures and tangents
@@ -97,5 +144,34 @@ def stack(pairs, ndof):
     else:
         C = sp.vstack(rows).tocsr()
         C.eliminate_zeros()
+    friction = _friction(pairs, ndof, factored)
     return ContactSet(C, np.concatenate(gap0), np.concatenate(w), np.concatenate(code),
-                      np.vstack(params), slices, factors)
+                      np.vstack(params), slices, factors, friction)
+
+
+def _friction(pairs, ndof, factored):
+    """The FrictionSet of the pairs, None when none has friction."""
+    if all(pair.sliding is None for pair in pairs):
+        return None
+    along, across, speed, m, dm, turn = [], [], [], [], [], []
+    for pair in pairs:
+        n = pair.rule.n_points
+        if pair.sliding is None:
+            width = pair.factors[1].shape[1] if factored else ndof
+            zero = sp.csr_matrix((ndof, width) if factored else (n, width))
+            along.append(zero)
+            across.append(zero)
+            for x in (speed, m, dm, turn):
+                x.append(np.zeros(n))
+            continue
+        t, c = tangential_rows(pair, pair.sliding, ndof)
+        along.append(t)
+        across.append(c)
+        law = steady(pair.spec.friction, pair.sliding.speed)
+        speed.append(pair.sliding.speed)
+        m.append(law.m)
+        dm.append(law.dm)
+        turn.append(law.across)
+    join = sp.hstack if factored else sp.vstack
+    return FrictionSet(join(along).tocsr(), join(across).tocsr(), *map(np.concatenate,
+                                                                         (speed, m, dm, turn)))

@@ -16,6 +16,7 @@ import scipy.sparse as sp
 from .coarse import select, side_bases
 from .compatibility import auto_eps, compatibility
 from ..errors import CaseError
+from .friction import pair_sliding
 from .interface import InterfaceError, build_interface, build_wall_interface
 from ..model.model import resolve_set
 from .regularize import (dual_factors, factor_projectors, factored_rows, primal_basis,
@@ -42,6 +43,7 @@ class ContactPair:
     factors: tuple = None     # (L, B): the rule's observation is L B^T (regularize.row_factors);
     #                           the rule's C1, C2 are then None
     projections: tuple = None  # with factors: (Q1, Y1), (Q2, Y2) of the sides' projectors
+    sliding: object = None    # friction.PairFriction with friction, else None
 
     @property
     def k(self):
@@ -129,8 +131,11 @@ def build_pair(case, model, name, need_compatibility=False):
             raise CaseError(case.path, f"{key}.weights", str(exc)) from None
         rule = coarse.rule
         timings["coarse_rule"] = time.perf_counter() - t0
-    return ContactPair(name, spec, interface, comp, eps, eps_source, rule, primal, coarse,
+    pair = ContactPair(name, spec, interface, comp, eps, eps_source, rule, primal, coarse,
                        timings, factors=factors, projections=projections)
+    if spec.friction.active:
+        pair = replace(pair, sliding=pair_sliding(case, pair))
+    return pair
 
 
 def build_contact(case, model, need_compatibility=False):

@@ -41,6 +41,8 @@ class ReducedSystem(System):
     damp: np.ndarray = None      # (n,) modal damping coefficients 2 zeta omega + Rayleigh [1/s]
     C: np.ndarray = None         # (m, n) contact rows C T, dense
     T: np.ndarray = None         # (ndof, n) the basis, zero on fixed dofs (field output only)
+    Ct: np.ndarray = None        # (m, n) tangential rows along the sliding (friction only)
+    Cc: np.ndarray = None        # (m, n) and across it
     reduced = True
 
 
@@ -54,6 +56,8 @@ class FullSystem(System):
     beta: float = 0.0
     C: sp.csr_matrix = None      # (m, n) contact rows on the free dofs
     free: np.ndarray = None      # the free dofs q lives on
+    Ct: sp.csr_matrix = None     # (m, n) tangential rows along the sliding (friction only)
+    Cc: sp.csr_matrix = None     # (m, n) and across it
     reduced = False
 
 
@@ -85,11 +89,14 @@ def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, si
     Cr = np.ascontiguousarray(contacts.observe(X) @ AW)
     n = len(omega2)
     S = _observation((sensors @ X) @ AW, n, field, dense=True)
+    Ct = Cc = None
+    if contacts.friction is not None:
+        Ct, Cc = (np.ascontiguousarray(R @ AW) for R in contacts.observe_tangential(X))
     return ReducedSystem(contacts, tangent,
                          patterns_matrix([AW.T @ (X.T @ p) for p in patterns], n),
                          signals, S, sensor_names, n if field else 0,
                          critical.reduced(omega2, Cr, contacts, tangent), omega2=omega2,
-                         damp=damp, C=Cr, T=X @ AW if field else None)
+                         damp=damp, C=Cr, T=X @ AW if field else None, Ct=Ct, Cc=Cc)
 
 
 def full_system(K_lin, lumped, M, damping, contacts, tangent, free, patterns, signals, sensors,
@@ -100,8 +107,11 @@ def full_system(K_lin, lumped, M, damping, contacts, tangent, free, patterns, si
     mass = lumped[free]
     Cf = restrict(contacts.C, cols=free)
     S = _observation(sensors[:, free], len(free), field, dense=False)
+    Ct = Cc = None
+    if contacts.friction is not None:
+        Ct, Cc = (restrict(R, cols=free) for R in contacts.tangential())
     return FullSystem(contacts, tangent, patterns_matrix([p[free] for p in patterns], len(free)),
                       signals, S, sensor_names, len(free) if field else 0,
                       critical.full(Kf, mass, Cf, contacts, tangent), K=Kf, mass=mass,
                       M=sp.diags(mass).tocsr() if M is None else free_block(M, free),
-                      alpha=damping.alpha, beta=damping.beta, C=Cf, free=free)
+                      alpha=damping.alpha, beta=damping.beta, C=Cf, free=free, Ct=Ct, Cc=Cc)

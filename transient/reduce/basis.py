@@ -60,7 +60,8 @@ class Basis:
         return self.A.T @ (self.X.T @ y)
 
 
-def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None, tol=0.0):
+def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None, tol=0.0,
+                  coupling=None):
     """Basis of the modes of (K_lin, M) up to fmax [Hz] and the responses to static loads.
     K_lin: sparse on the model dofs, or the tangent on the free dofs as an operator
     (lowrank.TangentStiffness, what the setup passes).
@@ -72,6 +73,9 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     contact (C, stiffness (m,)): adds the responses to the contact point loads C^T, only the
     shapes of them that matter (`contact_shapes`, tol); C (m, ndof), or (m, nfree) already
     restricted to the free dofs (the factorization stage's).
+
+    coupling: loads (nfree, k) of the modes Phi (nfree, n) that the basis must respond to
+    beyond them (the friction forces their normal motion drives, reduce.stage), or None.
     """
     t0 = time.perf_counter()
     free = np.flatnonzero(~fixed)
@@ -94,6 +98,8 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
         C = Cf = contact = None          # a dense copy at scale: not held through the basis
         columns.append(shapes)
         n_shapes = shapes.shape[1]
+    if coupling is not None:
+        columns.append(np.atleast_2d(solve(np.asfortranarray(coupling(Phi))).T).T)
     if statics.shape[1]:
         columns.append(np.atleast_2d(solve(np.asfortranarray(statics[free])).T).T)
     t_static = time.perf_counter() - t0 - t_modes

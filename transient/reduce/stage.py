@@ -58,8 +58,10 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
     contact = ((rows, contacts.weights * kt_crit)
                if reduction.statics and contacts.n_points else None)
     t0 = perf_counter()
+    coupling = (_friction_loads(contacts, preload, free)
+                if contacts.friction is not None and reduction.statics else None)
     basis = reduced_basis(K_lin, M, model.fixed, reduction.fmax, np.hstack(loads), solve,
-                          case.solver.shift_hz, contact, reduction.statics_tolerance)
+                          case.solver.shift_hz, contact, reduction.statics_tolerance, coupling)
     stages["reduction"] = perf_counter() - t0
     # T^T (M u): two sparse products with vectors, not one with the n x r basis
     q0, v = basis.coordinates(M @ preload.u), basis.coordinates(M @ v0)
@@ -95,6 +97,20 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
                         meta)
 
 
+def _friction_loads(contacts, preload, free):
+    """The friction forces Ct^T diag(w m k_t) C phi that the normal motion of each mode phi
+    drives at steady sliding (the friction stiffness's columns on the modes): their static
+    responses give the basis what the coupling of the modes through friction moves, which the
+    modes and the normal contact shapes need not hold."""
+    d = contacts.weights * contacts.friction.m * preload.tangent
+
+    def loads(Phi):
+        X = np.zeros((len(free), Phi.shape[1]))
+        X[free] = Phi
+        return contacts.tangential_load(d[:, None] * contacts.observe(X))[free]
+    return loads
+
+
 def _sample(case, contacts, candidate, omega2, Cr, q0, preload):
     """The sampled rule's points (sampling.py), with the reduced preload they hold. The points
     of every sampled pair are chosen together, to the first one's tolerance and cap."""
@@ -121,6 +137,8 @@ def _sampled_pairs(pairs, rich, keep, contacts):
             out.append(p)
             continue
         factors = None if p.factors is None else (p.factors[0][local], p.factors[1])
+        sliding = (None if p.sliding is None
+                   else replace(p.sliding, speed=p.sliding.speed[local]))
         out.append(replace(p, rule=subset_rule(p.rule, local, contacts.weights[new]),
-                           candidates=s.stop - s.start, factors=factors))
+                           candidates=s.stop - s.start, factors=factors, sliding=sliding))
     return out

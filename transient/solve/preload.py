@@ -1,7 +1,8 @@
 """Preload: static equilibrium under the constant loads with the nonlinear contact laws.
 
 Newton with a backtracking line search on the residual r(u) = f + C^T w p(C u + g0) - K u over
-the free dofs. The tangent K + C^T diag(w k_t) C is applied through a ContactSolver (one sparse
+the free dofs (plus, with friction, the tractions of steady sliding Ct^T w p m: the preload is
+then the steady sliding state). The tangent K + C^T diag(w k_t) C is applied through a ContactSolver (one sparse
 factorization of K - sigma M, low-rank updates for the contact): the tiny shift -sigma M keeps
 floating parts solvable and only slows the quadratic convergence by a factor of order sigma over
 the lowest eigenvalue.
@@ -45,6 +46,12 @@ def solve_preload(K, fixed, load, contacts, solver, tol=1e-10, max_iter=50):
 
     def residual(u):
         fc, g, p, kt = contacts.force(u)
+        if contacts.friction is not None:
+            # steady sliding: the friction tractions mu p along the constant sliding
+            # directions. The tangent below leaves out their non-symmetric stiffness, so the
+            # iterations converge linearly, at a rate of order mu times the coupling of the
+            # tangential loads into the pressures (small where supports take them)
+            fc = fc + contacts.friction_force(p)
         return (load + fc - K @ u)[free], g, p, kt
 
     r, g, p, kt = residual(u)

@@ -1,0 +1,69 @@
+"""Wall time of `transient cea` against `transient modes` on the same case, back to back.
+
+Each command is a child process (start-up and imports included, as a user sees them); the two
+alternate `--repeat` times so that a change of the machine's load shows in both. The cea's
+stages (setup, the complex modes themselves) come from its JSON. The issue's targets: the CEA
+of pad_disc (setup included) within 1.5x of `transient modes`, the complex modes under 1 s.
+
+    python tools/bench_cea.py [CASE] [--mu 0.4] [--repeat 2] [--set key=value ...] [--json]
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def timed(command, case, overrides):
+    args = [sys.executable, "-m", "transient", command, str(case), "--json"]
+    for o in overrides:
+        args += ["--set", o]
+    t0 = time.perf_counter()
+    done = subprocess.run(args, cwd=ROOT, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if done.returncode != 0:
+        sys.exit(f"transient {command} failed ({done.returncode}): {done.stderr.strip()}")
+    return wall, json.loads(done.stdout)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("case", nargs="?", default=str(ROOT / "cases" / "pad_disc.toml"))
+    parser.add_argument("--mu", type=float, default=0.4)
+    parser.add_argument("--pair", default="pad_disc")
+    parser.add_argument("--repeat", type=int, default=2)
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args(argv)
+    friction = args.set + [f"contact.{args.pair}.friction.mu={args.mu}"]
+    timed("cea", args.case, friction)          # compiles what the cache lacks
+    rows = []
+    for _ in range(args.repeat):
+        wall_modes, modes = timed("modes", args.case, args.set)
+        wall_cea, cea = timed("cea", args.case, friction)
+        rows.append({"modes_s": wall_modes, "cea_s": wall_cea, "ratio": wall_cea / wall_modes,
+                     "complex_modes_s": cea["stages"]["complex_modes"],
+                     "cea_stages": cea["stages"], "reduced_dofs": cea["reduced"],
+                     "unstable": [m for m in cea["modes"] if m["unstable"]],
+                     "modes_count": len(modes["frequencies_hz"])})
+    load = os.getloadavg()[0]
+    if args.json:
+        print(json.dumps({"case": Path(args.case).name, "mu": args.mu, "load": load,
+                          "rows": rows}))
+        return
+    for r in rows:
+        print(f"modes {r['modes_s']:.1f} s, cea {r['cea_s']:.1f} s: ratio {r['ratio']:.2f}; "
+              f"complex modes {r['complex_modes_s']:.2f} s on {r['reduced_dofs']} dofs; "
+              f"{len(r['unstable'])} unstable")
+    print(f"load {load:.1f}")
+    for m in rows[-1]["unstable"]:
+        print(f"  unstable {m['frequency_hz']:.1f} Hz, real {m['real']:.4g} 1/s, "
+              f"damping ratio {m['damping_ratio']:.3e}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,65 @@
+"""The cea stage: the case's setup up to its system (preload at steady sliding, reduction),
+linearized there, and its complex modes: QZ on the reduced model, shift-invert Arnoldi on the
+full one (solver.reduction.enabled = false: the reference for small cases).
+
+A sampled rule is analysed on the points it samples from (its pair's regularized fine rule): the
+sampling serves the time integration's contact passes, while the linearized matrices of every
+fine point cost one product with the basis.
+"""
+import time
+from dataclasses import dataclass, replace
+
+from .linearize import linearized
+from .modes import complex_modes
+from .reference import full_complex_modes
+
+FULL_DOFS = 60_000    # free dofs above which the full model's complex LU per shift is refused
+
+
+@dataclass(frozen=True)
+class Analysis:
+    modes: object            # ComplexModes up to fmax
+    fmax: float              # [Hz]
+    ndof: int                # free dofs of the model
+    reduced: int             # dofs of the reduced model (0: the full model)
+    stages: dict             # stage -> seconds
+    meta: dict               # the setup's (dynamics prepare's meta)
+
+
+def analysed_case(case):
+    """The case the analysis prepares: sampled rules on their candidates."""
+    contact = {name: replace(c, rule="fine") if c.rule == "sampled" else c
+               for name, c in case.contact.items()}
+    return replace(case, contact=contact)
+
+
+def fmax_of(case):
+    solver = case.solver
+    return solver.reduction.fmax if solver.reduction.enabled else (
+        solver.modes.fmax or solver.reduction.fmax)
+
+
+def analyse(case, check=None):
+    """Complex modes of a case at its steady sliding state (Analysis)."""
+    from ..stages import prepare
+    setup = prepare(analysed_case(case), check)
+    stages = dict(setup.stages)
+    system = setup.system
+    if not system.reduced and system.n > FULL_DOFS:
+        # one complex LU per shift: the full model is the reference for small cases
+        raise case.error("solver.reduction.enabled", f"the full model's complex modes "
+                         f"({system.n} free dofs, above {FULL_DOFS}) take a complex "
+                         "factorization per shift: analyse the reduced model "
+                         "(solver.reduction.enabled = true)")
+    fmax = fmax_of(case)
+    t0 = time.perf_counter()
+    M, D, K = linearized(system, setup.state)
+    if system.reduced:
+        modes = complex_modes(M, D, K).below(fmax)
+    else:
+        modes = full_complex_modes(M, D, K, fmax)
+    stages["complex_modes"] = time.perf_counter() - t0
+    ndof = setup.meta.get("free_dofs", system.n)
+    return Analysis(modes, fmax, int(ndof), system.n if system.reduced else 0, stages,
+                    setup.meta)
+

@@ -1,0 +1,174 @@
+"""Friction on a contact pair: the sliding a [motion] imposes, the tangential observation, and
+the regularized Coulomb law.
+
+Sliding. A rigid motion of a part's material (a disc rotating under its fixed mesh: the
+deformation is computed in the frame where the mesh stays) gives every point of Gamma the
+velocity V = v2 - v1 of surface 2 relative to surface 1, projected on the contact plane at the
+point: its direction t is the sliding direction, its length the sliding speed (Omega r on a
+disc). c = n x t is the direction across. The inertial (gyroscopic, convective) terms of the
+motion are left out.
+
+Tangential observation. Like the gap, through the node directions: t_a at each interface node
+(V at the node, projected off its normal), so the tangential displacement of a side is a scalar
+nodal field, observed by the very rows that observe the normal one. d = C1 u1_t - C2 u2_t is the
+displacement of surface 1 relative to surface 2 along t. A regularized rule observes it through
+the same (1-eps)-compatible projection: the friction traction is mu times the normal one, the
+same traction field, so its work is observed by the same operator (and a factored rule, C = L
+B^T, shares L: only B changes).
+
+Law. The traction on surface 1 is mu(|s|) p sgn_reg(s) along t with s = V - d' the sliding
+speed of 2 relative to 1, so the force on the dofs is f = C_t^T (w p m(s)), m(s) = mu(|s|)
+sgn_reg(s). sgn_reg(s) = tanh(s / v_eps) (the default: exactly Coulomb to round-off once s >
+20 v_eps, so steady sliding is unbiased) or (2 / pi) atan(s / v_eps) (a tail 2 v_eps / (pi s)
+below Coulomb at every speed). Its slope at rest, mu / v_eps, is a viscous damper of w p mu /
+v_eps per point: the bound it puts on an explicit step is the same as any damper's, dt <=
+2 (sqrt(1 + zeta^2) - zeta) / omega. Across the sliding the traction turns with the velocity:
+mu p w reg(V) / V per unit of velocity across, a damper (the friction's directional damping).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import CaseError
+from ..mesh.mesh import unit
+
+TANH, ATAN = 0, 1
+CODES = {"tanh": TANH, "atan": ATAN}
+
+
+def rigid_velocity(motion, x):
+    """Velocity (k, 3) of the rigid motion (MotionSpec) at points x (k, 3)."""
+    x = np.asarray(x, float)
+    if motion.kind == "rotation":
+        axis = unit(motion.axis)
+        return motion.omega * np.cross(axis, x - np.asarray(motion.point, float))
+    return np.broadcast_to(np.asarray(motion.velocity, float), x.shape).copy()
+
+
+def _part_velocity(case, part, x):
+    v = np.zeros((len(x), 3))
+    for motion in case.motion.values():
+        if motion.part == part:
+            v += rigid_velocity(motion, x)
+    return v
+
+
+def _in_plane(v, normals):
+    return v - np.einsum("ij,ij->i", v, normals)[:, None] * normals
+
+
+def sliding_velocity(case, spec, x, normals):
+    """V = v2 - v1 at points x (k, 3), projected off the unit normals (k, 3)."""
+    part1 = spec.surface1.split(".", 1)[0]
+    v = -_part_velocity(case, part1, x)
+    if not spec.wall:
+        v += _part_velocity(case, spec.surface2.split(".", 1)[0], x)
+    return _in_plane(v, normals)
+
+
+def _directions(V, what, key, case):
+    speed = np.linalg.norm(V, axis=1)
+    scale = speed.max() if len(speed) else 0.0
+    still = speed <= 1e-9 * max(scale, 1e-300)
+    if np.any(still):
+        raise CaseError(case.path, key, f"the motions leave {int(still.sum())} {what} of the "
+                        "contact without sliding (on an axis of rotation, or no relative "
+                        "motion): friction needs a sliding direction everywhere")
+    return V / speed[:, None], speed
+
+
+@dataclass(frozen=True)
+class PairFriction:
+    """The sliding of a pair: node directions of each side, speeds at the rule's points."""
+    along1: np.ndarray       # (N1, 3) t at the nodes of side 1
+    along2: np.ndarray       # (N2, 3)
+    across1: np.ndarray      # (N1, 3) n x t
+    across2: np.ndarray
+    speed: np.ndarray        # (P,) sliding speed V at the rule's points [m/s]
+
+
+def pair_sliding(case, pair):
+    """The sliding field of a contact pair with friction (ContactPair)."""
+    spec, interface = pair.spec, pair.interface
+    key = f"contact.{pair.name}.friction"
+    sides = []
+    for side in (interface.side1, interface.side2):
+        if side.n == 0:
+            sides.append((np.zeros((0, 3)), np.zeros((0, 3))))
+            continue
+        x = side.points[side.nodes]
+        t, _ = _directions(sliding_velocity(case, spec, x, side.node_normals), "nodes", key, case)
+        sides.append((t, np.cross(side.node_normals, t)))
+    rule = pair.rule
+    _, speed = _directions(sliding_velocity(case, spec, rule.points, rule.normals), "points",
+                           key, case)
+    return PairFriction(sides[0][0], sides[1][0], sides[0][1], sides[1][1], speed)
+
+
+def regularized_sign(code, s, v_eps):
+    """sgn_reg(s) and its derivative."""
+    x = s / v_eps
+    if code == TANH:
+        sign = np.tanh(x)
+        return sign, (1.0 - sign ** 2) / v_eps
+    return (2 / np.pi) * np.arctan(x), (2 / np.pi) / (v_eps * (1.0 + x ** 2))
+
+
+def coefficient(spec, speed):
+    """mu(|s|) and d mu / d|s| at speeds (the table linear between its points)."""
+    speed = np.abs(np.asarray(speed, float))
+    if not spec.speeds:
+        return np.full(speed.shape, spec.mu), np.zeros(speed.shape)
+    v, m = np.asarray(spec.speeds, float), np.asarray(spec.values, float)
+    mu = np.interp(speed, v, m)
+    if len(v) == 1:
+        return mu, np.zeros(speed.shape)
+    slopes = np.diff(m) / np.diff(v)
+    i = np.searchsorted(v, speed, side="right") - 1
+    inside = (i >= 0) & (i < len(slopes))
+    return mu, np.where(inside, slopes[np.clip(i, 0, len(slopes) - 1)], 0.0)
+
+
+@dataclass(frozen=True)
+class SteadySliding:
+    """The law linearized at steady sliding (d = 0, s = V) at every point: f = C_t^T (w p m)."""
+    m: np.ndarray            # (P,) mu(V) sgn_reg(V): the traction per unit pressure
+    dm: np.ndarray           # (P,) d m / d s at V: the damping along t per unit pressure
+    across: np.ndarray       # (P,) m / V: the damping across t per unit pressure [s/m]
+
+
+def steady(spec, speed):
+    """SteadySliding of a FrictionSpec at sliding speeds V (P,)."""
+    code = CODES[spec.regularization]
+    sign, dsign = regularized_sign(code, speed, spec.v_eps)
+    mu, dmu = coefficient(spec, speed)
+    m = mu * sign
+    return SteadySliding(m, dmu * sign * np.sign(speed) + mu * dsign, m / speed)
+
+
+def direction_map(side, directions, ndof):
+    """(N, ndof) sparse map from model dofs to the side's nodal components along directions."""
+    rows = np.repeat(np.arange(side.n), 3)
+    cols = (3 * (side.nodes + side.offset))[:, None] + np.arange(3)
+    return sp.csr_matrix((np.asarray(directions).ravel(), (rows, cols.ravel())),
+                         shape=(side.n, ndof))
+
+
+def tangential_rows(pair, sliding, ndof):
+    """The pair's observation of the tangential displacement along and across the sliding:
+    (Ct, Cc) as CSR rows (P, ndof), or, for a factored rule (C = L B^T), (Bt, Bc) with Ct =
+    L Bt^T: the same L as the gap's."""
+    s1, s2 = pair.interface.side1, pair.interface.side2
+    out = []
+    for d1, d2 in ((sliding.along1, sliding.along2), (sliding.across1, sliding.across2)):
+        T1, T2 = direction_map(s1, d1, ndof), direction_map(s2, d2, ndof)
+        if pair.factors is not None:
+            (_, Y1), (_, Y2) = pair.projections
+            out.append(sp.hstack([T1.T @ sp.csr_matrix(Y1.T), T2.T @ sp.csr_matrix(Y2.T)])
+                       .tocsr())
+        else:
+            rule = pair.rule
+            out.append(sp.csr_matrix(sp.csr_matrix(rule.C1) @ T1
+                                     - sp.csr_matrix(rule.C2) @ T2))
+    return tuple(out)
