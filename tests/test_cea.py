@@ -171,3 +171,23 @@ def test_frictionless_complex_modes_are_the_tied_modes(capsys):
     assert len(f) == len(tied)
     np.testing.assert_allclose(f, tied, rtol=1e-8)
     assert out["ndof"] > out["reduced"] > len(f)
+
+
+def test_nodal_diameter_of_a_disc_wave():
+    """A standing wave cos(3 theta) of the disc's axial motion is 3 nodal diameters, all of
+    it; a travelling one exp(5 i theta) is 5; energy shares add to one."""
+    from transient.cea.shapes import nodal_diameter, part_shares
+    from transient.model import build_model
+    case = small()
+    model = build_model(case)
+    motion = case.motion["disc"]
+    x = model.parts["disc"].mesh.points
+    theta = np.arctan2(x[:, 1], x[:, 0])
+    dofs = model.part_dofs("disc").reshape(-1, 3)
+    for wave, order in ((np.cos(3 * theta), 3), (np.exp(5j * theta), 5)):
+        u = np.zeros(model.ndof, complex)
+        u[dofs[:, 2]] = wave * np.hypot(x[:, 0], x[:, 1])
+        n, share = nodal_diameter(model, motion, u)
+        assert n == order and share > 0.999
+        shares = part_shares(model, model.M, u)
+        assert shares["disc"] == pytest.approx(1.0) and shares["pad"] == 0.0

@@ -38,6 +38,7 @@ class Setup:
     stages: dict             # stage -> seconds
     meta: dict               # what the stages report (points, reduced dofs, preload)
     geometry: dict           # fixed arrays of the history (/geometry)
+    model: object = None     # the Model (parts, dofs) the system was built from
 
 
 class _Stages(dict):
@@ -147,7 +148,8 @@ def _prepare(case, stages):
         meta["factorizations"] = {"stiffness": why(getattr(cs.solve0, "backend", "?"),
                                                    solver.linear_solver)}
     stages.check()
-    return Setup(system, state, rows0, dict(stages), meta, _geometry(case, system, pairs))
+    return Setup(system, state, rows0, dict(stages), meta, _geometry(case, system, pairs),
+                 model)
 
 
 def _contact_meta(pairs, contacts, preload):

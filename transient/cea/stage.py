@@ -9,9 +9,13 @@ fine point cost one product with the basis.
 import time
 from dataclasses import dataclass, replace
 
+import numpy as np
+import scipy.sparse as sp
+
 from .linearize import linearized
 from .modes import complex_modes
 from .reference import full_complex_modes
+from .shapes import describe
 
 FULL_DOFS = 60_000    # free dofs above which the full model's complex LU per shift is refused
 
@@ -24,13 +28,15 @@ class Analysis:
     reduced: int             # dofs of the reduced model (0: the full model)
     stages: dict             # stage -> seconds
     meta: dict               # the setup's (dynamics prepare's meta)
+    shapes: list             # the unstable modes described (cea.shapes.describe)
 
 
 def analysed_case(case):
-    """The case the analysis prepares: sampled rules on their candidates."""
+    """The case the analysis prepares: sampled rules on their candidates, and the reduced
+    basis formed (output.field) to draw and describe the modes."""
     contact = {name: replace(c, rule="fine") if c.rule == "sampled" else c
                for name, c in case.contact.items()}
-    return replace(case, contact=contact)
+    return replace(case, contact=contact, output=replace(case.output, field=True))
 
 
 def fmax_of(case):
@@ -60,6 +66,14 @@ def analyse(case, check=None):
         modes = full_complex_modes(M, D, K, fmax)
     stages["complex_modes"] = time.perf_counter() - t0
     ndof = setup.meta.get("free_dofs", system.n)
+    T = system.T if system.reduced else _full_basis(setup.model.ndof, system.free)
+    shapes = describe(case, setup.model, T, modes, np.flatnonzero(modes.unstable))
     return Analysis(modes, fmax, int(ndof), system.n if system.reduced else 0, stages,
-                    setup.meta)
+                    setup.meta, shapes)
+
+
+def _full_basis(ndof, free):
+    """The free dofs' injection in the model's dofs (sparse)."""
+    return sp.csr_matrix((np.ones(len(free)), (free, np.arange(len(free)))),
+                         shape=(ndof, len(free)))
 

@@ -63,7 +63,8 @@ def cmd_cea(args):
     if args.json:
         print(json.dumps({"modes": modes.table(), "ndof": result.ndof,
                           "reduced": result.reduced, "fmax_hz": result.fmax,
-                          "stages": result.stages, "total": total}))
+                          "unstable_shapes": result.shapes, "stages": result.stages,
+                          "total": total}))
         return 0
     friction = {n: c.friction for n, c in case.contact.items() if c.friction.active}
     what = (f"reduced model {result.reduced} dofs" if result.reduced
@@ -78,6 +79,12 @@ def cmd_cea(args):
         print(f"{i:>5} {row['frequency_hz']:16.6g} {row['real']:14.5g} "
               f"{row['damping_ratio']:14.4e}{mark}")
     print(f"{int(modes.unstable.sum())} unstable mode(s) below {result.fmax:g} Hz")
+    for row in result.shapes:
+        parts = ", ".join(f"{p} {100 * v:.0f}%" for p, v in row["shares"].items())
+        nd = "".join(f"; {p}: {d['order']} nodal diameters ({100 * d['share']:.0f}% of its "
+                     "axial motion)" for p, d in row.get("nodal_diameters", {}).items())
+        print(f"  mode {row['mode']} at {row['frequency_hz']:.1f} Hz: kinetic energy "
+              f"{parts}{nd}")
     print("stages: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.stages.items())
           + f"; total {total:.2f} s")
     return 0
