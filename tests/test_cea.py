@@ -191,3 +191,26 @@ def test_nodal_diameter_of_a_disc_wave():
         assert n == order and share > 0.999
         shares = part_shares(model, model.M, u)
         assert shares["disc"] == pytest.approx(1.0) and shares["pad"] == 0.0
+
+
+def test_plot_cea_draws_the_diagram_the_unstable_shapes_and_the_mu_map(tmp_path, capsys):
+    from PIL import Image
+    args = ["plot", "cea", str(PAD), "--out", str(tmp_path), "--mu", "0:0.4:2"]
+    args += [a for o in SMALL + ["contact.pad_disc.friction.mu=0.4"] for a in ("--set", o)]
+    assert main(args) == 0
+    paths = [Path(p) for p in capsys.readouterr().out.split()]
+    names = [p.name for p in paths]
+    assert names[0] == "pad_disc_stability.png" and names[-1] == "pad_disc_mu_map.png"
+    assert len([n for n in names if n.startswith("pad_disc_mode_")]) >= 2
+    for p in paths:
+        with Image.open(p) as image:
+            pixels = np.asarray(image.convert("L"))
+        assert pixels.std() > 5, p           # something is drawn, not a blank canvas
+
+
+@pytest.mark.parametrize("mu, reason", [("0:1", "START:STOP:COUNT"), ("0:0.6:0", "COUNT"),
+                                        ("-0.1,0.2", ">= 0"), ("0:0.6:x", "")])
+def test_plot_cea_bad_mu_is_one_line(tmp_path, capsys, mu, reason):
+    code = main(["plot", "cea", str(PAD), "--out", str(tmp_path), f"--mu={mu}"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "--mu" in err and reason in err

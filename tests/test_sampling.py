@@ -6,7 +6,8 @@ from scipy.optimize import nnls
 
 from transient.studies.bench import Variant, compare, run_variant
 from transient.cli import main
-from transient.reduce.sampling import features, gram_column, gram_target, nnls_gram, sample
+from transient.reduce.sampling import (features, friction_terms, gram_column, gram_target,
+                                       nnls_gram, sample)
 
 from test_bench import CASES, SMALL
 
@@ -34,6 +35,35 @@ def test_gram_matrix_is_the_features_gram():
         assert np.allclose(gram_column(feats, j), G[:, j], rtol=1e-12, atol=1e-12 * abs(G).max())
     w = rng.uniform(0.5, 1.5, len(p))
     assert np.allclose(gram_target(feats, w), G @ w, rtol=1e-11)
+
+
+def test_friction_features_gram_is_the_explicit_one():
+    """With friction, each point's features gain the friction stiffness's band columns
+    m k_t ct_i c_iJ^T, the friction preload m p ct_i / s (y = Omega q) and the damping along and
+    across p m' ct'_i ct'_iJ^T, p (m / V) cc'_i cc'_iJ^T (y = Omega^1/2 q), written out here
+    from Omega and the rows, not from the terms."""
+    rng = np.random.default_rng(3)
+    omega2, Cr, p, kt, q0, band = _random_system(rng)
+    m_pts = len(p)
+    Ct, Cc = rng.normal(size=(m_pts, len(omega2))), rng.normal(size=(m_pts, len(omega2)))
+    m, dm, turn = rng.uniform(0.2, 0.5, m_pts), rng.normal(size=m_pts), rng.uniform(0, 1, m_pts)
+    feats = features(omega2, Cr, p, kt, q0, band)
+    terms = friction_terms(omega2, Ct, Cc, m, dm, turn, p, kt, q0, band, Cr)
+    omega = np.sqrt(omega2)
+    s = np.linalg.norm(omega * q0)
+    c, ct, r = Cr / omega, Ct / omega, np.sqrt(omega)
+    extra = np.stack([np.r_[m[i] * kt[i] * np.outer(ct[i], c[i, :band]).ravel(),
+                            m[i] * p[i] / s * ct[i],
+                            p[i] * dm[i] * np.outer(Ct[i] / r, (Ct[i] / r)[:band]).ravel(),
+                            p[i] * turn[i] * np.outer(Cc[i] / r, (Cc[i] / r)[:band]).ravel()]
+                      for i in range(m_pts)], axis=1)
+    Z = np.vstack([_explicit(*feats), extra])
+    G = Z.T @ Z
+    for j in (0, 11, 39):
+        assert np.allclose(gram_column(feats, j, terms), G[:, j], rtol=1e-12,
+                           atol=1e-12 * abs(G).max())
+    w = rng.uniform(0.5, 1.5, m_pts)
+    assert np.allclose(gram_target(feats, w, terms), G @ w, rtol=1e-11)
 
 
 def test_nnls_in_gram_form_matches_scipy():

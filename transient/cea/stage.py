@@ -29,6 +29,12 @@ class Analysis:
     stages: dict             # stage -> seconds
     meta: dict               # the setup's (dynamics prepare's meta)
     shapes: list             # the unstable modes described (cea.shapes.describe)
+    model: object = None     # the Model, and
+    basis: object = None     # (ndof, n) the modes' coordinates to the model's dofs
+
+    def displacement(self, j):
+        """(ndof,) complex displacement of mode j (0-based)."""
+        return self.basis @ self.modes.vectors[:, j]
 
 
 def analysed_case(case):
@@ -69,7 +75,7 @@ def analyse(case, check=None):
     T = system.T if system.reduced else _full_basis(setup.model.ndof, system.free)
     shapes = describe(case, setup.model, T, modes, np.flatnonzero(modes.unstable))
     return Analysis(modes, fmax, int(ndof), system.n if system.reduced else 0, stages,
-                    setup.meta, shapes)
+                    setup.meta, shapes, setup.model, T)
 
 
 def _full_basis(ndof, free):

@@ -85,6 +85,15 @@ def _plot_parser(sub):
     p.add_argument("--pair", metavar="NAME", help="only this contact pair")
     p.add_argument("--shapes", metavar="I,J,...", help="shape numbers to draw, from 1 by "
                    "increasing incompatibility (default: the first, the last kept, two beyond)")
+    p = kinds.add_parser("cea", help="complex modes with friction: the stability diagram, "
+                         "the shapes of the unstable modes, and (--mu) the map of the modes "
+                         "against the friction coefficient")
+    _case_args(p)
+    p.add_argument("--out", required=True, metavar="DIR", help="directory of the PNG files")
+    p.add_argument("--mu", metavar="START:STOP:COUNT", help="friction coefficients of the map "
+                   "(or a comma-separated list), e.g. 0:0.6:13: one analysis each")
+    p.add_argument("--pair", metavar="NAME", help="contact pair whose mu the map varies "
+                   "(default: the first)")
     series = ("scalar series to draw: full names (sensors/tip, energy/kinetic) or groups "
               "(sensors, energy); default: every sensor")
     p = kinds.add_parser("history", help="time histories of a history's sensors (or energy "

@@ -3,6 +3,8 @@ history; the drawing lives in transient/plots, the files in transient/io."""
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from ..case.checks import check_two_surfaces
 from ..case.loading import load
 from ..errors import CaseError
@@ -10,7 +12,71 @@ from ..errors import CaseError
 
 def cmd_plot(args):
     return {"compat": _plot_compat, "history": _plot_history, "spectrum": _plot_spectrum,
-            "frf": _plot_frf, "pressure": _plot_pressure}[args.kind](args)
+            "frf": _plot_frf, "pressure": _plot_pressure, "cea": _plot_cea}[args.kind](args)
+
+
+def parse_values(text):
+    """'START:STOP:COUNT' (COUNT values, ends included) or 'A,B,...' -> floats."""
+    if ":" in text:
+        parts = text.split(":")
+        if len(parts) != 3:
+            raise ValueError(f"expected START:STOP:COUNT, got '{text}'")
+        start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
+        if count < 1:
+            raise ValueError(f"expected a COUNT >= 1, got {count}")
+        return [float(x) for x in np.linspace(start, stop, count)]
+    return [float(x) for x in text.split(",") if x.strip()]
+
+
+def _plot_cea(args):
+    from ..cea.stage import analyse
+    from ..plots.cea import mode_figure, mu_map_figure, stability_figure
+    from ..plots.render import RenderingUnavailable
+    case = load(args.case, args.overrides)
+    names = list(case.contact)
+    pair = args.pair or (names[0] if names else None)
+    if pair is None or pair not in names:
+        raise CaseError(case.path, "contact", f"no pair '{pair}' to vary mu on (pairs: "
+                        f"{', '.join(names) or 'none'})")
+    mus = []
+    if args.mu is not None:
+        try:
+            mus = parse_values(args.mu)
+        except ValueError as exc:
+            raise CaseError(case.path, "--mu", str(exc)) from None
+        if not mus or min(mus) < 0:
+            raise CaseError(case.path, "--mu", "expected friction coefficients >= 0")
+        # every variant is checked at load before the first analysis
+        variants = [load(args.case, args.overrides + [f"contact.{pair}.friction.mu={mu!r}"])
+                    for mu in mus]
+    out = Path(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CaseError(case.path, "--out", f"cannot create: {exc}") from None
+    stem = Path(case.path).stem
+    result = analyse(case)
+    mu = case.contact[pair].friction.mu
+    paths = [out / f"{stem}_stability.png"]
+    stability_figure(result, paths[0], f"{stem}: complex modes at mu = {mu:g}")
+    try:
+        for row in result.shapes:
+            j = row["mode"] - 1
+            path = out / f"{stem}_mode_{row['mode']:03d}.png"
+            mode_figure(result.model, result.displacement(j), path,
+                        f"mode {row['mode']}, {row['frequency_hz']:.0f} Hz, "
+                        f"real {row['real']:.3g} 1/s")
+            paths.append(path)
+    except RenderingUnavailable as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    if mus:
+        analyses = [analyse(v) for v in variants]
+        path = out / f"{stem}_mu_map.png"
+        mu_map_figure(mus, analyses, path, f"{stem}: complex modes against mu ({pair})")
+        paths.append(path)
+    print("\n".join(str(p) for p in paths))
+    return 0
 
 
 def _plot_history(args):

@@ -41,17 +41,41 @@ def features(omega2, Cr, pressure, tangent, q0, band):
     return c, np.ascontiguousarray(c[:, :band]), tangent, pressure / s
 
 
-def gram_column(feats, j):
+def friction_terms(omega2, Ct, Cc, m, dm, turn, pressure, tangent, q0, band, Cr):
+    """The friction's features as terms (s, L, R), each point's z_i = s_i L_i (x) R_i: the
+    friction stiffness Ct^T diag(w m k_t) C on the band's columns and the friction preload in
+    the scaled coordinates y = Omega q, and the friction damping along and across the sliding
+    in y = Omega^1/2 q (Omega^-1/2 D Omega^-1/2: its diagonal is 2 zeta, the relative shift of a
+    real part as Omega^-1 K Omega^-1's is of an eigenvalue). m, dm, turn: the law at steady
+    sliding (contactset.FrictionSet)."""
+    omega = np.sqrt(np.maximum(omega2, omega2[omega2 > 0].min() if np.any(omega2 > 0) else 1.0))
+    s = max(np.linalg.norm(omega * q0), 1e-300)
+    ct, cb = Ct / omega, np.ascontiguousarray(Cr[:, :band] / omega[:band])
+    root = np.sqrt(omega)
+    ctd, ccd = Ct / root, Cc / root
+    one = np.ones((len(pressure), 1))
+    return [(m * tangent, ct, cb), (m * pressure / s, ct, one),
+            (pressure * dm, ctd, np.ascontiguousarray(ctd[:, :band])),
+            (pressure * turn, ccd, np.ascontiguousarray(ccd[:, :band]))]
+
+
+def gram_column(feats, j, terms=()):
     c, cb, kt, ps = feats
-    return (c @ c[j]) * (kt * kt[j] * (cb @ cb[j]) + ps * ps[j])
+    g = (c @ c[j]) * (kt * kt[j] * (cb @ cb[j]) + ps * ps[j])
+    for t, L, R in terms:
+        g += (t * t[j]) * (L @ L[j]) * (R @ R[j])
+    return g
 
 
-def gram_target(feats, w):
+def gram_target(feats, w, terms=()):
     """h = G w (the candidates' features against the rich rule's combination b = Z w)."""
     c, cb, kt, ps = feats
     Mf = (c * (w * kt)[:, None]).T @ cb
     F = c.T @ (w * ps)
-    return kt * np.einsum("ia,ab,ib->i", c, Mf, cb, optimize=True) + ps * (c @ F)
+    h = kt * np.einsum("ia,ab,ib->i", c, Mf, cb, optimize=True) + ps * (c @ F)
+    for t, L, R in terms:
+        h += t * np.einsum("ia,ab,ib->i", L, (L * (w * t)[:, None]).T @ R, R, optimize=True)
+    return h
 
 
 def nnls_gram(column, h, bb, tol, max_points):
@@ -120,14 +144,18 @@ def nnls_gram(column, h, bb, tol, max_points):
     return P, x, float(res)
 
 
-def sample(omega2, Cr, weights, pressure, tangent, q0, band, tol, max_points):
-    """The points and weights reproducing the rich rule's contact on the reduced dynamics."""
+def sample(omega2, Cr, weights, pressure, tangent, q0, band, tol, max_points, friction=None):
+    """The points and weights reproducing the rich rule's contact on the reduced dynamics.
+    friction: (Ct, Cc, m, dm, turn) of the candidates (friction_terms), to reproduce its
+    coupling too."""
     t0 = time.perf_counter()
     band = max(1, min(band, len(omega2)))
     feats = features(omega2, Cr, pressure, tangent, q0, band)
-    h = gram_target(feats, weights)
+    terms = (() if friction is None else
+             friction_terms(omega2, *friction, pressure, tangent, q0, band, Cr))
+    h = gram_target(feats, weights, terms)
     bb = float(weights @ h)
-    chosen, w, res = nnls_gram(lambda j: gram_column(feats, j), h, bb, tol, max_points)
+    chosen, w, res = nnls_gram(lambda j: gram_column(feats, j, terms), h, bb, tol, max_points)
     order = np.argsort(chosen)
     return Sample(chosen[order], w[order], res, band, time.perf_counter() - t0)
 
@@ -152,18 +180,24 @@ class Sampled:
 
 
 def sample_contact(contacts, candidate, omega2, Cr, q0, gap, pressure, tangent, band, tol,
-                   max_points, newton_tol=1e-10, max_iter=50):
+                   max_points, newton_tol=1e-10, max_iter=50, tangential=None):
     """Sample the candidate points (bool mask) of a reduced model built on the rich rule, then
     re-solve the preload with the points kept and re-diagonalize the linearized stiffness.
 
     omega2, Cr, q0: the rich model's (its linearized modes diagonalize K + Cr^T diag(w k_t) Cr);
     gap, pressure, tangent: its preload state at every point. Points outside `candidate` are
     kept with their weights and left out of the features (their contribution is exact).
+    tangential: (Ct, Cc) the rich model's tangential rows, with friction (contacts.friction):
+    the points then reproduce the friction's coupling and damping too, and the reduced preload
+    is the steady sliding one.
     """
     cand = np.flatnonzero(candidate)
     w = contacts.weights
+    f = contacts.friction
+    friction = (None if f is None else
+                (tangential[0][cand], tangential[1][cand], f.m[cand], f.dm[cand], f.turn[cand]))
     s = sample(omega2, Cr[cand], w[cand], pressure[cand], tangent[cand], q0, band, tol,
-               max_points or len(cand))
+               max_points or len(cand), friction)
     weights = w.copy()
     weights[cand] = 0.0
     weights[cand[s.chosen]] = s.weights
@@ -172,27 +206,41 @@ def sample_contact(contacts, candidate, omega2, Cr, q0, gap, pressure, tangent, 
     # the structure alone, and the constant load balancing the rich rule's preload
     Kr = np.diag(omega2) - (Cr.T * (w * tangent)) @ Cr
     fr = Kr @ q0 - Cr.T @ (w * pressure)
+    Ct = None
+    if f is not None:
+        fr -= tangential[0].T @ (w * pressure * f.m)
+        Ct = tangential[0][keep]
     Ck = Cr[keep]
-    q, g, p, kt, iterations, res = reduced_preload(Kr, fr, Ck, sub, q0, newton_tol, max_iter)
+    q, g, p, kt, iterations, res = reduced_preload(Kr, fr, Ck, sub, q0, newton_tol, max_iter,
+                                                   Ct)
     omega2_s, W = np.linalg.eigh(Kr + (Ck.T * (sub.weights * kt)) @ Ck)
     return Sampled(sub, keep, W, np.maximum(omega2_s, 0.0), W.T @ q, g, p, kt, iterations, res,
                    s)
 
 
-def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter):
-    """Newton on fr + Cr^T (w p(Cr q + g0)) - Kr q = 0 (dense: a reduced model)."""
+def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter, Ct=None):
+    """Newton on fr + Cr^T (w p(Cr q + g0)) - Kr q = 0 (dense: a reduced model); with the
+    tangential rows Ct, plus the friction of steady sliding Ct^T (w p m), whose stiffness the
+    tangent holds (dense and small here: exact Newton)."""
     q = q.copy()
     scale = max(np.linalg.norm(fr), 1e-300)
+    w = contacts.weights
+    m = None if Ct is None else contacts.friction.m
     for it in range(max_iter + 1):
         g = Cr @ q + contacts.gap0
         p, kt, _ = contacts.laws(g)
-        r = fr + Cr.T @ (contacts.weights * p) - Kr @ q
+        r = fr + Cr.T @ (w * p) - Kr @ q
+        if Ct is not None:
+            r += Ct.T @ (w * p * m)
         res = np.linalg.norm(r) / scale
         if res <= tol:
             return q, g, p, kt, it, float(res)
         if it < max_iter:
+            tangent = Kr + (Cr.T * (w * kt)) @ Cr
+            if Ct is not None:
+                tangent += (Ct.T * (w * m * kt)) @ Cr
             try:
-                q += np.linalg.solve(Kr + (Cr.T * (contacts.weights * kt)) @ Cr, r)
+                q += np.linalg.solve(tangent, r)
             except np.linalg.LinAlgError:
                 raise ReducedPreloadError("the preload tangent with the sampled points is "
                                           "singular: too few points hold the parts (lower "

@@ -82,7 +82,9 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
     t0 = perf_counter()
     with blas.every_core():      # dense algebra on the reduced coordinates, no solve
         Cr = contacts.observe(basis.X) @ basis.A
-        sampled = _sample(case, contacts, mask, basis.omega2, Cr, q0, preload)
+        tangential = (None if contacts.friction is None else
+                      tuple(R @ basis.A for R in contacts.observe_tangential(basis.X)))
+        sampled = _sample(case, contacts, mask, basis.omega2, Cr, q0, preload, tangential)
         AW = basis.A @ sampled.W
     stages["sampling"] = perf_counter() - t0
     held = Preload(basis.X @ (AW @ sampled.q), sampled.gap, sampled.pressure, sampled.tangent,
@@ -111,7 +113,7 @@ def _friction_loads(contacts, preload, free):
     return loads
 
 
-def _sample(case, contacts, candidate, omega2, Cr, q0, preload):
+def _sample(case, contacts, candidate, omega2, Cr, q0, preload, tangential=None):
     """The sampled rule's points (sampling.py), with the reduced preload they hold. The points
     of every sampled pair are chosen together, to the first one's tolerance and cap."""
     solver = case.solver
@@ -122,7 +124,7 @@ def _sample(case, contacts, candidate, omega2, Cr, q0, preload):
         return sample_contact(contacts, candidate, omega2, Cr, q0, preload.gap,
                               preload.pressure, preload.tangent, band,
                               spec.sampling_tolerance, spec.points,
-                              solver.newton.tolerance, solver.newton.max_iter)
+                              solver.newton.tolerance, solver.newton.max_iter, tangential)
     except ReducedPreloadError as exc:
         raise CaseError(case.path, f"contact.{name}.sampling_tolerance", str(exc)) from None
 
