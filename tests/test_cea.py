@@ -92,20 +92,36 @@ def test_law_slopes_against_finite_differences(code):
 
 def _numpy_friction(system, q, v, mu, v_eps):
     """The friction force on the system's dofs in plain NumPy: the 2D regularized Coulomb
-    traction mu p tanh(|s| / v_eps) s / |s| of the sliding velocity s = (V - Ct v, -Cc v)."""
+    traction mu(|s|) p tanh(|s| / v_eps) s / |s| of the sliding velocity s = (V - Ct v, -Cc v);
+    mu a number or a table (speeds, values)."""
     c = system.contacts
     g = system.C @ q + c.gap0
     p, _, _ = c.laws(np.asarray(g))
     s_t, s_c = c.friction.speed - system.Ct @ v, -(system.Cc @ v)
     norm = np.hypot(s_t, s_c)
-    traction = mu * c.weights * p * np.tanh(norm / v_eps) / norm
+    coef = np.interp(norm, *mu) if isinstance(mu, tuple) else mu
+    traction = coef * c.weights * p * np.tanh(norm / v_eps) / norm
     return system.Ct.T @ (traction * s_t) + system.Cc.T @ (traction * s_c)
 
 
-def test_linearization_against_finite_differences(full_setup):
+FALLING = ((0.0, 2.0, 10.0), (0.5, 0.4, 0.3))     # mu(v), falling through the sliding speeds
+
+
+@pytest.fixture(scope="module")
+def falling_setup():
+    case = small("contact.pad_disc.friction.speeds=[0.0,2.0,10.0]",
+                 "contact.pad_disc.friction.values=[0.5,0.4,0.3]",
+                 "solver.reduction.enabled=false")
+    return case, prepare(analysed_case(case))
+
+
+@pytest.mark.parametrize("law", ["constant", "falling"])
+def test_linearization_against_finite_differences(full_setup, falling_setup, law):
     """K and D of the linearization are the derivatives of a plain NumPy friction law (plus
-    K_lin and the contact tangent): -dF/dq and -dF/dv by central differences."""
-    _, setup = full_setup
+    K_lin and the contact tangent): -dF/dq and -dF/dv by central differences. A falling mu(v)
+    makes the damping along the sliding negative."""
+    _, setup = full_setup if law == "constant" else falling_setup
+    mu = 0.4 if law == "constant" else FALLING
     system, state = setup.system, setup.state
     M, D, K = linearized(system, state)
     rng = np.random.default_rng(1)
@@ -115,17 +131,19 @@ def test_linearization_against_finite_differences(full_setup):
     Kf, Df = _friction_terms(system, p, kt)
     for _ in range(3):
         dq = rng.standard_normal(system.n) * 1e-9
-        dv = rng.standard_normal(system.n) * 1e-6
+        dv = rng.standard_normal(system.n) * 1e-2      # 1e-5 m/s: above round-off
         h = 1e-3
-        fq = (_numpy_friction(system, q0 + h * dq, v0, 0.4, 1e-3)
-              - _numpy_friction(system, q0 - h * dq, v0, 0.4, 1e-3)) / (2 * h)
-        fv = (_numpy_friction(system, q0, v0 + h * dv, 0.4, 1e-3)
-              - _numpy_friction(system, q0, v0 - h * dv, 0.4, 1e-3)) / (2 * h)
+        fq = (_numpy_friction(system, q0 + h * dq, v0, mu, 1e-3)
+              - _numpy_friction(system, q0 - h * dq, v0, mu, 1e-3)) / (2 * h)
+        fv = (_numpy_friction(system, q0, v0 + h * dv, mu, 1e-3)
+              - _numpy_friction(system, q0, v0 - h * dv, mu, 1e-3)) / (2 * h)
         np.testing.assert_allclose(Kf @ dq, -fq, rtol=1e-5, atol=1e-6 * np.abs(fq).max())
         np.testing.assert_allclose(Df @ dv, -fv, rtol=1e-5, atol=1e-6 * np.abs(fv).max())
     # the friction stiffness is what makes K non-symmetric
     Kd = K.toarray()
     assert np.abs(Kd - Kd.T).max() > 1e-3 * np.abs(Kf.toarray()).max()
+    f = system.contacts.friction
+    assert (f.dm < 0).all() if law == "falling" else (f.dm == 0).all()
 
 
 def _match(reference, modes):

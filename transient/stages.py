@@ -39,6 +39,8 @@ class Setup:
     meta: dict               # what the stages report (points, reduced dofs, preload)
     geometry: dict           # fixed arrays of the history (/geometry)
     model: object = None     # the Model (parts, dofs) the system was built from
+    basis: tuple = None      # a reduced system's (X, AW): its coordinates on the model's dofs
+    #                          are X AW q (the product formed only for field output)
 
 
 class _Stages(dict):
@@ -149,7 +151,7 @@ def _prepare(case, stages):
                                                    solver.linear_solver)}
     stages.check()
     return Setup(system, state, rows0, dict(stages), meta, _geometry(case, system, pairs),
-                 model)
+                 model, (red.X, red.AW) if system.reduced else None)
 
 
 def _contact_meta(pairs, contacts, preload):

@@ -5,10 +5,10 @@ import numpy as np
 from ..mesh.mesh import unit
 
 
-def nodal_diameter(model, motion, u):
-    """(n, share): the circumferential order n of the axial displacement of the part that a
-    rotation turns, and the share of that order in its axial motion (|c_n|^2 / sum |c_k|^2).
-    u: (ndof,) complex displacement."""
+def nodal_diameters(model, motion, U):
+    """(n (k,), share (k,)): for each displacement U[:, j] (ndof, k complex), the
+    circumferential order n of the axial motion of the part that a rotation turns, and the
+    share of that order in it (|c_n|^2 / sum |c_k|^2)."""
     part = model.parts[motion.part]
     dofs = model.part_dofs(motion.part).reshape(-1, 3)
     axis = unit(motion.axis)
@@ -16,15 +16,21 @@ def nodal_diameter(model, motion, u):
     e1 = np.cross(axis, [1.0, 0, 0] if abs(axis[0]) < 0.9 else [0, 1.0, 0])
     e1 /= np.linalg.norm(e1)
     theta = np.arctan2(x @ np.cross(axis, e1), x @ e1)
-    w = u[dofs] @ axis
+    W = np.einsum("ndk,d->nk", U.reshape(len(U) // 3, 3, U.shape[1])[dofs[:, 0] // 3], axis)
     # up to half the distinct angles of the nodes: beyond, orders alias (N - n is n again)
     angles = len(np.unique(np.round(theta, 6)))
-    orders = np.arange(0, max(angles // 2, 1) + 1)
-    c = np.abs(np.exp(-1j * np.outer(orders, theta)) @ w) ** 2
+    E = np.exp(-1j * np.outer(np.arange(0, max(angles // 2, 1) + 1), theta))
     # an order n and its mirror -n are one nodal diameter: a standing or travelling wave
-    c = c + np.abs(np.exp(1j * np.outer(orders, theta)) @ w) ** 2 * (orders > 0)
-    n = int(np.argmax(c))
-    return n, float(c[n] / max(c.sum(), 1e-300))
+    c = np.abs(E @ W) ** 2
+    c[1:] += np.abs(E[1:].conj() @ W) ** 2
+    n = np.argmax(c, axis=0)
+    return n, c[n, np.arange(len(n))] / np.maximum(c.sum(axis=0), 1e-300)
+
+
+def nodal_diameter(model, motion, u):
+    """(n, share) of one displacement u (ndof,): nodal_diameters."""
+    n, share = nodal_diameters(model, motion, np.asarray(u)[:, None])
+    return int(n[0]), float(share[0])
 
 
 def part_shares(model, M, u):
@@ -35,17 +41,20 @@ def part_shares(model, M, u):
             for name in model.parts for d in [model.part_dofs(name)]}
 
 
-def describe(case, model, T, modes, which):
+def describe(case, model, basis, modes, which):
     """One dict per mode index in which: frequency, real part, the rotating parts' nodal
-    diameter and the parts' energy shares."""
-    rotations = [m for m in case.motion.values() if m.kind == "rotation"]
+    diameter and the parts' energy shares. basis: (X, A), the modes' coordinates z are
+    X (A z) on the model's dofs."""
+    X, A = basis
+    U = X @ (A @ modes.vectors[:, which])
+    rotations = {m.part: nodal_diameters(model, m, U)
+                 for m in case.motion.values() if m.kind == "rotation"}
     out = []
-    for j in which:
-        u = T @ modes.vectors[:, j]
+    for k, j in enumerate(which):
         row = {"mode": int(j + 1), "frequency_hz": float(modes.frequency_hz[j]),
-               "real": float(modes.real[j]), "shares": part_shares(model, model.M, u)}
-        for m in rotations:
-            n, share = nodal_diameter(model, m, u)
-            row.setdefault("nodal_diameters", {})[m.part] = {"order": n, "share": share}
+               "real": float(modes.real[j]), "shares": part_shares(model, model.M, U[:, k])}
+        if rotations:
+            row["nodal_diameters"] = {part: {"order": int(n[k]), "share": float(share[k])}
+                                      for part, (n, share) in rotations.items()}
         out.append(row)
     return out

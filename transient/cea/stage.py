@@ -30,19 +30,19 @@ class Analysis:
     meta: dict               # the setup's (dynamics prepare's meta)
     shapes: list             # the unstable modes described (cea.shapes.describe)
     model: object = None     # the Model, and
-    basis: object = None     # (ndof, n) the modes' coordinates to the model's dofs
+    basis: tuple = None      # (X, A): the modes' coordinates z are X (A z) on the model's dofs
 
     def displacement(self, j):
         """(ndof,) complex displacement of mode j (0-based)."""
-        return self.basis @ self.modes.vectors[:, j]
+        X, A = self.basis
+        return X @ (A @ self.modes.vectors[:, j])
 
 
 def analysed_case(case):
-    """The case the analysis prepares: sampled rules on their candidates, and the reduced
-    basis formed (output.field) to draw and describe the modes."""
+    """The case the analysis prepares: sampled rules on their candidates."""
     contact = {name: replace(c, rule="fine") if c.rule == "sampled" else c
                for name, c in case.contact.items()}
-    return replace(case, contact=contact, output=replace(case.output, field=True))
+    return replace(case, contact=contact)
 
 
 def fmax_of(case):
@@ -72,10 +72,11 @@ def analyse(case, check=None):
         modes = full_complex_modes(M, D, K, fmax)
     stages["complex_modes"] = time.perf_counter() - t0
     ndof = setup.meta.get("free_dofs", system.n)
-    T = system.T if system.reduced else _full_basis(setup.model.ndof, system.free)
-    shapes = describe(case, setup.model, T, modes, np.flatnonzero(modes.unstable))
+    basis = (setup.basis if system.reduced else
+             (_full_basis(setup.model.ndof, system.free), sp.identity(system.n, format="csr")))
+    shapes = describe(case, setup.model, basis, modes, np.flatnonzero(modes.unstable))
     return Analysis(modes, fmax, int(ndof), system.n if system.reduced else 0, stages,
-                    setup.meta, shapes, setup.model, T)
+                    setup.meta, shapes, setup.model, basis)
 
 
 def _full_basis(ndof, free):

@@ -50,7 +50,9 @@ def solve_preload(K, fixed, load, contacts, solver, tol=1e-10, max_iter=50):
             # steady sliding: the friction tractions mu p along the constant sliding
             # directions. The tangent below leaves out their non-symmetric stiffness, so the
             # iterations converge linearly, at a rate of order mu times the coupling of the
-            # tangential loads into the pressures (small where supports take them)
+            # tangential loads into the pressures (small where supports take them): pad_disc
+            # at mu = 0.4, 0.13 an iteration, 16 in all against 6 (Anderson's mixing of the
+            # last 3 steps saved 2: the error spans the interface's many directions)
             fc = fc + contacts.friction_force(p)
         return (load + fc - K @ u)[free], g, p, kt
 
