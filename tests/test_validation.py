@@ -71,6 +71,7 @@ def sets(*overrides):
     ("cea", PAD, ["contact.pad_disc.friction.v_eps=0.0"], "contact.pad_disc.friction.v_eps"),
     ("run", PAD, ["contact.pad_disc.friction.mu=0.4"], "contact.pad_disc.friction.mu"),
     ("cea", PAD, ["motion.disc.axis=[0,0,0]"], "motion.disc.axis"),
+    ("cea", PAD, ["solver.reduction.enabled=false"], "solver.reduction.enabled"),
     ("cea", PAD, ['motion.disc.part="rotor"'], "motion.disc.part"),
     ("cea", PAD, ['motion.belt.kind="translation"', 'motion.belt.part="disc"',
                   "motion.belt.velocity=[1.0,0.0,0.0]"], "motion.belt.part"),

@@ -64,7 +64,7 @@ class _Stages(dict):
         return out
 
 
-def prepare(case, check=None):
+def prepare(case, check=None, model=None):
     """Model, contact, preload, linearization and (optionally) reduction of a case.
 
     The setup's dense algebra runs on one OpenBLAS thread: its calls are many and mid-sized
@@ -72,14 +72,15 @@ def prepare(case, check=None):
     machine were 2.8 times slower over the setup of pad_disc_long (an 2668^2 eigh: 4.1 s on
     one thread, 22-26 s on two, though 2.8 -> 1.7 s alone: the slowdown is contention with
     PARDISO's and Numba's threads). PARDISO (MKL) keeps its threads, which pay for its solves.
-    The large products of sections that solve nothing run on every core (solve.blas)."""
+    The large products of sections that solve nothing run on every core (solve.blas).
+    model: the case's Model when the caller built it already (cea bounds its size first)."""
     with blas.one_thread():
-        return _prepare(case, _Stages(check))
+        return _prepare(case, _Stages(check), model)
 
 
-def _prepare(case, stages):
+def _prepare(case, stages, model=None):
     solver = case.solver
-    model = stages.timed("model", build_model, case)
+    model = model or stages.timed("model", build_model, case)
     pairs = stages.timed("contact", build_contact, case, model) if case.contact else []
     contacts = stack(pairs, model.ndof)
     if solver.scheme == "implicit" and not solver.reduction.enabled:

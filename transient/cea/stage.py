@@ -53,16 +53,18 @@ def fmax_of(case):
 
 def analyse(case, check=None):
     """Complex modes of a case at its steady sliding state (Analysis)."""
+    from ..model import build_model
     from ..stages import prepare
-    setup = prepare(analysed_case(case), check)
-    stages = dict(setup.stages)
+    model, stages = None, {}
+    if not case.solver.reduction.enabled:
+        # the model first (seconds), its size bounded before the setup's stages
+        t0 = time.perf_counter()
+        model = build_model(case)
+        stages["model"] = time.perf_counter() - t0
+        _bounded(case, int((~model.fixed).sum()))
+    setup = prepare(analysed_case(case), check, model)
+    stages.update(setup.stages)
     system = setup.system
-    if not system.reduced and system.n > FULL_DOFS:
-        # one complex LU per shift: the full model is the reference for small cases
-        raise case.error("solver.reduction.enabled", f"the full model's complex modes "
-                         f"({system.n} free dofs, above {FULL_DOFS}) take a complex "
-                         "factorization per shift: analyse the reduced model "
-                         "(solver.reduction.enabled = true)")
     fmax = fmax_of(case)
     t0 = time.perf_counter()
     M, D, K = linearized(system, setup.state)
@@ -84,3 +86,10 @@ def _full_basis(ndof, free):
     return sp.csr_matrix((np.ones(len(free)), (free, np.arange(len(free)))),
                          shape=(ndof, len(free)))
 
+
+def _bounded(case, dofs):
+    """One complex LU per shift: the full model is the reference for small cases."""
+    if dofs > FULL_DOFS:
+        raise case.error("solver.reduction.enabled", f"the full model's complex modes "
+                         f"({dofs} free dofs, above {FULL_DOFS}) take a complex factorization per "
+                         "shift: analyse the reduced model (solver.reduction.enabled = true)")
