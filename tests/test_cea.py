@@ -232,3 +232,18 @@ def test_plot_cea_bad_mu_is_one_line(tmp_path, capsys, mu, reason):
     code = main(["plot", "cea", str(PAD), "--out", str(tmp_path), f"--mu={mu}"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "--mu" in err and reason in err
+
+
+def test_a_pad_mode_is_recognized_by_its_mac():
+    """A displacement that is the pad's own third mode (alone on its abutments), plus some
+    disc motion, matches that mode with MAC 1."""
+    from transient.cea.shapes import matched_part_modes, part_modes
+    from transient.model import build_model
+    model = build_model(small())
+    f, Phi, dofs = part_modes(model, "pad", 20000.0)
+    assert len(f) > 4 and f[3] > 1000.0
+    u = np.zeros((model.ndof, 1), complex)
+    u[dofs, 0] = (1 + 2j) * Phi[:, 3]
+    u[model.part_dofs("disc")[2::3], 0] = 1e-3
+    (index, freq, mac), = matched_part_modes(model, u, ["pad"], 20000.0).values()
+    assert index[0] == 3 and freq[0] == f[3] and mac[0] == pytest.approx(1.0, abs=1e-12)

@@ -1,5 +1,6 @@
-"""What a complex mode looks like on a brake: the nodal diameter of the rotating part and the
-share of the motion each part carries (which disc mode and how much of the pad couple)."""
+"""What a complex mode looks like on a brake: the nodal diameter of the rotating part, the share
+of the motion each part carries, and which mode of each other part alone (the pad on its
+abutments) its motion there resembles: which disc mode and which pad mode couple."""
 import numpy as np
 
 from ..mesh.mesh import unit
@@ -49,6 +50,10 @@ def describe(case, model, basis, modes, which):
     U = X @ (A @ modes.vectors[:, which])
     rotations = {m.part: nodal_diameters(model, m, U)
                  for m in case.motion.values() if m.kind == "rotation"}
+    # the parts that do not turn (the pad): which of their own modes the motion resembles
+    still = [p for p in model.parts if p not in rotations]
+    matched = matched_part_modes(model, U, still, 1.5 * modes.frequency_hz.max()) if len(
+        which) else {}
     out = []
     for k, j in enumerate(which):
         row = {"mode": int(j + 1), "frequency_hz": float(modes.frequency_hz[j]),
@@ -56,5 +61,41 @@ def describe(case, model, basis, modes, which):
         if rotations:
             row["nodal_diameters"] = {part: {"order": int(n[k]), "share": float(share[k])}
                                       for part, (n, share) in rotations.items()}
+        if matched:
+            row["part_modes"] = {part: {"mode": int(i[k] + 1), "frequency_hz": float(f[k]),
+                                        "mac": float(mac[k])}
+                                 for part, (i, f, mac) in matched.items()}
         out.append(row)
+    return out
+
+
+def part_modes(model, part, fmax, shift_hz=1.0):
+    """The normal modes of one part alone, on its own supports (contact left out), up to fmax
+    [Hz]: (frequencies, shapes on the part's free dofs, those dofs)."""
+    from ..solve.modes import normal_modes
+    dofs = model.part_dofs(part)
+    dofs = dofs[~model.fixed[dofs]]
+    K = model.K[dofs][:, dofs]
+    M = model.M[dofs][:, dofs]
+    modes = normal_modes(K, M, None, count=20, fmax=fmax, shift=-shift_hz)
+    return modes.frequencies, modes.shapes, dofs
+
+
+def matched_part_modes(model, U, parts, fmax):
+    """{part: (index (k,), frequency (k,), MAC (k,))}: for each displacement U[:, j], the mode
+    of each part alone that its motion on the part resembles most (the modal assurance
+    criterion in the part's mass)."""
+    out = {}
+    for part in parts:
+        f, Phi, dofs = part_modes(model, part, fmax)
+        if Phi.shape[1] == 0:
+            continue
+        M = model.M[dofs][:, dofs]
+        Up = U[dofs]
+        cross = np.abs(Phi.T @ (M @ Up)) ** 2
+        norms = np.einsum("ij,ij->j", Phi, M @ Phi)[:, None] * np.real(
+            np.einsum("ij,ij->j", Up.conj(), M @ Up))[None, :]
+        mac = cross / np.maximum(norms, 1e-300)
+        best = np.argmax(mac, axis=0)
+        out[part] = (best, f[best], mac[best, np.arange(U.shape[1])])
     return out

@@ -76,7 +76,9 @@ def analyse(case, check=None):
     ndof = setup.meta.get("free_dofs", system.n)
     basis = (setup.basis if system.reduced else
              (_full_basis(setup.model.ndof, system.free), sp.identity(system.n, format="csr")))
+    t0 = time.perf_counter()
     shapes = describe(case, setup.model, basis, modes, np.flatnonzero(modes.unstable))
+    stages["shapes"] = time.perf_counter() - t0
     return Analysis(modes, fmax, int(ndof), system.n if system.reduced else 0, stages,
                     setup.meta, shapes, setup.model, basis)
 
