@@ -83,8 +83,9 @@ def cmd_cea(args):
         parts = ", ".join(f"{p} {100 * v:.0f}%" for p, v in row["shares"].items())
         nd = "".join(f"; {p}: {d['order']} nodal diameters ({100 * d['share']:.0f}% of its "
                      "axial motion)" for p, d in row.get("nodal_diameters", {}).items())
-        own = "".join(f"; {p}: like its mode {d['mode']} alone ({max(d['frequency_hz'], 0.0):.0f} Hz, "
-                      f"MAC {d['mac']:.2f})" for p, d in row.get("part_modes", {}).items())
+        own = "".join(f"; {p}: like its mode {d['mode']} alone "
+                      f"({max(d['frequency_hz'], 0.0):.0f} Hz, MAC {d['mac']:.2f})"
+                      for p, d in row.get("part_modes", {}).items())
         print(f"  mode {row['mode']} at {row['frequency_hz']:.1f} Hz: kinetic energy "
               f"{parts}{nd}{own}")
     print("stages: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.stages.items())
