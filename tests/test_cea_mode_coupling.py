@@ -185,7 +185,8 @@ def bisect(unstable_at, lo=BRACKET[0], hi=BRACKET[1]):
 
 
 def flags_unstable(cx=0.0, cy=0.0):
-    """Undamped: below threshold the real parts are round-off, so ask `unstable` (UNSTABLE_RTOL |lambda|)."""
+    """Undamped: below threshold the real parts are round-off, so ask `unstable`
+    (UNSTABLE_RTOL |lambda|)."""
     return lambda mu: bool(modes(mu, cx, cy).unstable.any())
 
 

@@ -76,7 +76,8 @@ def mode_figure(model, u, path, title):
         g = grid.copy()
         g.point_data["u"] = part
         g.point_data["|u|"] = np.linalg.norm(part, axis=1)
-        warped = g.extract_surface(algorithm="dataset_surface").warp_by_vector("u", factor=0.05 * extent)
+        surface = g.extract_surface(algorithm="dataset_surface")
+        warped = surface.warp_by_vector("u", factor=0.05 * extent)
         plotter.add_mesh(warped, scalars="|u|", cmap="viridis", show_scalar_bar=k == 1,
                          scalar_bar_args={"title": "|u| (max 1)", "color": "black"})
         plotter.add_text(f"{title}: {name}", font_size=10, color="black")

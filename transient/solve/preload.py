@@ -2,10 +2,10 @@
 
 Newton with a backtracking line search on the residual r(u) = f + C^T w p(C u + g0) - K u over
 the free dofs (plus, with friction, the tractions of steady sliding Ct^T w p m: the preload is
-then the steady sliding state). The tangent K + C^T diag(w k_t) C is applied through a ContactSolver (one sparse
-factorization of K - sigma M, low-rank updates for the contact): the tiny shift -sigma M keeps
-floating parts solvable and only slows the quadratic convergence by a factor of order sigma over
-the lowest eigenvalue.
+then the steady sliding state). The tangent K + C^T diag(w k_t) C is applied through a
+ContactSolver (one sparse factorization of K - sigma M, low-rank updates for the contact): the
+tiny shift -sigma M keeps floating parts solvable and only slows the quadratic convergence by a
+factor of order sigma over the lowest eigenvalue.
 """
 import time
 from dataclasses import dataclass
