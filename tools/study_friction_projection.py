@@ -24,13 +24,12 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def _raw_rows(pair, sliding, ndof):
     """The tangential rows of the pair's fine rule, unprojected (the study's variant)."""
-    from transient.contact.friction import direction_map
     s1, s2 = pair.interface.side1, pair.interface.side2
     fine = pair.interface.fine
     out = []
     for d1, d2 in ((sliding.along1, sliding.along2), (sliding.across1, sliding.across2)):
-        out.append(sp.csr_matrix(fine.C1 @ direction_map(s1, d1, ndof)
-                                 - fine.C2 @ direction_map(s2, d2, ndof)))
+        out.append(sp.csr_matrix(fine.C1 @ s1.direction_map(d1, ndof)
+                                 - fine.C2 @ s2.direction_map(d2, ndof)))
     return tuple(out)
 
 

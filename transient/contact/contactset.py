@@ -171,7 +171,7 @@ def _friction(pairs, ndof, factored):
         speed.append(pair.sliding.speed)
         m.append(law.m)
         dm.append(law.dm)
-        turn.append(law.across)
+        turn.append(law.turn)
     join = sp.hstack if factored else sp.vstack
     return FrictionSet(join(along).tocsr(), join(across).tocsr(), *map(np.concatenate,
                                                                          (speed, m, dm, turn)))

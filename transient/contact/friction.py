@@ -140,7 +140,7 @@ class SteadySliding:
     """The law linearized at steady sliding (d = 0, s = V) at every point: f = C_t^T (w p m)."""
     m: np.ndarray            # (P,) mu(V) sgn_reg(V): the traction per unit pressure
     dm: np.ndarray           # (P,) d m / d s at V: the damping along t per unit pressure
-    across: np.ndarray       # (P,) m / V: the damping across t per unit pressure [s/m]
+    turn: np.ndarray         # (P,) m / V: the damping across t per unit pressure [s/m]
 
 
 def steady(spec, speed):
@@ -152,13 +152,6 @@ def steady(spec, speed):
     return SteadySliding(m, dmu * sign * np.sign(speed) + mu * dsign, m / speed)
 
 
-def direction_map(side, directions, ndof):
-    """(N, ndof) sparse map from model dofs to the side's nodal components along directions."""
-    rows = np.repeat(np.arange(side.n), 3)
-    cols = (3 * (side.nodes + side.offset))[:, None] + np.arange(3)
-    return sp.csr_matrix((np.asarray(directions).ravel(), (rows, cols.ravel())),
-                         shape=(side.n, ndof))
-
 
 def tangential_rows(pair, sliding, ndof):
     """The pair's observation of the tangential displacement along and across the sliding:
@@ -167,7 +160,7 @@ def tangential_rows(pair, sliding, ndof):
     s1, s2 = pair.interface.side1, pair.interface.side2
     out = []
     for d1, d2 in ((sliding.along1, sliding.along2), (sliding.across1, sliding.across2)):
-        T1, T2 = direction_map(s1, d1, ndof), direction_map(s2, d2, ndof)
+        T1, T2 = s1.direction_map(d1, ndof), s2.direction_map(d2, ndof)
         if pair.factors is not None:
             (_, Y1), (_, Y2) = pair.projections
             out.append(sp.hstack([T1.T @ sp.csr_matrix(Y1.T), T2.T @ sp.csr_matrix(Y2.T)])

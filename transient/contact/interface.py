@@ -50,9 +50,14 @@ class Side:
 
     def dof_map(self, ndof):
         """(N, ndof) sparse map from model dofs to the normal dofs of the interface nodes."""
+        return self.direction_map(self.node_normals, ndof)
+
+    def direction_map(self, directions, ndof):
+        """(N, ndof) sparse map from model dofs to the nodes' components along directions
+        (N, 3): the normals, or the sliding directions of friction."""
         rows = np.repeat(np.arange(self.n), 3)
         cols = (3 * (self.nodes + self.offset))[:, None] + np.arange(3)
-        return sp.csr_matrix((self.node_normals.ravel(), (rows, cols.ravel())),
+        return sp.csr_matrix((np.asarray(directions).ravel(), (rows, cols.ravel())),
                              shape=(self.n, ndof))
 
 
