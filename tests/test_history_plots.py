@@ -156,3 +156,66 @@ def test_bad_input_is_one_line_error(history, tmp_path, capsys, args, expected):
     args = [a.format(**names) for a in args]
     assert main(["plot"] + args) == 2
     _one_line_error(capsys, args[1], expected)
+
+
+def _growing(t, sigma=50.0, f=2000.0, limit=1e-4):
+    """A sine growing at sigma [1/s] from 1e-6, saturating at `limit` (a limit cycle), plus a
+    decaying 5 kHz tone."""
+    a = 1e-6 * np.exp(sigma * t) / np.sqrt(1 + (1e-6 * np.exp(sigma * t) / limit) ** 2)
+    return a * np.sin(2 * np.pi * f * t) + 1e-7 * np.exp(-20 * t) * np.sin(2 * np.pi * 5e3 * t)
+
+
+@pytest.mark.parametrize("sigma", [30.0, -30.0])
+def test_growth_rate_of_a_pure_exponential(sigma):
+    from transient.plots.signals import envelope, growth_rate
+    dt = 1e-5
+    t = np.arange(0, 0.2, dt)
+    fitted, (t0, t1), rms = growth_rate(t, envelope(np.exp(sigma * t) * np.sin(4e3 * np.pi * t),
+                                                    dt))
+    assert fitted == pytest.approx(sigma, rel=5e-4)
+    assert t1 - t0 > 0.05 and rms < 0.05
+
+
+def test_growth_rate_of_a_limit_cycle_is_fitted_on_its_linear_phase():
+    """The growth until a tenth of the limit cycle's amplitude, the other tone filtered out by
+    the band: within 0.5% (the saturation slows the growth by 1% at the end of the fit)."""
+    from transient.plots.signals import envelope, growth_rate
+    dt = 1e-5
+    t = np.arange(0, 0.2, dt)
+    x = _growing(t)
+    sigma, (t0, t1), _ = growth_rate(t, envelope(x, dt, (1500.0, 2500.0)))
+    assert sigma == pytest.approx(50.0, rel=5e-3)
+    assert t1 < np.log(0.11 * 1e-4 / 1e-6) / 50.0       # before a tenth of the limit (and a bit)
+
+
+def test_envelope_and_spectrogram_pictures(tmp_path, capsys):
+    t = np.arange(0, 0.1, 1e-5)
+    path = _synthetic(tmp_path / "squeal.h5", t, _growing(t))
+    assert main(["plot", "envelope", str(path), "--band", "1500:2500"]) == 0
+    out = capsys.readouterr().out
+    picture = tmp_path / "squeal_envelope.png"
+    _check_picture(picture)
+    sigma = float(out.split("growth rate ")[1].split()[0])
+    assert sigma == pytest.approx(50.0, rel=5e-3)
+    assert main(["plot", "spectrogram", str(path), "--fmax", "8000"]) == 0
+    _check_picture(tmp_path / "squeal_spectrogram.png")
+    from transient.plots.signals import spectrogram
+    f, tc, A = spectrogram(_growing(t), 1e-5, 512)
+    assert abs(f[np.argmax(A[:, -1])] - 2000.0) <= f[1]
+    # a sine on a bin reads its amplitude in every segment
+    f_bin = 10 * 1e5 / 512
+    f, tc, A = spectrogram(3e-5 * np.sin(2 * np.pi * f_bin * t), 1e-5, 512)
+    np.testing.assert_allclose(A[10], 3e-5, rtol=1e-3)
+
+
+@pytest.mark.parametrize("args, key", [(["envelope", "--window", "0.05"], "--window"),
+                                       (["envelope", "--window", "0.05:0.01"], "--window"),
+                                       (["envelope", "--band", "a:b"], "--band"),
+                                       (["envelope", "--window", "0.2:0.3"], "--window"),
+                                       (["spectrogram", "--segment", "4"], "--segment"),
+                                       (["spectrogram", "--series", "sensors/x"], "--series")])
+def test_bad_envelope_and_spectrogram_options_are_one_line(tmp_path, capsys, args, key):
+    t = np.arange(0, 0.1, 1e-5)
+    path = _synthetic(tmp_path / "s.h5", t, _growing(t))
+    assert main(["plot", args[0], str(path)] + args[1:]) == 2
+    _one_line_error(capsys, key)

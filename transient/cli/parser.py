@@ -117,6 +117,22 @@ def _plot_parser(sub):
                    "(default: the largest power of two up to a quarter of the rows)")
     p.add_argument("--fmax", type=float, metavar="HZ", help="highest frequency drawn [Hz] "
                    "(default: half the sample rate)")
+    p = kinds.add_parser("spectrogram", help="time-frequency map of a series of a history: "
+                         "short-time amplitude spectra in dB")
+    _history_args(p, "spectrogram")
+    p.add_argument("--series", metavar="NAME", help="the series (default: the first sensor)")
+    p.add_argument("--segment", type=int, metavar="SAMPLES", help="samples per segment "
+                   "(default: half the transfer function's default)")
+    p.add_argument("--fmax", type=float, metavar="HZ", help="highest frequency drawn [Hz]")
+    p = kinds.add_parser("envelope", help="envelopes of a history's series and their "
+                         "exponential growth (or decay) rate fitted over the linear phase")
+    _history_args(p, "envelope")
+    p.add_argument("--series", nargs="+", metavar="NAME", help=series)
+    p.add_argument("--window", metavar="T0:T1", help="times [s] of the fit (default: a growth "
+                   "from the start to a tenth of the envelope's peak, a decay from the peak to "
+                   "a thousandth of it)")
+    p.add_argument("--band", metavar="F0:F1", help="the series' part in this band [Hz] only "
+                   "(one mode's growth among others)")
     p = kinds.add_parser("pressure", help="contact pressure maps on Gamma, one panel per "
                          "history side by side with one colour scale (e.g. fine, centre and "
                          "regularized rules)")

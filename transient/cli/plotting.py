@@ -12,7 +12,52 @@ from ..errors import CaseError
 
 def cmd_plot(args):
     return {"compat": _plot_compat, "history": _plot_history, "spectrum": _plot_spectrum,
-            "frf": _plot_frf, "pressure": _plot_pressure, "cea": _plot_cea}[args.kind](args)
+            "frf": _plot_frf, "pressure": _plot_pressure, "cea": _plot_cea,
+            "spectrogram": _plot_spectrogram, "envelope": _plot_envelope}[args.kind](args)
+
+
+def _plot_spectrogram(args):
+    from ..plots.history import MIN_SEGMENT, one_series, select_series, spectrogram_figure
+    from ..io.stored import open_history
+    stored = open_history(args.file)
+    _check_fmax(stored, args.fmax)
+    name = (one_series(stored, args.series, "--series") if args.series
+            else select_series(stored, None)[0])
+    if args.segment is not None and args.segment < MIN_SEGMENT:
+        raise CaseError(stored.path, "--segment", f"expected at least {MIN_SEGMENT} samples, "
+                        f"got {args.segment}")
+    path = _png_path(args, stored.path)
+    _save(lambda: spectrogram_figure(stored, name, path, args.segment, args.fmax), path)
+    return 0
+
+
+def _pair_of(stored, text, key, what):
+    """'A:B' -> (a, b) floats with a < b, or None."""
+    if text is None:
+        return None
+    try:
+        a, b = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise stored.error(key, f"expected {what} as A:B, got '{text}'") from None
+    if not a < b:
+        raise stored.error(key, f"expected A < B, got '{text}'")
+    return a, b
+
+
+def _plot_envelope(args):
+    from ..plots.history import envelope_figure, select_series
+    from ..io.stored import open_history
+    stored = open_history(args.file)
+    names = select_series(stored, args.series)
+    window = _pair_of(stored, args.window, "--window", "times [s]")
+    band = _pair_of(stored, args.band, "--band", "frequencies [Hz]")
+    path = _png_path(args, stored.path)
+    fits = {}
+    _save(lambda: fits.update(envelope_figure(stored, names, path, window, band)), path)
+    for name, (sigma, (t0, t1), rms) in fits.items():
+        print(f"{name}: growth rate {sigma:.6g} 1/s over {t0:.6g}-{t1:.6g} s (log-envelope "
+              f"RMS deviation {rms:.2g})")
+    return 0
 
 
 def parse_values(text):

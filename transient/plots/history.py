@@ -9,11 +9,12 @@ functions that draw nothing, so tests check them directly: `amplitude_spectrum` 
 import numpy as np
 
 from .pressure import plane_frame, pressure_panels
-from .signals import (MIN_SEGMENT, amplitude_spectrum, default_segment, sample_step,
-                      transfer_function)
+from .signals import (MIN_SEGMENT, amplitude_spectrum, default_segment, envelope,
+                      growth_rate, sample_step, spectrogram, transfer_function)
 
 __all__ = ["MIN_SEGMENT", "select_series", "one_series", "history_figure", "spectrum_figure",
-           "frf_figure", "pressure_panels", "pressure_figure"]
+           "frf_figure", "spectrogram_figure", "envelope_figure", "pressure_panels",
+           "pressure_figure"]
 
 UNITS = {"sensors": "m", "energy": "J"}      # unit of the series of each group
 MIN_DB_SPAN = 20.0      # smallest range of the magnitude axis of a transfer function [dB]
@@ -131,6 +132,68 @@ def spectrum_figure(stored, names, path, fmax=None):
     fig.suptitle(f"{_title(stored)}: amplitude spectra ({len(t)} samples of "
                  f"{dt * 1e6:.4g} us, Hann window, resolution {1e-3 / (len(t) * dt):.3g} kHz)")
     fig.savefig(path, dpi=110)
+
+
+def spectrogram_figure(stored, name, path, segment=None, fmax=None):
+    """Time-frequency map of one series: short-time amplitude spectra in dB (Hann segments
+    overlapping by three quarters), time in ms, frequency in kHz."""
+    t = stored.time()
+    dt = sample_step(stored, t)
+    n = len(t)
+    segment = segment or default_segment(n) // 2 or MIN_SEGMENT
+    if segment > n:
+        raise stored.error("--segment", f"the history has {n} rows, fewer than the segment of "
+                           f"{segment}")
+    f, tc, A = spectrogram(stored.read(name), dt, segment)
+    top = min(fmax or np.inf, 0.5 / dt)
+    keep = f <= top
+    with np.errstate(divide="ignore"):
+        db = 20 * np.log10(A[keep] / max(A.max(), 1e-300))
+    fig = _figure(10, 5)
+    ax = fig.subplots()
+    mesh = ax.pcolormesh((t[0] + tc) * 1e3, f[keep] / 1e3, np.maximum(db, -100.0),
+                         shading="nearest", cmap=CMAP, vmin=max(-100.0, db[np.isfinite(db)].min()))
+    fig.colorbar(mesh, ax=ax, label="amplitude [dB re peak]")
+    ax.set_xlabel("time [ms]")
+    ax.set_ylabel("frequency [kHz]")
+    ax.set_title(f"{_title(stored)}: {name} (segments of {segment} rows)")
+    fig.savefig(path, dpi=110)
+
+
+def envelope_figure(stored, names, path, window=None, band=None):
+    """Each series with its envelope (top), and the envelope on a log scale with the
+    exponential fitted over its linear phase and its growth rate (bottom). Returns
+    {name: (sigma [1/s], (t0, t1), rms)}."""
+    t = stored.time()
+    dt = sample_step(stored, t)
+    fig = _figure(10, 7)
+    top, bottom = fig.subplots(2, 1, sharex=True)
+    fits = {}
+    for name in names:
+        x = stored.read(name)
+        env = envelope(x, dt, band)
+        try:
+            sigma, (t0, t1), rms = growth_rate(t, env, window)
+        except ValueError as exc:
+            raise stored.error("--window", f"{name}: {exc}") from None
+        fits[name] = (sigma, (t0, t1), rms)
+        line, = top.plot(t * 1e3, x - np.mean(x), lw=0.6, alpha=0.6)
+        top.plot(t * 1e3, env, lw=1.2, color=line.get_color(), label=name)
+        bottom.semilogy(t * 1e3, np.maximum(env, 1e-300), lw=1, color=line.get_color())
+        sel = (t >= t0) & (t <= t1)
+        a = np.exp(np.mean(np.log(np.maximum(env[sel], 1e-300)) - sigma * t[sel]))
+        bottom.semilogy(t[sel] * 1e3, a * np.exp(sigma * t[sel]), "--", lw=2, color="black")
+        bottom.text(t1 * 1e3, a * np.exp(sigma * t1), f"  {sigma:.4g} 1/s", fontsize=9)
+    top.set_ylabel("series and envelope")
+    top.legend(loc="best", fontsize=8)
+    bottom.set_ylabel("envelope (log)")
+    bottom.set_xlabel("time [ms]")
+    for ax in (top, bottom):
+        ax.grid(alpha=0.3)
+    what = f", band {band[0]:g}-{band[1]:g} Hz" if band else ""
+    fig.suptitle(f"{_title(stored)}: envelopes and growth rates (dashed: fit){what}")
+    fig.savefig(path, dpi=110)
+    return fits
 
 
 def frf_figure(stored, source, response, path, segment=None, fmax=None):

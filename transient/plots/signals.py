@@ -93,3 +93,76 @@ def transfer_function(x, y, dt, segment):
         H = np.where(pxx > 0, pxy / pxx, np.nan)
         coherence = np.where((pxx > 0) & (pyy > 0), np.abs(pxy) ** 2 / (pxx * pyy), np.nan)
     return f, H, coherence
+
+
+def envelope(x, dt, band=None):
+    """Amplitude envelope |x + i H(x)| of a series about its mean (H: the Hilbert transform),
+    optionally of its part in a frequency band (f0, f1) [Hz] only: the growth of one mode
+    among others.
+
+    Returns (n,) in the unit of x.
+    """
+    from scipy.signal import hilbert
+    x = np.asarray(x, dtype=float) - np.mean(x)
+    n = len(x)
+    # zeros after the series: the FFT's wrap-around would put its (large, grown) end next to
+    # its (small) start, whose envelope its ringing would then swamp
+    if band is not None:
+        X = np.fft.rfft(x, 2 * n)
+        f = np.fft.rfftfreq(2 * n, dt)
+        X[(f < band[0]) | (f > band[1])] = 0.0
+        x = np.fft.irfft(X, 2 * n)[:n]
+    return np.abs(hilbert(x, 2 * n)[:n])
+
+
+EDGE = 0.05          # fraction of the rows at each end left out of a fit (Hilbert's end effects)
+SATURATION = 0.1     # a growth is fitted until the envelope first reaches this fraction of its
+#                      peak: a limit cycle's saturation has slowed the growth by 1% there
+DECAYED = 1e-3       # a decay is fitted from the peak until the envelope falls to this fraction
+
+
+def growth_rate(t, env, window=None):
+    """Exponential growth rate sigma [1/s] of an envelope, env ~ exp(sigma t), by least squares
+    on log(env) over the linear phase: the window (t0, t1) given, or found: a growth from the
+    start until the envelope first reaches SATURATION of its peak (a limit cycle begins), a
+    decay from the peak until it falls to DECAYED of it; EDGE of the rows left out at each end.
+
+    Returns (sigma, (t0, t1), rms): rms is the RMS deviation of log(env) from the line, how far
+    from exponential the phase fitted is (0 for a pure exponential).
+    """
+    t, env = np.asarray(t, float), np.asarray(env, float)
+    n = len(t)
+    lo, hi = int(EDGE * n), n - int(EDGE * n)
+    if window is not None:
+        sel = (t >= window[0]) & (t <= window[1])
+    else:
+        inner = env[lo:hi]
+        peak = lo + int(np.argmax(inner))
+        if peak > lo + 0.5 * (hi - lo) or inner[0] < SATURATION * env[peak]:
+            # growing: up to the first sample at SATURATION of the peak
+            first = lo + int(np.argmax(inner >= SATURATION * env[peak]))
+            sel = np.zeros(n, bool)
+            sel[lo:max(first, lo + 2) + 1] = True
+        else:
+            above = np.flatnonzero(env[peak:hi] >= DECAYED * env[peak])
+            sel = np.zeros(n, bool)
+            sel[peak:peak + above[-1] + 1] = True
+    sel &= env > 0
+    if sel.sum() < 3:
+        raise ValueError("fewer than 3 samples in the window fitted")
+    A = np.stack([np.ones(sel.sum()), t[sel]], axis=1)
+    y = np.log(env[sel])
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    rms = float(np.sqrt(np.mean((A @ coef - y) ** 2)))
+    return float(coef[1]), (float(t[sel][0]), float(t[sel][-1])), rms
+
+
+def spectrogram(x, dt, segment):
+    """Short-time amplitude spectra of a series: Hann segments of `segment` samples overlapping
+    by three quarters. Returns (f (nf,) [Hz], t (nt,) [s] at segment centres, amplitude
+    (nf, nt) in the unit of x, a sine of amplitude a reading about a)."""
+    from scipy.signal import spectrogram as stft
+    f, tc, S = stft(np.asarray(x, float), fs=1.0 / dt, window="hann", nperseg=segment,
+                    noverlap=3 * segment // 4, detrend="constant", mode="magnitude",
+                    scaling="spectrum")
+    return f, tc, 2.0 * S
