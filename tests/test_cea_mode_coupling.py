@@ -333,3 +333,67 @@ def test_damping_paradox():
         cm = modes(mu, cx, cy)
         assert np.max(cm.real) > 0 and cm.unstable.sum() == 1
     assert np.max(modes(mu, 1.0, 1.0).real) < 0
+
+
+# --- the same model through the package's contact set and linearization ----------------------
+
+def reduced_hoffmann(mu, speeds=(), values=(), V=1.0, N0=100.0):
+    """The Hoffmann-Gaul mass as the package's ReducedSystem: one contact point (weight 1, a
+    linear law of k = K3) whose gap is y and whose tangential displacement along the belt's
+    sliding (+x) is x, pressed by N0; its modes diagonalize K_lin (Ks with the contact's
+    tangent K3). The friction enters only through the contact set (FrictionSet) and
+    cea.linearize, so their conventions are what this checks against the closed forms."""
+    import scipy.sparse as sp
+    from transient.case.specs import FrictionSpec
+    from transient.contact.contactset import ContactSet, FrictionSet
+    from transient.contact.friction import steady
+    from transient.dynamics.state import State
+    from transient.dynamics.system import ReducedSystem
+    from transient.kernels.codes import LINEAR
+    M, _, K_lin = system(0.0)
+    omega2, Phi = np.linalg.eigh(K_lin / MASS)
+    Phi = Phi / np.sqrt(MASS)                       # Phi^T M Phi = I
+    spec = FrictionSpec(mu, tuple(speeds), tuple(values), "tanh", 1e-3)
+    law = steady(spec, np.array([V]))
+    Cn, Ct = np.array([[0.0, 1.0]]), np.array([[1.0, 0.0]])
+    friction = FrictionSet(sp.csr_matrix(Ct), sp.csr_matrix((1, 2)), np.array([V]), law.m,
+                           law.dm, law.turn)
+    contacts = ContactSet(sp.csr_matrix(Cn), np.zeros(1), np.ones(1), np.array([LINEAR]),
+                          np.array([[K3, 0.0, 0.0, 0.0]]), {"belt": slice(0, 1)},
+                          friction=friction)
+    sys_ = ReducedSystem(contacts, np.array([K3]), np.zeros((0, 2)), (), np.zeros((0, 2)), (),
+                         0, None, omega2=omega2, damp=np.zeros(2), C=Cn @ Phi, Ct=Ct @ Phi,
+                         Cc=np.zeros((1, 2)))
+    state = State.zeros(2, 1)
+    state.q[:] = Phi.T @ M @ np.array([0.0, -N0 / K3])    # the contact spring holds N0
+    return sys_, state
+
+
+def package_modes(mu, **kw):
+    from transient.cea.linearize import linearized
+    return complex_modes(*linearized(*reduced_hoffmann(mu, **kw)))
+
+
+def test_the_package_linearization_has_hoffmanns_threshold_and_eigenvalue():
+    """The friction stiffness of the contact set (mu k_t along +x from the normal gap) is the
+    closed form's [[0, mu K3], [0, 0]]: the threshold from the package's linearization and the
+    growing eigenvalue above it match the closed forms."""
+    mu_c = bisect(lambda mu: bool(package_modes(mu).unstable.any()))
+    assert rel(mu_c, mu_c_undamped()) < 1e-8
+    lam = package_modes(1.2 * mu_c_undamped()).eigenvalues
+    grow = lam[np.argmax(lam.real)]
+    assert rel(grow, lambda_growing_undamped(1.2 * mu_c_undamped())) < 1e-10
+
+
+def test_a_falling_friction_law_is_negative_damping_along_the_sliding():
+    """mu(v) falling by dmu/dv at the sliding speed is a damper w p dmu/dv < 0 on x: the
+    eigenvalues are the roots of det(lambda^2 M + lambda diag(N0 dmu, 0) + K(mu(V)))."""
+    N0, V = 100.0, 1.0
+    speeds, values = (0.0, 2.0), (0.5, 0.3)          # mu(1) = 0.4, dmu/dv = -0.1 s/m
+    lam = package_modes(0.0, speeds=speeds, values=values, V=V, N0=N0).eigenvalues
+    c1 = N0 * (-0.1)
+    roots = np.roots(hurwitz_coefficients(0.4, c1, 0.0))
+    roots = roots[roots.imag >= 0]
+    for r in roots:
+        assert np.min(np.abs(lam - r)) < 1e-10 * abs(r)
+    assert np.max(lam.real) > 0             # negative damping: unstable at mu = 0.4 < mu_c
