@@ -257,12 +257,57 @@ def _newton_step(S, U, C, e, rows, r):
     return np.linalg.solve(S + U[:, None] * (CA.T @ (e[rows, None] * CA)), r)
 
 
+TANH, ATAN, NONE = 0, 1, -1
+SMALL = 1e-6
+
+
+def no_friction(n):
+    """The friction arrays of a system without friction (as dynamics.schemes makes them)."""
+    return (np.zeros((0, n)), np.zeros((0, n)), np.zeros(0), np.zeros(0, np.int64),
+            np.zeros(0), np.zeros(0, np.int64), np.zeros((1, 1)), np.zeros((1, 1)),
+            np.ones(1, np.int64))
+
+
+def friction_force(fr, w, press, v):
+    """(force on the coordinates, the sliding's input power) of the regularized Coulomb
+    tractions w p mu(|s|) sgn_reg(|s|) s / |s|, s = (V - Ct v, -Cc v); None without
+    friction."""
+    Ct, Cc, V, code, v_eps, table, tab_v, tab_mu, tab_n = fr
+    if len(Ct) == 0:
+        return None, 0.0
+    st, sc = V - Ct @ v, -(Cc @ v)
+    s = np.hypot(st, sc)
+    mu = np.array([np.interp(x, tab_v[k, :tab_n[k]], tab_mu[k, :tab_n[k]])
+                   for x, k in zip(s, table)])
+    x = s / v_eps
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(code == TANH, np.tanh(x), (2 / np.pi) * np.arctan(x)) / s
+    series = np.where(code == TANH, 1.0, 2 / np.pi) * (1.0 - x * x / 3.0) / v_eps
+    ratio = np.where(x < SMALL, series, ratio)
+    c = np.where((code == NONE) | (press == 0.0), 0.0, w * press * mu * ratio)
+    return Ct.T @ (c * st) + Cc.T @ (c * sc), float((c * st) @ V)
+
+
+def friction_energy(state, acc, energy, ff, dq, p_in, dt):
+    """The friction's energies of a step (kernels.stepping.friction_energy): its work on the
+    structure 1/2 (ff0 + ff) . dq, the sliding's input by the trapezoid; ff0 in state[6]."""
+    onto = 0.5 * np.dot(state[6] + ff, dq)
+    inflow = 0.5 * dt * (acc[3] + p_in)
+    acc[0] += inflow
+    acc[1] += inflow - onto
+    acc[3] = p_in
+    state[6] = ff
+    energy[3], energy[4] = acc[0], acc[1]
+
+
 # ----------------------------------------------------------------------------- explicit
 
 def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0, code,
-                     params, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p, out_e):
+                     params, fr, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p,
+                     out_e):
     """Velocity Verlet on the modal system, the diagonal damping taken implicitly at the end
-    of the step: v_{n+1} = (v_{n+1/2} + dt/2 f_{n+1}) / (1 + dt/2 c)."""
+    of the step: v_{n+1} = (v_{n+1/2} + dt/2 f_{n+1}) / (1 + dt/2 c); friction at the
+    half-step velocity."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
     m, n = C.shape
@@ -279,6 +324,9 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
         t += dt
         fext = external(t, patterns, sig)
         phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf)
+        ff, p_in = friction_force(fr, w, press, v_half)
+        if ff is not None:
+            f += ff
         gmin[:] = np.fmin(gmin, gap)
         force = fext + f - omega2 * q
         v[:] = (v_half + 0.5 * dt * force) / (1.0 + 0.5 * dt * damp)
@@ -286,6 +334,8 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
         energy = _energies(acc, 0.5 * np.dot(v, v), 0.5 * np.dot(omega2, q * q) - lin, phi,
                            0.5 * np.dot(fext_old + fext, dq),
                            0.5 * dt * (power_old + np.dot(damp, v * v)))
+        if ff is not None:
+            friction_energy(state, acc, energy, ff, dq, p_in, dt)
         fext_old = fext
         if not _finite(q, v, energy):
             state[3, 0] = t
@@ -350,8 +400,8 @@ def _finish(state, t, f0, fstart, omega2, damp):
 
 
 def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
-                        code, params, patterns, sig, S, blocks, corrections, propagate_last,
-                        fprev, fstart, out_t, out_s, out_g, out_p, out_e):
+                        code, params, fr, patterns, sig, S, blocks, corrections,
+                        propagate_last, fprev, fstart, out_t, out_s, out_g, out_p, out_e):
     """Exact modal propagation under forces linear over the step. The end forces are first
     extrapolated from the step's start and fprev (the previous step's start), then evaluated
     1 + corrections times, each at the state propagated with the last ones; if
@@ -376,10 +426,13 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
             q[:], v[:] = propagate(coef, q0, v0, f0, f1)
             phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
                                        fbuf)
-            f1 = fext + rem
+            ff, p_in = friction_force(fr, w, press, v)
+            f1 = fext + rem + (ff if ff is not None else 0.0)
         if propagate_last:
             q[:], v[:] = propagate(coef, q0, v0, f0, f1)
         energy = _modal_energies(acc, q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt)
+        if ff is not None:
+            friction_energy(state, acc, energy, ff, q - q0, p_in, dt)
         fprev[:] = f0
         f0, fext0 = f1, fext
         if not _finite(q, v, energy):

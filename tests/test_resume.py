@@ -31,7 +31,12 @@ SHORT = {"bar_impact": ("6e-5", "1.2e-4", "200", []),
          "drilled_cube": ("5e-4", "1e-3", "100", ["parts.lower.mesh.divisions=[6,6,3]",
                                                   "parts.upper.mesh.divisions=[2,2,2]"]),
          "pad_disc": ("1e-3", "2e-3", "400", PAD),
-         "pad_disc_long": ("1e-3", "2e-3", "800", PAD + ['contact.pad_disc.rule="fine"'])}
+         "pad_disc_long": ("1e-3", "2e-3", "800", PAD + ['contact.pad_disc.rule="fine"']),
+         # friction: the state's friction row and the sliding's power carried, the system's
+         # FrictionSet stored (the disc turning, growth at mu = 0.4)
+         "pad_disc_squeal": ("1e-3", "2e-3", "400", PAD + [
+             "contact.pad_disc.friction.mu=0.4", "loads.tap.vector=[0.0,0.0,-0.02]"])}
+FILES = {"pad_disc_squeal": "pad_disc"}
 
 
 def transient(*args, env=None, check=True):
@@ -67,7 +72,7 @@ def assert_same(a, b):
 @pytest.mark.parametrize("name", sorted(SHORT))
 def test_resume_is_bit_for_bit_under_other_thread_counts(tmp_path, name):
     t1, t2, chunk, coarse = SHORT[name]
-    case = str(CASES / f"{name}.toml")
+    case = str(CASES / f"{FILES.get(name, name)}.toml")
     sets = ["--set", f"solver.chunk={chunk}", "--quiet"] + [a for o in coarse
                                                            for a in ("--set", o)]
     whole, part = tmp_path / "whole.h5", tmp_path / "part.h5"

@@ -7,7 +7,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..kernels.laws import evaluate
-from .friction import steady, tangential_rows
+from .friction import CODES, NONE, steady, tangential_rows
 from .laws import law_params
 from .regularize import factored_rows
 
@@ -22,11 +22,16 @@ class FrictionSet:
     m: np.ndarray            # (P,) traction per unit pressure mu(V) sgn_reg(V)
     dm: np.ndarray           # (P,) its slope in the sliding speed [s/m]
     turn: np.ndarray         # (P,) m / V: the damping across per unit pressure [s/m]
+    code: np.ndarray = None  # (P,) the law for the kernels (kernels.friction): TANH, ATAN,
+    v_eps: np.ndarray = None  # NONE (a pair without friction); v_eps (P,) [m/s];
+    table: np.ndarray = None  # (P,) the table of mu(|s|) in `tables`:
+    tables: tuple = None     # (speeds (T, K), values (T, K), counts (T,))
 
     def subset(self, keep, factored):
         rows = (lambda R: R) if factored else (lambda R: R[keep])
         return FrictionSet(rows(self.along), rows(self.across), self.speed[keep],
-                           self.m[keep], self.dm[keep], self.turn[keep])
+                           self.m[keep], self.dm[keep], self.turn[keep], self.code[keep],
+                           self.v_eps[keep], self.table[keep], self.tables)
 
 
 @dataclass(frozen=True)
@@ -153,9 +158,10 @@ def _friction(pairs, ndof, factored):
     """The FrictionSet of the pairs, None when none has friction."""
     if all(pair.sliding is None for pair in pairs):
         return None
-    along, across, speed, m, dm, turn = [], [], [], [], [], []
+    along, across, speed, m, dm, turn, code, v_eps, table, tables = ([] for _ in range(10))
     for pair in pairs:
         n = pair.rule.n_points
+        spec = pair.spec.friction
         if pair.sliding is None:
             width = pair.factors[1].shape[1] if factored else ndof
             zero = sp.csr_matrix((ndof, width) if factored else (n, width))
@@ -163,15 +169,28 @@ def _friction(pairs, ndof, factored):
             across.append(zero)
             for x in (speed, m, dm, turn):
                 x.append(np.zeros(n))
+            code.append(np.full(n, NONE))
+            v_eps.append(np.ones(n))
+            table.append(np.zeros(n, np.int64))
             continue
         t, c = tangential_rows(pair, pair.sliding, ndof)
         along.append(t)
         across.append(c)
-        law = steady(pair.spec.friction, pair.sliding.speed)
+        law = steady(spec, pair.sliding.speed)
         speed.append(pair.sliding.speed)
         m.append(law.m)
         dm.append(law.dm)
         turn.append(law.turn)
+        code.append(np.full(n, CODES[spec.regularization]))
+        v_eps.append(np.full(n, spec.v_eps))
+        table.append(np.full(n, len(tables), np.int64))
+        tables.append((spec.speeds, spec.values) if spec.speeds else ((0.0,), (spec.mu,)))
     join = sp.hstack if factored else sp.vstack
-    return FrictionSet(join(along).tocsr(), join(across).tocsr(), *map(np.concatenate,
-                                                                         (speed, m, dm, turn)))
+    width = max((len(v) for v, _ in tables), default=1)
+    tab_v, tab_mu = np.zeros((max(len(tables), 1), width)), np.zeros((max(len(tables), 1), width))
+    counts = np.ones(max(len(tables), 1), np.int64)
+    for k, (v, mu) in enumerate(tables):
+        tab_v[k, :len(v)], tab_mu[k, :len(v)], counts[k] = v, mu, len(v)
+    return FrictionSet(join(along).tocsr(), join(across).tocsr(),
+                       *map(np.concatenate, (speed, m, dm, turn, code, v_eps, table)),
+                       (tab_v, tab_mu, counts))

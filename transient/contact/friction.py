@@ -38,7 +38,7 @@ import scipy.sparse as sp
 from ..errors import CaseError
 from ..mesh.mesh import unit
 
-TANH, ATAN = 0, 1
+TANH, ATAN, NONE = 0, 1, -1      # as kernels.friction's
 CODES = {"tanh": TANH, "atan": ATAN}
 
 

@@ -55,12 +55,25 @@ def _contact(system):
         system.contacts.code, system.contacts.params
 
 
+def friction_arrays(system):
+    """The friction's arrays for the reduced kernels (kernels.stepping.friction_pass): Ct, Cc,
+    V, law code, v_eps, table, and the tables; Ct with no rows when the system has none."""
+    f = system.contacts.friction
+    if f is None:
+        n = system.n
+        return (np.zeros((0, n)), np.zeros((0, n)), np.zeros(0), np.zeros(0, np.int64),
+                np.zeros(0), np.zeros(0, np.int64), np.zeros((1, 1)), np.zeros((1, 1)),
+                np.ones(1, np.int64))
+    return (system.Ct, system.Cc, f.speed, f.code.astype(np.int64), f.v_eps,
+            f.table.astype(np.int64), *f.tables)
+
+
 def explicit(system, dt, blocks=None):
     """Central differences (velocity Verlet); the state's gmin follows the smallest gaps."""
     if system.reduced:
         blocks = single_block(system.n_points) if blocks is None else blocks
-        args = (system.omega2, system.damp, system.C, *_contact(system), system.patterns,
-                system.signals, system.sensors)
+        args = (system.omega2, system.damp, system.C, *_contact(system),
+                friction_arrays(system), system.patterns, system.signals, system.sensors)
 
         def advance(state, n_steps, every, rows, blocks):
             return stepping.explicit_reduced(state.array, state.acc, n_steps, every, dt, *args,
@@ -147,8 +160,8 @@ def exponential(system, dt, corrections, corrector, newton, blocks=None):
                         "reduced model: set solver.reduction.enabled = true")
     blocks = single_block(system.n_points) if blocks is None else blocks
     coef = exponential_coefficients(system.omega2, system.damp, dt)
-    head = (coef, system.damp, system.omega2, system.C, *_contact(system), system.patterns,
-            system.signals, system.sensors)
+    head = (coef, system.damp, system.omega2, system.C, *_contact(system))
+    tail_head = (system.patterns, system.signals, system.sensors)
     if corrector == "implicit":
         m = system.n_points
         if 8.0 * m * m > MAX_WOODBURY_BYTES:
@@ -162,10 +175,11 @@ def exponential(system, dt, corrections, corrector, newton, blocks=None):
     else:
         tail = (corrections, corrector == "propagated")
         kernel = exponential_kernels.exponential_reduced
+        head = head + (friction_arrays(system),)
 
     def advance(state, n_steps, every, rows, blocks):
-        return kernel(state.array, state.acc, n_steps, every, dt, *head, blocks, *tail,
-                      state.forces, state.start, *rows.arrays)
+        return kernel(state.array, state.acc, n_steps, every, dt, *head, *tail_head, blocks,
+                      *tail, state.forces, state.start, *rows.arrays)
     return Stepper("exponential", dt, advance, blocks)
 
 
@@ -204,6 +218,8 @@ def initial_acceleration(system, state, store_contact, M=None):
     explicit(system, 0.0)(trial, 1, 1, rows)
     state.a[:] = trial.a
     state.acc[2] = trial.acc[2]          # explicit_full's damping power at t = 0
+    state.acc[3] = trial.acc[3]          # the sliding's input power at t = 0
+    state.array[6] = trial.array[6]      # and the friction force
     if system.reduced:
         # the forces at t = 0: the first extrapolation then takes them constant
         state.forces[:] = trial.a + system.omega2 * trial.q + system.damp * trial.v

@@ -1,9 +1,9 @@
 """What the kernels update in place, under names: the integrated state and a chunk's output rows.
 
-The kernels take the state as one (6, n) array (q, v, a, the time in [3, 0], and the forces at
+The kernels take the state as one (7, n) array (q, v, a, the time in [3, 0], the forces at
 the start of the previous step in [4] and of the next step in [5], which the exponential
-scheme carries between chunks) and the outputs as five arrays; only this module and the scheme
-factories know that layout.
+scheme carries between chunks, and the friction force at the next step's start in [6]) and
+the outputs as five arrays; only this module and the scheme factories know that layout.
 """
 from dataclasses import dataclass
 
@@ -11,7 +11,10 @@ import numpy as np
 
 from ..kernels.codes import ENERGY_TERMS
 
-Q, V, A, TIME, FORCES, START = range(6)
+Q, V, A, TIME, FORCES, START, FRICTION = range(7)
+ROWS, ACC = 7, 4     # the state's rows and the accumulators' length (a history of an earlier
+#                      version holds 6 and 3: padded with zeros when resumed, as it has no
+#                      friction)
 
 
 class State:
@@ -21,13 +24,14 @@ class State:
     gap each contact point has reached (the critical step is rechecked against it)."""
 
     def __init__(self, array, acc, gmin):
-        self.array = array          # (6, n), the kernels' layout
-        self.acc = acc              # (3,) external work, dissipated energy [J], power [W]
+        self.array = array          # (7, n), the kernels' layout
+        self.acc = acc              # (4,) external work, dissipated energy [J], a damping
+        #                             power and the sliding's input power [W] carried
         self.gmin = gmin            # (m,) [m]
 
     @classmethod
     def zeros(cls, n, m):
-        return cls(np.zeros((6, n)), np.zeros(3), np.zeros(m))
+        return cls(np.zeros((ROWS, n)), np.zeros(ACC), np.zeros(m))
 
     q = property(lambda self: self.array[Q])
     v = property(lambda self: self.array[V])

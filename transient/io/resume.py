@@ -8,7 +8,7 @@ import h5py
 import numpy as np
 
 from ..case.compare import RESUMABLE, changed
-from ..dynamics.state import State
+from ..dynamics.state import ACC, ROWS, State
 from ..errors import CaseError, DamagedHistory
 from ..kernels.codes import BILATERAL, TABLE
 from .attributes import read_attrs
@@ -58,7 +58,8 @@ def resumed(path, case):
         raise CaseError(case.path, keys[0], f"--resume: differs from the case the history "
                         f"was run with ({', '.join(keys)}); a resumed run may change only "
                         f"{', '.join(RESUMABLE)}")
-    state = State(saved["state"], saved["acc"], saved["gmin"])
+    state = State(_padded(saved["state"], (ROWS, system.n)), _padded(saved["acc"], (ACC,)),
+                  saved["gmin"])
     return Resumed(system, state, int(saved["step"][0]), float(meta["dt"]), saved["blocks"],
                    saved["balance"], meta)
 
@@ -70,14 +71,16 @@ def _fits(system, saved):
     n, m = system.n, system.n_points
     c = system.contacts
     # blocks: any length on a full system, which does not use them
-    checkpoint = {"state": (6, n), "acc": (3,), "gmin": (m,), "step": (1,), "balance": (3,),
-                  "blocks": (len(np.atleast_1d(saved.get("blocks", ()))),)}
+    checkpoint = {"state": (ROWS, n), "acc": (ACC,), "gmin": (m,), "step": (1,),
+                  "balance": (3,), "blocks": (len(np.atleast_1d(saved.get("blocks", ()))),)}
+    # an earlier version's state and accumulators, without the friction's rows
+    legacy = {"state": (6, n), "acc": (3,)} if system.contacts.friction is None else {}
     for name, want in checkpoint.items():
         value = saved.get(name)
         if value is None:
             raise DamagedHistory(f"{CHECKPOINT}/{name}", "missing")
         kinds = {"step": "iu", "blocks": "fiu"}.get(name, "f")
-        if value.shape != want or value.dtype.kind not in kinds:
+        if value.shape not in (want, legacy.get(name)) or value.dtype.kind not in kinds:
             raise DamagedHistory(f"{CHECKPOINT}/{name}", f"a {value.dtype} array of shape "
                                  f"{value.shape}, expected {want} "
                                  + ("integers" if kinds == "iu" else "numbers"))
@@ -130,3 +133,12 @@ def _fits(system, saved):
                            or np.any(np.diff(blocks) < 0) or np.any(blocks % 1 != 0)):
         raise DamagedHistory(f"{CHECKPOINT}/blocks", "row blocks that do not cover the "
                              "contact points")
+
+
+def _padded(a, shape):
+    """a with zeros after its rows up to shape (an earlier version's checkpoint)."""
+    if a.shape == shape:
+        return a
+    out = np.zeros(shape)
+    out[tuple(slice(0, k) for k in a.shape)] = a
+    return out

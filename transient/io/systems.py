@@ -14,13 +14,14 @@ from dataclasses import fields
 import numpy as np
 import scipy.sparse as sp
 
-from ..contact.contactset import ContactSet
+from ..contact.contactset import ContactSet, FrictionSet
 from ..dynamics.critical import CriticalStep
 from ..dynamics.system import FullSystem, ReducedSystem
 from ..errors import DamagedHistory
 from .history import SYSTEM as GROUP
 
 SKIPPED = ("T",)
+FRICTION_ARRAYS = ("speed", "m", "dm", "turn", "code", "v_eps", "table")
 
 
 def write_system(f, system):
@@ -66,6 +67,16 @@ def _write(g, name, value):
         for part in ("gap0", "weights", "code", "params"):
             s.create_dataset(part, data=getattr(value, part))
         _write(s, "C", value.C)
+        f = value.friction
+        if f is not None:
+            # the rows explicit, as C is (a factored set is read back as rows)
+            r = s.create_group("friction")
+            along, across = value.tangential()
+            _write(r, "along", along)
+            _write(r, "across", across)
+            for part in FRICTION_ARRAYS:
+                r.create_dataset(part, data=getattr(f, part))
+            _write(r, "tables", tuple(f.tables))
     elif isinstance(value, CriticalStep):
         s = g.create_group(name)
         s.attrs["type"], s.attrs["dt"] = "critical", value.dt
@@ -100,8 +111,14 @@ def _read(g, name):
             raise DamagedHistory(f"{node.name.lstrip('/')} attribute slices", "expected a table "
                                  "of pairs")
         slices = {k: slice(a, b) for k, (a, b) in pairs.items()}
+        friction = None
+        if "friction" in node:
+            r = node["friction"]
+            friction = FrictionSet(_read(r, "along"), _read(r, "across"),
+                                   *(r[part][()] for part in FRICTION_ARRAYS),
+                                   _read(r, "tables"))
         return ContactSet(_read(node, "C"), node["gap0"][()], node["weights"][()],
-                          node["code"][()], node["params"][()], slices)
+                          node["code"][()], node["params"][()], slices, friction=friction)
     if kind == "critical":
         return {"dt": float(node.attrs["dt"]), "kt_checked": node["kt_checked"][()],
                 "rows": node["rows"][()],

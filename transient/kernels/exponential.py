@@ -7,7 +7,8 @@ import numpy as np
 
 from ..jit import njit_fast
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
-from .stepping import _external, _finite, _store, modal_step_energies, remainder_dense
+from .stepping import (_external, _finite, _store, friction_energy, friction_pass,
+                       modal_step_energies, remainder_dense)
 from .woodbury import active_rows, woodbury_dense
 
 IMPLICIT_TOL = 1e-3     # the implicit corrector's residual, relative to the step's motion
@@ -35,8 +36,8 @@ def _finish(state, t, f0, fstart, omega2, damp):
 
 @njit_fast
 def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
-                        code, params, patterns, sig, S, blocks, corrections, propagate, fprev,
-                        fstart, out_t, out_s, out_g, out_p, out_e):
+                        code, params, fr, patterns, sig, S, blocks, corrections, propagate,
+                        fprev, fstart, out_t, out_s, out_g, out_p, out_e):
     """Exponential integrator on the reduced system: each mode's linear part (K_lin, damping)
     is propagated exactly over a step, the forces F = patterns s(t) + remainder(q) taken linear
     in time between the step's ends (first-order hold).
@@ -54,7 +55,9 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     explicit force update is not: 11% energy drift on the bar impact, against 0.2% for PECE).
     With propagate, the gaps, pressures and contact energy stored are those of the last
     evaluation, a local error away from the final state. state, acc and outputs as in
-    explicit_reduced; the acceleration left in the state is that of the forces carried."""
+    explicit_reduced; the acceleration left in the state is that of the forces carried.
+    fr: the friction's arrays (stepping.friction_pass), its tractions part of the remainder,
+    at each evaluation's velocity; state[6] and acc[3] carry its force and input power."""
     q, v = state[0], state[1]
     t = state[3, 0]
     n = q.shape[0]
@@ -71,6 +74,11 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     fbuf = np.empty((blocks.shape[0] - 1, n))
     energy = np.empty(5)
     fext0 = np.empty(n)
+    ff = np.empty(n)
+    dq = np.empty(n)
+    # the friction force at the step's start, carried in the state (with friction only: a
+    # frictionless state may have fewer rows)
+    ff0 = state[6] if fr[0].shape[0] > 0 else np.empty(n)
     _external(t, patterns, sig, svals, fext0)
     for k in range(n):
         f0[k] = fstart[k]
@@ -82,16 +90,21 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
             f1[k] = 2.0 * f0[k] - fprev[k]          # linear extrapolation of the forces
         t += dt
         _external(t, patterns, sig, svals, fext)
+        p_in = 0.0
         for it in range(corrections + 1):
             _propagate(coef, q0, v0, f0, f1, q, v)
             phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
                                        fbuf)
+            p_in = friction_pass(fr, w, press, v, ff, rem)
             for k in range(n):
                 f1[k] = fext[k] + rem[k]
         if propagate:
             _propagate(coef, q0, v0, f0, f1, q, v)
         modal_step_energies(q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt, acc,
                             energy)
+        for k in range(n):
+            dq[k] = q[k] - q0[k]
+        friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
         for k in range(n):
             fprev[k] = f0[k]
             f0[k] = f1[k]

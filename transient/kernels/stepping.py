@@ -21,6 +21,7 @@ import numpy as np
 
 from ..jit import njit, njit_fast, njit_parallel
 from .codes import CONTACT, DISSIPATED, KINETIC, NOT_FINITE, OK, STRAIN, WORK
+from .friction import friction_dense
 from .laws import pressure_potential
 from .signals import signal_values
 from .sparse import csr_matvec
@@ -135,6 +136,43 @@ def _energies(energy, kin, strain, phi, acc, work, dissipated):
 
 
 @njit_fast
+def friction_pass(fr, w, press, v, ff, f):
+    """The friction force ff at velocity v (kernels.friction), added into f too, when the
+    system has friction: fr = (Ct, Cc, V, code, v_eps, table, speeds, values, counts), Ct
+    (0, n) without. Returns the sliding's input power [W]."""
+    if fr[0].shape[0] == 0:
+        return 0.0
+    for j in range(ff.shape[0]):
+        ff[j] = 0.0
+    p_in, _ = friction_dense(fr[0], fr[1], w, press, fr[2], fr[3], fr[4], fr[5], fr[6],
+                             fr[7], fr[8], v, ff)
+    for j in range(ff.shape[0]):
+        f[j] += ff[j]
+    return p_in
+
+
+@njit_fast
+def friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt):
+    """The friction's share of a step's energies. Its work on the structure is taken as the
+    loads' is, 1/2 (ff0 + ff) . dq (ff0 at the step's start, ff at its end), so that the
+    balance closes on the scheme's own arithmetic; the sliding's input, tau_t V, by the
+    trapezoid of its power (acc[3] carries the power at the start) goes to the external work,
+    and what of it the structure did not take to the dissipated energy. ff0 becomes ff."""
+    if fr[0].shape[0] == 0:
+        return
+    onto = 0.0
+    for j in range(ff.shape[0]):
+        onto += 0.5 * (ff0[j] + ff[j]) * dq[j]
+        ff0[j] = ff[j]
+    inflow = 0.5 * dt * (acc[3] + p_in)
+    acc[0] += inflow
+    acc[1] += inflow - onto
+    acc[3] = p_in
+    energy[WORK] = acc[0]
+    energy[DISSIPATED] = acc[1]
+
+
+@njit_fast
 def _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e):
     out_t[row] = t
     for k in range(S.shape[0]):
@@ -150,12 +188,15 @@ def _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e):
 
 @njit_fast
 def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0, code,
-                     params, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p, out_e):
+                     params, fr, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p,
+                     out_e):
     """Central differences (velocity Verlet) on the reduced system, diagonal damping taken
     implicitly in the half step. state (6, n): q, v, a, state[3, 0] the time, and the forces
     the exponential kernels carry (dynamics.state). acc (3,): external work and dissipated
     energy so far, and a damping power explicit_full carries; gmin (m,): smallest gap of each
-    point so far (the critical step is rechecked against it). Returns (status, steps done)."""
+    point so far (the critical step is rechecked against it). fr: the friction's arrays
+    (friction_pass), taken at the half-step velocity; state[6] and acc[3] then carry its
+    force and input power (friction_energy). Returns (status, steps done)."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
     n = q.shape[0]
@@ -169,6 +210,10 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
     fbuf = np.empty((blocks.shape[0] - 1, n))
     energy = np.empty(5)
     dq = np.empty(n)
+    ff = np.empty(n)
+    # the friction force at the step's start, carried in the state (with friction only: a
+    # frictionless state may have fewer rows)
+    ff0 = state[6] if fr[0].shape[0] > 0 else np.empty(n)
     _external(t, patterns, sig, svals, fext_old)
     row = 0
     for step in range(1, n_steps + 1):
@@ -182,6 +227,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
         t += dt
         _external(t, patterns, sig, svals, fext)
         phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf)
+        p_in = friction_pass(fr, w, press, v, ff, f)
         _track_min(gap, gmin)
         kin = 0.0
         strain = -lin
@@ -198,6 +244,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
             strain += 0.5 * omega2[k] * q[k] * q[k]
             power += damp[k] * vn * vn
         _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
+        friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
         if not (_finite(q) and _finite(v) and _finite(energy)):
             state[3, 0] = t
             return NOT_FINITE, step

@@ -1,0 +1,83 @@
+"""Squeal in time: friction in the transient kernels against the complex modes.
+
+The small pad and disc of test_cea at mu = 0.4 (the disc turning at 50 rad/s), preloaded at
+steady sliding and tapped lightly: in the linear phase, the amplitude of each complex mode in
+the transient, c_j(t) = y_j^H z(t) with y_j its left eigenvector and z = (q - q0, v) the
+first-order state, evolves as exp(lambda_j t). Its fitted growth rate must be the CEA's real
+part of the very system integrated (linearized at its preload by cea.linearize): for the
+unstable mode (growth) and its flutter partner (decay), with every scheme that integrates
+friction, converging as the step shrinks.
+"""
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+from transient.cea.linearize import linearized
+from transient.dynamics.chunks import buffer
+from transient.stages import choose_dt, prepare, stepper
+
+from test_cea import small
+
+T_END = 8e-3
+
+
+def modal_rates(scheme, corrector, dt=0.0):
+    """(CEA eigenvalues, fitted rates) of the unstable mode and its partner, and the run's
+    energy balance error relative to the peak mechanical energy."""
+    case = small("contact.pad_disc.friction.mu=0.4", "loads.tap.vector=[0.0,0.0,-0.02]",
+                 f"solver.t_end={T_END}", f'solver.scheme="{scheme}"',
+                 f'solver.corrector="{corrector}"', "output.field=true", f"solver.dt={dt}")
+    setup = prepare(case)
+    system = setup.system
+    _, D, K = linearized(system, setup.state)
+    n = system.n
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-K, -D]])
+    lam, left = sla.eig(A, left=True, right=False)
+    step = choose_dt(case, setup)
+    steps = int(round(T_END / step))
+    state = setup.state.copy()
+    q0 = state.q.copy()
+    out = buffer(system, steps, False)
+    status, done = stepper(case, system, step)(state, steps, 1, out)
+    assert status == 0 and done == steps
+    t = out.time
+    q = out.sensors[:, len(system.sensor_names):]
+    z = np.hstack([q - q0, np.gradient(q, t, axis=0)])
+    grow = np.argmax(np.where(lam.imag > 0, lam.real, -np.inf))
+    partner = np.argmin(np.where((lam.imag > 0) & (np.abs(lam.imag - lam[grow].imag)
+                                                   < 1e-3 * lam[grow].imag), lam.real, np.inf))
+    sel = (t > 1e-3) & (t < T_END - 0.5e-3)
+    rates = []
+    for j in (grow, partner):
+        c = np.abs(z @ left[:, j].conj())
+        fit = (t < 2e-3) & (t > 0.2e-3) if j == partner else sel
+        rates.append(np.polyfit(t[fit], np.log(c[fit]), 1)[0])
+    e = out.energy
+    balance = e[:, 0] + e[:, 1] + e[:, 2] - e[:, 3] + e[:, 4]
+    drift = np.abs(balance - balance[0]).max() / (e[:, 0] + e[:, 1] + e[:, 2]).max()
+    return lam[[grow, partner]], np.array(rates), drift
+
+
+@pytest.mark.parametrize("scheme, corrector", [("exponential", "evaluated"),
+                                               ("exponential", "propagated"),
+                                               ("explicit", "evaluated")])
+def test_growth_in_time_is_the_complex_modes_real_part(scheme, corrector):
+    """The unstable mode grows at the CEA's real part within 1% at the scheme's step (the
+    exponential's at half its default: 0.39% measured, 1.6% at the default), and its partner
+    decays at its own within 5% over the first ms, before the growing one swamps it."""
+    dt = 1.5625e-6 if scheme == "exponential" else 0.0
+    lam, rates, drift = modal_rates(scheme, corrector, dt)
+    assert lam[0].real > 500 and lam[1].real < -500     # a flutter pair: one grows, one decays
+    assert rates[0] == pytest.approx(lam[0].real, rel=1e-2)
+    assert rates[1] == pytest.approx(lam[1].real, rel=5e-2)
+    assert drift < 1e-3
+
+
+def test_growth_rate_converges_with_the_step():
+    """The exponential scheme's error on the growth rate falls at least 3 times as dt halves
+    (second order: 1.6%, 0.39%, 0.09% measured)."""
+    errors = []
+    for dt in (3.125e-6, 1.5625e-6):
+        lam, rates, _ = modal_rates("exponential", "evaluated", dt)
+        errors.append(abs(rates[0] / lam[0].real - 1))
+    assert errors[1] < errors[0] / 3
