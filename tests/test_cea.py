@@ -240,7 +240,7 @@ def test_a_pad_mode_is_recognized_by_its_mac():
     from transient.cea.shapes import matched_part_modes, part_modes
     from transient.model import build_model
     model = build_model(small())
-    f, Phi, dofs = part_modes(model, "pad", 20000.0)
+    f, Phi, dofs, _ = part_modes(model, "pad", 20000.0)
     assert len(f) > 4 and f[3] > 1000.0
     u = np.zeros((model.ndof, 1), complex)
     u[dofs, 0] = (1 + 2j) * Phi[:, 3]
