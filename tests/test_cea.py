@@ -12,7 +12,8 @@ from transient.case.loading import load
 from transient.cea.linearize import linearized, preload_pressure
 from transient.cea.stage import analyse, analysed_case
 from transient.cli import main
-from transient.contact.friction import coefficient, regularized_sign, steady, TANH, ATAN
+from transient.contact.friction import coefficient, regularized_sign, steady
+from transient.kernels.codes import ATAN, TANH
 from transient.stages import prepare
 
 PAD = Path(__file__).resolve().parent.parent / "cases" / "pad_disc.toml"

@@ -349,15 +349,18 @@ def reduced_hoffmann(mu, speeds=(), values=(), V=1.0, N0=100.0):
     from transient.contact.friction import steady
     from transient.dynamics.state import State
     from transient.dynamics.system import ReducedSystem
-    from transient.kernels.codes import LINEAR
+    from transient.kernels.codes import LINEAR, TANH
     M, _, K_lin = system(0.0)
     omega2, Phi = np.linalg.eigh(K_lin / MASS)
     Phi = Phi / np.sqrt(MASS)                       # Phi^T M Phi = I
     spec = FrictionSpec(mu, tuple(speeds), tuple(values), "tanh", 1e-3)
     law = steady(spec, np.array([V]))
     Cn, Ct = np.array([[0.0, 1.0]]), np.array([[1.0, 0.0]])
+    table = (np.array([speeds or (0.0,)]), np.array([values or (mu,)]),
+             np.array([max(len(speeds), 1)]))
     friction = FrictionSet(sp.csr_matrix(Ct), sp.csr_matrix((1, 2)), np.array([V]), law.m,
-                           law.dm, law.turn)
+                           law.dm, law.turn, np.array([TANH]), np.array([1e-3]),
+                           np.zeros(1, np.int64), table)
     contacts = ContactSet(sp.csr_matrix(Cn), np.zeros(1), np.ones(1), np.array([LINEAR]),
                           np.array([[K3, 0.0, 0.0, 0.0]]), {"belt": slice(0, 1)},
                           friction=friction)

@@ -48,7 +48,7 @@ def test_friction_features_gram_is_the_explicit_one():
     Ct, Cc = rng.normal(size=(m_pts, len(omega2))), rng.normal(size=(m_pts, len(omega2)))
     m, dm, turn = rng.uniform(0.2, 0.5, m_pts), rng.normal(size=m_pts), rng.uniform(0, 1, m_pts)
     feats = features(omega2, Cr, p, kt, q0, band)
-    terms = friction_terms(omega2, Ct, Cc, m, dm, turn, p, kt, q0, band, Cr)
+    terms = friction_terms(feats, omega2, Ct, Cc, m, dm, turn, p)
     omega = np.sqrt(omega2)
     s = np.linalg.norm(omega * q0)
     c, ct, r = Cr / omega, Ct / omega, np.sqrt(omega)

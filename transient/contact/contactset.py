@@ -6,8 +6,9 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from ..kernels.codes import FRICTIONLESS
 from ..kernels.laws import evaluate
-from .friction import CODES, NONE, steady, tangential_rows
+from .friction import CODES, steady, tangential_rows
 from .laws import law_params
 from .regularize import factored_rows
 
@@ -22,10 +23,11 @@ class FrictionSet:
     m: np.ndarray            # (P,) traction per unit pressure mu(V) sgn_reg(V)
     dm: np.ndarray           # (P,) its slope in the sliding speed [s/m]
     turn: np.ndarray         # (P,) m / V: the damping across per unit pressure [s/m]
-    code: np.ndarray = None  # (P,) the law for the kernels (kernels.friction): TANH, ATAN,
-    v_eps: np.ndarray = None  # NONE (a pair without friction); v_eps (P,) [m/s];
-    table: np.ndarray = None  # (P,) the table of mu(|s|) in `tables`:
-    tables: tuple = None     # (speeds (T, K), values (T, K), counts (T,))
+    code: np.ndarray         # (P,) the law for the kernels (kernels.friction): TANH, ATAN,
+    #                          FRICTIONLESS (a pair without friction)
+    v_eps: np.ndarray        # (P,) [m/s]
+    table: np.ndarray        # (P,) the table of mu(|s|) in `tables`:
+    tables: tuple            # (speeds (T, K), values (T, K), counts (T,))
 
     def subset(self, keep, factored):
         rows = (lambda R: R) if factored else (lambda R: R[keep])
@@ -169,7 +171,7 @@ def _friction(pairs, ndof, factored):
             across.append(zero)
             for x in (speed, m, dm, turn):
                 x.append(np.zeros(n))
-            code.append(np.full(n, NONE))
+            code.append(np.full(n, FRICTIONLESS))
             v_eps.append(np.ones(n))
             table.append(np.zeros(n, np.int64))
             continue

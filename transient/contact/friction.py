@@ -36,9 +36,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import CaseError
+from ..kernels.codes import ATAN, TANH
 from ..mesh.mesh import unit
 
-TANH, ATAN, NONE = 0, 1, -1      # as kernels.friction's
 CODES = {"tanh": TANH, "atan": ATAN}
 
 

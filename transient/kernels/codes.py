@@ -10,6 +10,10 @@ N_PARAMS = 8
 # contact laws (kernels.laws)
 EXPONENTIAL, LINEAR, BILATERAL = 0, 1, 2
 
+# friction laws (kernels.friction): the regularized sign of the sliding velocity; FRICTIONLESS
+# marks the points of a pair without friction
+TANH, ATAN, FRICTIONLESS = 0, 1, -1
+
 # status of a chunk of steps (kernels.stepping, kernels.newmark)
 OK, NOT_FINITE, NO_CONVERGENCE = 0, 1, 2
 

@@ -7,14 +7,13 @@ sgn_reg(|s|) s / |s|, with sgn_reg tanh(|s| / v_eps) or (2 / pi) atan(|s| / v_ep
 force on the coordinates is Ct_i^T tau_t + Cc_i^T tau_c. Its power on the structure splits
 into what the sliding puts in, tau_t V, and what the slip dissipates, tau . s >= 0.
 
-Per point: code (TANH, ATAN; NONE: no friction), v_eps, and a table of mu against |s| (one
+Per point: code (TANH, ATAN; FRICTIONLESS: no friction), v_eps, and a table of mu against |s| (one
 entry: constant) in the packed tables (speeds, values, counts).
 """
 import numpy as np
 
 from ..jit import njit_fast
-
-TANH, ATAN, NONE = 0, 1, -1
+from .codes import FRICTIONLESS, TANH
 SMALL = 1e-6     # |s| / v_eps below which sgn_reg(|s|) / |s| is its series (no 0 / 0)
 
 
@@ -54,7 +53,7 @@ def friction_dense(Ct, Cc, w, press, V, code, v_eps, table, tab_v, tab_mu, tab_n
     p_in = 0.0
     p_diss = 0.0
     for i in range(m):
-        if code[i] == NONE or press[i] == 0.0:
+        if code[i] == FRICTIONLESS or press[i] == 0.0:
             continue
         rt = Ct[i]
         rc = Cc[i]

@@ -33,28 +33,35 @@ class Sample:
     seconds: float
 
 
+def _omega(omega2):
+    """The modes' circular frequencies, the zero ones raised to the lowest positive."""
+    return np.sqrt(np.maximum(omega2, omega2[omega2 > 0].min() if np.any(omega2 > 0) else 1.0))
+
+
 def features(omega2, Cr, pressure, tangent, q0, band):
     """(c~, c~ of the band, k_t, p / s): what the Gram matrix of the points is made of."""
-    omega = np.sqrt(np.maximum(omega2, omega2[omega2 > 0].min() if np.any(omega2 > 0) else 1.0))
+    omega = _omega(omega2)
     c = Cr / omega
     s = max(np.linalg.norm(omega * q0), 1e-300)
     return c, np.ascontiguousarray(c[:, :band]), tangent, pressure / s
 
 
-def friction_terms(omega2, Ct, Cc, m, dm, turn, pressure, tangent, q0, band, Cr):
+def friction_terms(feats, omega2, Ct, Cc, m, dm, turn, pressure):
     """The friction's features as terms (s, L, R), each point's z_i = s_i L_i (x) R_i: the
     friction stiffness Ct^T diag(w m k_t) C on the band's columns and the friction preload in
     the scaled coordinates y = Omega q, and the friction damping along and across the sliding
     in y = Omega^1/2 q (Omega^-1/2 D Omega^-1/2: its diagonal is 2 zeta, the relative shift of a
-    real part as Omega^-1 K Omega^-1's is of an eigenvalue). m, dm, turn: the law at steady
-    sliding (contactset.FrictionSet)."""
-    omega = np.sqrt(np.maximum(omega2, omega2[omega2 > 0].min() if np.any(omega2 > 0) else 1.0))
-    s = max(np.linalg.norm(omega * q0), 1e-300)
-    ct, cb = Ct / omega, np.ascontiguousarray(Cr[:, :band] / omega[:band])
+    real part as Omega^-1 K Omega^-1's is of an eigenvalue). feats: the normal features
+    (features), whose band rows, tangents and scaled pressures these share; m, dm, turn: the
+    law at steady sliding (contactset.FrictionSet)."""
+    _, cb, tangent, ps = feats
+    band = cb.shape[1]
+    omega = _omega(omega2)
+    ct = Ct / omega
     root = np.sqrt(omega)
     ctd, ccd = Ct / root, Cc / root
     one = np.ones((len(pressure), 1))
-    return [(m * tangent, ct, cb), (m * pressure / s, ct, one),
+    return [(m * tangent, ct, cb), (m * ps, ct, one),
             (pressure * dm, ctd, np.ascontiguousarray(ctd[:, :band])),
             (pressure * turn, ccd, np.ascontiguousarray(ccd[:, :band]))]
 
@@ -152,7 +159,7 @@ def sample(omega2, Cr, weights, pressure, tangent, q0, band, tol, max_points, fr
     band = max(1, min(band, len(omega2)))
     feats = features(omega2, Cr, pressure, tangent, q0, band)
     terms = (() if friction is None else
-             friction_terms(omega2, *friction, pressure, tangent, q0, band, Cr))
+             friction_terms(feats, omega2, *friction, pressure))
     h = gram_target(feats, weights, terms)
     bb = float(weights @ h)
     chosen, w, res = nnls_gram(lambda j: gram_column(feats, j, terms), h, bb, tol, max_points)
