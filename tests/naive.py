@@ -21,7 +21,7 @@ import scipy.sparse as sp
 
 from transient.kernels.codes import NO_CONVERGENCE, NOT_FINITE, OK
 from transient.kernels.exponential import IMPLICIT_TOL
-from transient.kernels.woodbury import WOODBURY_REST
+from transient.kernels.woodbury import ARMIJO, MIN_STEP, WOODBURY_REST
 
 # contact laws: the codes and parameter rows (4,) of kernels/laws.py
 EXPONENTIAL, LINEAR, BILATERAL = 0, 1, 2
@@ -284,7 +284,7 @@ def friction_force(fr, w, press, v):
         ratio = np.where(code == TANH, np.tanh(x), (2 / np.pi) * np.arctan(x)) / s
     series = np.where(code == TANH, 1.0, 2 / np.pi) * (1.0 - x * x / 3.0) / v_eps
     ratio = np.where(x < SMALL, series, ratio)
-    c = np.where((code == NONE) | (press == 0.0), 0.0, w * press * mu * ratio)
+    c = np.where((code == NONE) | (press <= 0.0), 0.0, w * press * mu * ratio)
     return Ct.T @ (c * st) + Cc.T @ (c * sc), float((c * st) @ V)
 
 
@@ -298,6 +298,110 @@ def friction_energy(state, acc, energy, ff, dq, p_in, dt):
     acc[3] = p_in
     state[6] = ff
     energy[3], energy[4] = acc[0], acc[1]
+
+
+def slip_tangent(code, v_eps, mu, dmu, st, sc):
+    """(c, c' |s|) of the traction w p c(|s|) s, c = mu sgn_reg(|s|) / |s| (mu and its slope
+    dmu at |s| given): c' |s| = dmu sgn_reg + mu (sgn_reg' - sgn_reg / |s|), the last
+    difference -(2/3) x^2 / v_eps (times 2 / pi for atan) to leading order where it would
+    cancel (x = |s| / v_eps < 1e-4)."""
+    s = np.hypot(st, sc)
+    x = s / v_eps
+    k = 1.0 if code == TANH else 2.0 / np.pi
+    g = np.tanh(x) if code == TANH else k * np.arctan(x)
+    gp = (1.0 - g * g) / v_eps if code == TANH else k / (v_eps * (1.0 + x * x))
+    if x < 1e-4:
+        return mu * k * (1.0 - x * x / 3.0) / v_eps, dmu * g + mu * k * (-2.0 / 3.0) * x * x / v_eps
+    return mu * g / s, dmu * g + mu * (gp - g / s)
+
+
+def _table_slope(tab_v, tab_mu, k, s):
+    """(mu, dmu/ds) of a table of k points at s (0 slope beyond its ends)."""
+    xs, ys = tab_v[:k], tab_mu[:k]
+    if k == 1 or s <= xs[0] or s >= xs[-1]:
+        return float(np.interp(s, xs, ys)), 0.0
+    j = np.searchsorted(xs, s)
+    slope = (ys[j] - ys[j - 1]) / (xs[j] - xs[j - 1])
+    return ys[j - 1] + slope * (s - xs[j - 1]), slope
+
+
+def coupled_terms(code, params, gap, press, w, kt0, fr, v, P, Dq, Dv, C):
+    """The Jacobian terms U_c V_c^T of the implicit steps (kernels.woodbury.coupled_rows:
+    x moves q by Dq x and v by Dv x, J = diag(P) + sum U V^T), as dense (U, V) pairs with each
+    term's size, the sum of |coefficient x V_c^T P^-1 column| over the columns C_i, Ct_i,
+    Cc_i it combines; per point i the gap's term, then the slip's along and across."""
+    _, kt, _ = pressure_potential(code, params, gap)
+    m = len(gap)
+    friction = len(fr[0]) > 0
+    terms = []
+
+    def cross(a, da, b):
+        return abs(float(a * da / P @ b))
+
+    for i in range(m):
+        e = w[i] * (kt[i] - kt0[i])
+        U, V = e * C[i], Dq * C[i]
+        size = abs(e) * cross(1.0, C[i] * Dq, C[i])
+        slips = []
+        if friction:
+            Ct, Cc, Vs, fcode, v_eps, table, tab_v, tab_mu, tab_n = fr
+            slips = [(0.0, np.zeros_like(U), Dv * Ct[i]), (0.0, np.zeros_like(U), Dv * Cc[i])]
+            if fcode[i] != NONE and press[i] > 0.0:
+                st, sc = Vs[i] - Ct[i] @ v, -(Cc[i] @ v)
+                t = table[i]
+                mu, dmu = _table_slope(tab_v[t], tab_mu[t], tab_n[t], np.hypot(st, sc))
+                c, d = slip_tangent(fcode[i], v_eps[i], mu, dmu, st, sc)
+                g = w[i] * kt[i] * c
+                U = U + g * (st * Ct[i] + sc * Cc[i])
+                size += abs(g * st) * cross(1.0, C[i] * Dq, Ct[i]) + abs(g * sc) * cross(
+                    1.0, C[i] * Dq, Cc[i])
+                s2 = st * st + sc * sc
+                H = w[i] * press[i] * (c * np.eye(2) + (d / s2 if s2 > 0 else 0.0)
+                                       * np.outer([st, sc], [st, sc]))
+                slips = [(abs(H[0, 0]) * cross(1.0, Ct[i] * Dv, Ct[i])
+                          + abs(H[1, 0]) * cross(1.0, Ct[i] * Dv, Cc[i]),
+                          H[0, 0] * Ct[i] + H[1, 0] * Cc[i], Dv * Ct[i]),
+                         (abs(H[1, 1]) * cross(1.0, Cc[i] * Dv, Cc[i])
+                          + abs(H[0, 1]) * cross(1.0, Cc[i] * Dv, Ct[i]),
+                          H[0, 1] * Ct[i] + H[1, 1] * Cc[i], Dv * Cc[i])]
+        terms.append((size, U, V))
+        terms.extend(slips)
+    return terms
+
+
+class LineSearch:
+    """The friction's Newton steps, halved while the squared residual does not fall by
+    ARMIJO times the step's fraction (down to MIN_STEP of it): kernels.woodbury.backtrack."""
+
+    def __init__(self):
+        self.start, self.step, self.r2, self.alpha = None, None, np.inf, 1.0
+
+    def newton(self, x, step, r2):
+        """The full Newton step from x (residual r2 there)."""
+        self.start, self.step, self.r2, self.alpha = x.copy(), step, r2, 1.0
+        return x - step
+
+    def shorter(self, r2):
+        """Whether the point just evaluated (residual r2) is to be replaced by a shorter step."""
+        if self.alpha > MIN_STEP and r2 > (1.0 - ARMIJO * self.alpha) ** 2 * self.r2:
+            self.alpha *= 0.5
+            return True
+        return False
+
+    def point(self):
+        return self.start - self.alpha * self.step
+
+
+def coupled_newton(terms, P, R):
+    """J_A^-1 R, J_A = diag(P) + the terms of largest size, taken until the others sum to at
+    most WOODBURY_REST, solved densely."""
+    sizes = np.array([t[0] for t in terms])
+    order = np.argsort(-sizes)
+    rest = sizes.sum() - np.concatenate([[0.0], np.cumsum(sizes[order])])
+    J = np.diag(P)
+    for c in order[:np.argmax(rest <= WOODBURY_REST)]:
+        J += np.outer(terms[c][1], terms[c][2])
+    return np.linalg.solve(J, R)
 
 
 # ----------------------------------------------------------------------------- explicit
@@ -446,46 +550,57 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
 
 
 def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
-                         code, params, patterns, sig, S, blocks, Z, G, max_iter, fprev, fstart,
-                         out_t, out_s, out_g, out_p, out_e):
-    """The exponential step with the end forces implicit: q = qb + D (fext + remainder(q)),
-    D = diag(G1x), solved by Newton from the extrapolated forces' end state, with
-    J = I + D C_A^T diag(e_A) C_A (e_i = w_i (k_t,i - k_t*,i), A as in active_rows with
-    G_ii = (C D C^T)_ii) solved densely: Z and G are taken for the signature only. Converged
-    when |r| <= IMPLICIT_TOL |q - q0|; q stays the last state evaluated, v is propagated with
-    the forces found there."""
+                         code, params, fr, patterns, sig, S, blocks, GQ, GV, max_iter, fprev,
+                         fstart, out_t, out_s, out_g, out_p, out_e):
+    """The exponential step with the end forces x implicit: q = qb + D x, v = vb + Dv x
+    (D, Dv = diag(G1x), diag(G1v)), R(x) = x - fext - remainder(q) - friction(q, v) = 0 solved
+    by Newton from the extrapolated forces, with J = I + the terms of coupled_terms solved
+    densely: GQ and GV are taken for the signature only. Converged when |D R| <= IMPLICIT_TOL
+    |q - q0| (and with friction |Dv R| <= IMPLICIT_TOL |v - v0|); q stays the last state
+    evaluated, v is propagated with the forces found there."""
     q, v = state[0], state[1]
     t = state[3, 0]
     m, n = C.shape
+    friction = len(fr[0]) > 0
     rem, gap, press = np.empty(n), np.empty(m), np.empty(m)
     fbuf = np.empty((len(blocks) - 1, n))
     outs = (out_t, out_s, out_g, out_p, out_e)
-    D = coef[:, 6]
-    Gd = (C * C) @ D
+    D, Dv, ones = coef[:, 6], coef[:, 7], np.ones(n)
     fext0 = external(t, patterns, sig)
     f0 = fstart.copy()
     row = 0
     for step in range(1, n_steps + 1):
         q0, v0 = q.copy(), v.copy()
-        f1 = 2.0 * f0 - fprev
+        x = 2.0 * f0 - fprev
         t += dt
         fext = external(t, patterns, sig)
-        q[:] = propagate(coef, q0, v0, f0, f1)[0]
-        qb = q - D * f1
+        q[:], v[:] = propagate(coef, q0, v0, f0, x)
+        qb, vb = q - D * x, v - Dv * x
         converged = False
+        line = LineSearch()
         for _ in range(max_iter):
             phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
                                        fbuf)
-            f1 = fext + rem
-            r = qb + D * f1 - q
-            scale = max(np.sum((q - q0) ** 2), 1e-20 * np.dot(q, q), 1e-300)
-            if np.dot(r, r) <= IMPLICIT_TOL ** 2 * scale:
+            ff, p_in = friction_force(fr, w, press, v)
+            f1 = fext + rem + (ff if ff is not None else 0.0)
+            R = x - f1
+
+            def small(r, d, d0):
+                return np.dot(r, r) <= IMPLICIT_TOL ** 2 * max(np.dot(d - d0, d - d0),
+                                                              1e-20 * np.dot(d, d), 1e-300)
+            if small(D * R, q, q0) and (not friction or small(Dv * R, v, v0)):
                 converged = True
                 break
-            e, rows = active_rows(code, params, gap, w, kt0, 1.0, Gd)
-            q += _newton_step(np.eye(n), D, C, e, rows, r)
+            if friction and line.shorter(np.dot(R, R)):
+                x = line.point()
+            else:
+                terms = coupled_terms(code, params, gap, press, w, kt0, fr, v, ones, D, Dv, C)
+                x = line.newton(x, coupled_newton(terms, ones, R), np.dot(R, R))
+            q[:], v[:] = qb + D * x, vb + Dv * x
         v[:] = propagate(coef, q0, v0, f0, f1)[1]
         energy = _modal_energies(acc, q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt)
+        if ff is not None:
+            friction_energy(state, acc, energy, ff, q - q0, p_in, dt)
         fprev[:] = f0
         f0, fext0 = f1, fext
         if not _finite(q, v, energy):
@@ -504,16 +619,20 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
 # ----------------------------------------------------------------------------- Newmark
 
 def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, sig, observe,
-             tol, max_iter, outs):
+             tol, max_iter, outs, fr=None):
     """Average-acceleration Newmark on M a + cdamp v + K q = F + remainder(q), dense M, K and
     cdamp, Newton on a with J = S + C_A^T diag(e_A) C_A (S = M + dt/2 cdamp + dt^2/4 K,
     e_i = dt^2/4 w_i (k_t,i - k_t*,i), A as in active_rows with G_ii = (C S^-1 C^T)_ii).
     Converged when |R| <= tol |(f, |K| |q|, M a, 2/dt M v)|. The dissipation is the trapezoid
     of the damping power v . cdamp v; contact = (remainder, code, params, w, kt0) with
-    remainder(q) -> (force, gap, pressure, (phi, lin))."""
+    remainder(q) -> (force, gap, pressure, (phi, lin)). With friction (fr, a diagonal
+    operator S), the friction force at v joins the remainder and the Jacobian is that of
+    coupled_terms (x = a, P = diag(S), Dq = dt^2/4, Dv = dt/2); its work and the sliding's
+    input as friction_energy takes them."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
     remainder, code, params, w, kt0 = contact
+    friction = fr is not None and len(fr[0]) > 0
     h2 = 0.25 * dt * dt
     v_scale = 2.0 / dt if dt > 0.0 else 0.0
     Sop = M + 0.5 * dt * cdamp + h2 * K
@@ -527,11 +646,13 @@ def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, 
         t += dt
         fext = external(t, patterns, sig)
         converged = False
+        line = LineSearch()
         for _ in range(max_iter):
             q[:] = qp + h2 * a
             v[:] = vp + 0.5 * dt * a
             rem, gap, press, (phi, lin) = remainder(q)
-            f = fext + rem
+            ff, p_in = friction_force(fr, w, press, v) if friction else (None, 0.0)
+            f = fext + rem + (ff if ff is not None else 0.0)
             ku = K @ q
             r = M @ a + cdamp @ v + ku - f
             scale = (np.dot(f, f) + np.sum((np.abs(K) @ np.abs(q)) ** 2)
@@ -539,13 +660,23 @@ def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, 
             if np.dot(r, r) <= tol * tol * max(scale, 1e-300):
                 converged = True
                 break
-            e, rows = active_rows(code, params, gap, w, kt0, h2, Gd)
-            a -= _newton_step(Sop, np.ones(len(q)), C, e, rows, r)
+            if friction and line.shorter(np.dot(r, r)):
+                a[:] = line.point()
+            elif friction:
+                P = np.diag(Sop)
+                terms = coupled_terms(code, params, gap, press, w, kt0, fr, v, P,
+                                      np.full(len(q), h2), np.full(len(q), 0.5 * dt), C)
+                a[:] = line.newton(a, coupled_newton(terms, P, r), np.dot(r, r))
+            else:
+                e, rows = active_rows(code, params, gap, w, kt0, h2, Gd)
+                a -= _newton_step(Sop, np.ones(len(q)), C, e, rows, r)
         q[:] = qp + h2 * a
         v[:] = vp + 0.5 * dt * a
         energy = _energies(acc, 0.5 * np.dot(v, M @ v), 0.5 * np.dot(q, K @ q) - lin, phi,
                            0.5 * np.dot(fext_old + fext, q - q_old),
                            0.5 * dt * (np.dot(v_old, cdamp @ v_old) + np.dot(v, cdamp @ v)))
+        if friction:
+            friction_energy(state, acc, energy, ff, q - q_old, p_in, dt)
         fext_old = fext
         if not _finite(q, v, energy):
             state[3, 0] = t
@@ -561,10 +692,10 @@ def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, 
 
 
 def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0, code, params,
-                    patterns, sig, S, blocks, Z, G, tol, max_iter, out_t, out_s, out_g, out_p,
-                    out_e):
-    """Newmark on the modal system (M = I, diagonal damping and K_lin). Z and G are taken for
-    the signature only (see _newmark)."""
+                    fr, patterns, sig, S, blocks, GQ, GV, tol, max_iter, out_t, out_s, out_g,
+                    out_p, out_e):
+    """Newmark on the modal system (M = I, diagonal damping and K_lin), friction included.
+    GQ and GV are taken for the signature only (see _newmark)."""
     m, n = C.shape
     fbuf = np.empty((len(blocks) - 1, n))
 
@@ -575,7 +706,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
 
     return _newmark(state, acc, n_steps, every, dt, np.eye(n), np.diag(omega2), np.diag(damp),
                     C, (remainder, code, params, w, kt0), patterns, sig, lambda q: S @ q, tol,
-                    max_iter, (out_t, out_s, out_g, out_p, out_e))
+                    max_iter, (out_t, out_s, out_g, out_p, out_e), fr)
 
 
 def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt0, code,

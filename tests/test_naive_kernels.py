@@ -216,7 +216,7 @@ TWO_BLOCKS = np.array([0, N_POINTS // 2, N_POINTS])
 
 def reduced_args(r, *tail, blocks=ONE_BLOCK, friction=False):
     """The reduced system's arguments from C to blocks (with the friction's after the laws
-    for the kernels that take them), then tail."""
+    for the kernels that take them: none for a system without), then tail."""
     fr = (r.fr,) if friction else ()
     return (r.C, r.g0, r.w, r.kt0, r.code, r.params) + fr + (r.patterns, r.sig, r.S,
                                                              blocks) + tail
@@ -241,17 +241,28 @@ def exponential_reduced_args(r, dt, corrections, propagate):
                                                   r.fprev.copy(), friction=True)
 
 
+def coupled_operators(r, Dq, Dv):
+    """GQ = C Dq Cs^T and GV = [Ct; Cc] Dv Cs^T, Cs = [C; Ct; Cc] (C Dq C^T and none without
+    friction): what dynamics.schemes.coupled_operators gives the implicit kernels."""
+    fr = r.fr
+    if len(fr[0]) == 0:
+        return np.ascontiguousarray((r.C * Dq) @ r.C.T), np.zeros((0, 0))
+    Cs = np.vstack([r.C, fr[0], fr[1]])
+    return (np.ascontiguousarray((r.C * Dq) @ Cs.T),
+            np.ascontiguousarray((np.vstack([fr[0], fr[1]]) * Dv) @ Cs.T))
+
+
 def exponential_implicit_args(r, dt, max_iter=30):
     coef = nv.exponential_coefficients(r.omega2, r.damp, dt)
-    Z = np.ascontiguousarray(coef[:, 6:7] * r.C.T)          # D C^T, D = diag(G1x)
-    return (coef, r.damp, r.omega2) + reduced_args(r, Z, r.C @ Z, max_iter, r.fprev.copy(),
-                                                  r.fprev.copy())
+    return (coef, r.damp, r.omega2) + reduced_args(
+        r, *coupled_operators(r, coef[:, 6], coef[:, 7]), max_iter, r.fprev.copy(),
+        r.fprev.copy(), friction=True)
 
 
 def newmark_reduced_args(r, dt, max_iter=50):
     op = 1.0 + 0.5 * dt * r.damp + 0.25 * dt ** 2 * r.omega2
-    Z = np.ascontiguousarray(r.C.T / op[:, None])
-    return (r.damp, r.omega2) + reduced_args(r, Z, r.C @ Z, 1e-10, max_iter)
+    GQ, GV = coupled_operators(r, 0.25 * dt * dt / op, 0.5 * dt / op)
+    return (r.damp, r.omega2) + reduced_args(r, GQ, GV, 1e-10, max_iter, friction=True)
 
 
 def newmark_full_args(f, dt, max_iter=50):
@@ -283,6 +294,9 @@ CONFIGS = {
                                                     {"corrections": 0, "propagate": True}),
     "exponential_implicit": (exponential.exponential_implicit, exponential_implicit_args, {}),
     "newmark_reduced": (newmark.newmark_reduced, newmark_reduced_args, {}),
+    "exponential_implicit-friction": (exponential.exponential_implicit,
+                                      exponential_implicit_args, {}),
+    "newmark_reduced-friction": (newmark.newmark_reduced, newmark_reduced_args, {}),
     "newmark_full": (newmark.newmark_full, newmark_full_args, {}),
 }
 FULL = (stepping.explicit_full, newmark.newmark_full)
@@ -297,7 +311,8 @@ def systems():
     return {(False, False): reduced_system(), (True, False): full_system(),
             (False, True): reduced_system(impulse=10.0, dt_factor=2.0),
             (True, True): full_system(impulse=15.0, dt_factor=2.0),
-            "friction": with_friction(reduced_system())}
+            "friction": with_friction(reduced_system()),
+            "friction-hard": with_friction(reduced_system(impulse=10.0, dt_factor=2.0))}
 
 
 def setup(name, systems, hard=True, dt=None, **options):
@@ -306,7 +321,7 @@ def setup(name, systems, hard=True, dt=None, **options):
     kernel, build, defaults = CONFIGS[name]
     system = systems[(kernel in FULL, hard and kernel in IMPLICIT)]
     if name.endswith("-friction"):
-        system = systems["friction"]
+        system = systems["friction-hard" if hard and kernel in IMPLICIT else "friction"]
     args = build(system, dt or system.dt, **{**defaults, **options})
     return kernel, getattr(nv, kernel.__name__), system, args
 
@@ -445,16 +460,32 @@ def test_remainder_sparse(systems):
 # ----------------------------------------------------------------------------- the kernels
 
 def corrected_rows(system, arrays, kernel, G):
-    """Output rows whose gaps have rows to correct exactly through Woodbury."""
-    scale = 1.0 if kernel is exponential.exponential_implicit else 0.25 * system.dt ** 2
+    """Output rows whose gaps have rows to correct exactly through Woodbury (G: the full
+    Newmark's C S^-1 C^T, or the reduced kernels' GQ, whose Dq carries dt^2/4)."""
+    scale = 0.25 * system.dt ** 2 if kernel is newmark.newmark_full else 1.0
     return sum(len(nv.active_rows(system.code, system.params, g, system.w, system.kt0, scale,
-                                  np.diag(G))[1]) > 0 for g in arrays["out_g"])
+                                  np.diag(G)[:len(g)])[1]) > 0 for g in arrays["out_g"])
 
 
 @pytest.mark.parametrize("name", CONFIGS)
-def test_kernel_equals_its_twin(systems, name):
+def test_kernel_equals_its_twin(systems, name, monkeypatch):
     kernel, twin, system, args = setup(name, systems)
+    taken = []
+    if name.endswith("-friction") and kernel in IMPLICIT:
+        newton = nv.coupled_newton
+
+        def counting(terms, P, R):
+            # the slip terms the twin's Jacobian takes (each point's gap term, then its two)
+            sizes = np.array([t[0] for t in terms])
+            order = np.argsort(-sizes)
+            rest = sizes.sum() - np.concatenate([[0.0], np.cumsum(sizes[order])])
+            taken.append(np.sum(order[:np.argmax(rest <= nv.WOODBURY_REST)] % 3 > 0))
+            return newton(terms, P, R)
+        monkeypatch.setattr(nv, "coupled_newton", counting)
     _, got = compare(kernel, twin, system, args)
+    if taken:
+        # the friction's own terms were corrected exactly (sticking points) on many steps
+        assert sum(np.array(taken) > 0) > 10, taken
     # the run went through every branch of the laws: exponential points into the linear
     # continuation and opened by more than 1/lambda, unilateral points closed
     g, p = got["out_g"], got["out_p"]
@@ -463,9 +494,49 @@ def test_kernel_equals_its_twin(systems, name):
     assert np.any(g[:, exp] - system.gap0[exp] > 1.0 / LAM)
     assert np.any(p[:, system.code == nv.LINEAR] > 0.0)
     if kernel in IMPLICIT:
-        # G comes before (tol, max_iter), or before (max_iter, fprev, fstart)
-        G = args[-4] if kernel is exponential.exponential_implicit else args[-3]
+        # the full Newmark's G before (tol, max_iter); the reduced kernels' GQ before
+        # (GV, tol, max_iter) or (GV, max_iter, fprev, fstart)
+        G = {exponential.exponential_implicit: args[-5], newmark.newmark_reduced: args[-4],
+             newmark.newmark_full: args[-3]}[kernel]
         assert corrected_rows(system, got, kernel, G) > 10
+
+
+def test_coupled_jacobian_is_the_residuals_derivative(systems):
+    """Every term of the implicit steps' Jacobian (naive.coupled_terms, the kernels' twin)
+    against central differences of Newmark's residual R(a) = a + c v + K q - F - f(q, v), at
+    states where points stick, slip both ways and close: the gap's, the pressure's on the
+    friction and the slip's derivatives, for tanh and atan laws and a falling mu."""
+    r = systems["friction-hard"]
+    m, n = r.C.shape
+    dt = r.dt
+    h2 = 0.25 * dt * dt
+    P = 1.0 + 0.5 * dt * r.damp + h2 * r.omega2
+    rng = np.random.default_rng(7)
+    checked = 0
+    for trial in range(6):
+        qp = r.state[0] + 2.0 / LAM * rng.standard_normal(n) / np.sqrt(n)
+        vp = r.state[1] * rng.uniform(0.5, 3.0)
+        a0 = rng.standard_normal(n) * np.abs(r.state[2]).max()
+
+        def residual(a):
+            q, v = qp + h2 * a, vp + 0.5 * dt * a
+            f, gap, press = np.empty(n), np.empty(m), np.empty(m)
+            nv.remainder_dense(r.C, r.g0, r.w, r.kt0, r.code, r.params, q, f, gap, press,
+                               ONE_BLOCK, np.empty((1, n)))
+            ff, _ = nv.friction_force(r.fr, r.w, press, v)
+            return a + r.damp * v + r.omega2 * q - f - ff, gap, press, v
+
+        _, gap, press, v = residual(a0)
+        terms = nv.coupled_terms(r.code, r.params, gap, press, r.w, r.kt0, r.fr, v, P,
+                                 np.full(n, h2), np.full(n, 0.5 * dt), r.C)
+        J = np.diag(P) + sum(np.outer(U, V) for _, U, V in terms)
+        step = 1e-7 * np.abs(a0).max()
+        J_fd = np.column_stack([(residual(a0 + step * e)[0] - residual(a0 - step * e)[0])
+                                / (2 * step) for e in np.eye(n)])
+        np.testing.assert_allclose(J, J_fd, rtol=0, atol=1e-6 * np.abs(J).max())
+        st = r.fr[2] - r.fr[0] @ v
+        checked += np.sum(np.abs(st) < 3 * r.fr[4])      # points near sticking
+    assert checked > 5
 
 
 @pytest.mark.parametrize("name", ["explicit_reduced", "explicit_full"])
@@ -538,9 +609,11 @@ ENERGY_TOL = {"explicit_reduced": 6e-4, "explicit_reduced-two-blocks": 6e-4,
               # friction (with_friction: points sticking, slipping both ways, v_eps 5% of V):
               # its work by the loads' rule, the sliding's input by the trapezoid; the
               # explicit corrector of the stiff slope at rest (w p mu / v_eps) is what PECE
-              # pays, measured 8.1e-3, 11.6 times less at half the step
+              # pays, measured 8.1e-3, 11.6 times less at half the step; the implicit ones
+              # take that slope in their Jacobian: 1.4e-4 (exponential) and 1.2e-4 (Newmark)
               "explicit_reduced-friction": 6e-4, "exponential_reduced-PECE-friction": 1.6e-2,
-              "exponential_reduced-PEC-propagated-friction": 1.6e-3}
+              "exponential_reduced-PEC-propagated-friction": 1.6e-3,
+              "exponential_implicit-friction": 3e-4, "newmark_reduced-friction": 3e-4}
 
 
 @pytest.mark.parametrize("name", CONFIGS)

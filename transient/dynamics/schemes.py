@@ -95,10 +95,10 @@ def implicit(system, dt, newton, linear_solver="auto", blocks=None):
     if system.reduced:
         blocks = single_block(system.n_points) if blocks is None else blocks
         op = 1.0 + 0.5 * dt * system.damp + 0.25 * dt * dt * system.omega2
-        Z = np.ascontiguousarray(system.C.T / op[:, None])
-        head = (system.damp, system.omega2, system.C, *_contact(system), system.patterns,
-                system.signals, system.sensors)
-        tail = (Z, system.C @ Z, newton.tolerance, newton.max_iter)
+        GQ, GV = coupled_operators(system, 0.25 * dt * dt / op, 0.5 * dt / op, "scheme")
+        head = (system.damp, system.omega2, system.C, *_contact(system),
+                friction_arrays(system), system.patterns, system.signals, system.sensors)
+        tail = (GQ, GV, newton.tolerance, newton.max_iter)
         stages, meta = {}, {}
 
         def advance(state, n_steps, every, rows, blocks):
@@ -117,6 +117,26 @@ def implicit(system, dt, newton, linear_solver="auto", blocks=None):
             return newmark.newmark_full(state.array, state.acc, n_steps, every, dt, *args,
                                         *rows.arrays)
     return Stepper("implicit", dt, advance, blocks, stages, meta)
+
+
+def coupled_operators(system, Dq, Dv, key):
+    """GQ = C diag(Dq) Cs^T and GV = [Ct; Cc] diag(Dv) Cs^T, Cs = [C; Ct; Cc], of the implicit
+    reduced kernels' exact corrections (kernels.woodbury.coupled_rows); without friction
+    GQ = C diag(Dq) C^T and GV empty. Refused (solver.KEY) when too large to keep dense."""
+    C = system.C
+    m = system.n_points
+    friction = system.contacts.friction is not None
+    size = 8.0 * (15 * m * m if friction else m * m)
+    if size > MAX_WOODBURY_BYTES:
+        what = "C D [C; Ct; Cc]^T and [Ct; Cc] D [C; Ct; Cc]^T" if friction else "C D C^T"
+        raise CaseError("", f"solver.{key}", f"the implicit {key} keeps {what} dense: {m} "
+                        f"contact points is {1e-9 * size:.1f} GB; sample the points (contact "
+                        f"rule \"sampled\") or use corrector \"evaluated\"")
+    if not friction:
+        return np.ascontiguousarray((C * Dq) @ C.T), np.zeros((0, 0))
+    Cs = np.vstack([C, system.Ct, system.Cc])
+    return (np.ascontiguousarray((C * Dq) @ Cs.T),
+            np.ascontiguousarray((np.vstack([system.Ct, system.Cc]) * Dv) @ Cs.T))
 
 
 def check_woodbury(n, m, path=""):
@@ -162,20 +182,15 @@ def exponential(system, dt, corrections, corrector, newton, blocks=None):
     coef = exponential_coefficients(system.omega2, system.damp, dt)
     head = (coef, system.damp, system.omega2, system.C, *_contact(system))
     tail_head = (system.patterns, system.signals, system.sensors)
+    head = head + (friction_arrays(system),)
     if corrector == "implicit":
-        m = system.n_points
-        if 8.0 * m * m > MAX_WOODBURY_BYTES:
-            raise CaseError("", "solver.corrector", f"the implicit corrector keeps C D C^T "
-                            f"dense: {m} contact points is {8e-9 * m * m:.1f} GB; sample the "
-                            f"points (contact rule \"sampled\") or use corrector \"evaluated\"")
-        # the end state moves by D = diag(G1x) per unit end force: Z = D C^T, G = C Z
-        Z = np.ascontiguousarray(coef[:, 6:7] * system.C.T)
-        tail = (Z, system.C @ Z, newton.max_iter)
+        # the end state moves by G1x (and its velocity by G1v) per unit end force
+        tail = (*coupled_operators(system, coef[:, 6], coef[:, 7], "corrector"),
+                newton.max_iter)
         kernel = exponential_kernels.exponential_implicit
     else:
         tail = (corrections, corrector == "propagated")
         kernel = exponential_kernels.exponential_reduced
-        head = head + (friction_arrays(system),)
 
     def advance(state, n_steps, every, rows, blocks):
         return kernel(state.array, state.acc, n_steps, every, dt, *head, *tail_head, blocks,

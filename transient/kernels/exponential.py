@@ -9,7 +9,7 @@ from ..jit import njit_fast
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
 from .stepping import (_external, _finite, _store, friction_energy, friction_pass,
                        modal_step_energies, remainder_dense)
-from .woodbury import active_rows, woodbury_dense
+from .woodbury import backtrack, coupled_rows, coupled_solve
 
 IMPLICIT_TOL = 1e-3     # the implicit corrector's residual, relative to the step's motion
 
@@ -75,6 +75,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     energy = np.empty(5)
     fext0 = np.empty(n)
     ff = np.empty(n)
+    slip = np.empty((2, fr[0].shape[0]))
     dq = np.empty(n)
     # the friction force at the step's start, carried in the state (with friction only: a
     # frictionless state may have fewer rows)
@@ -95,7 +96,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
             _propagate(coef, q0, v0, f0, f1, q, v)
             phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
                                        fbuf)
-            p_in = friction_pass(fr, w, press, v, ff, rem)
+            p_in = friction_pass(fr, w, press, v, ff, rem, slip)
             for k in range(n):
                 f1[k] = fext[k] + rem[k]
         if propagate:
@@ -121,44 +122,62 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
 
 @njit_fast
 def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
-                         code, params, patterns, sig, S, blocks, Z, G, max_iter, fprev, fstart,
-                         out_t, out_s, out_g, out_p, out_e):
+                         code, params, fr, patterns, sig, S, blocks, GQ, GV, max_iter, fprev,
+                         fstart, out_t, out_s, out_g, out_p, out_e):
     """The exponential integrator with the forces at the step's end taken implicitly.
 
-    The end state is affine in the end forces, q = qb + D F1 with D = diag(G1x), so the step
-    solves q = qb + D (fext + remainder(q)) by Newton: J = I + D C^T diag(e) C with
-    e_i = w_i (k_t,i - k_t*,i). Rows whose tangent moved from the preload's are corrected
-    exactly through Woodbury (Z = D C^T, G = C Z; woodbury.py), the others by fixed-point
-    iteration, which is the evaluated corrector (PECE) when no row moved. exponential_reduced
-    treats the remainder explicitly and diverges once contact stiffens far beyond the preload's
-    tangent at a step set by accuracy (a hard tap on pad_disc: 4 kN); here it stays stable.
-    Converged when the residual is below IMPLICIT_TOL of the step's motion (on pad_disc's tap
-    the histories then agree with the evaluated corrector's to 4e-6, at one contact pass per
-    step or two); NO_CONVERGENCE after max_iter iterations. Otherwise as exponential_reduced."""
+    The end state is affine in the end forces x, q = qb + D x and v = vb + Dv x with
+    D = diag(G1x), Dv = diag(G1v), so the step solves R(x) = x - fext - f(q, v) = 0 (f the
+    contact remainder and the friction) by Newton: J = I + U V^T as in woodbury.coupled_rows
+    (P = I, Dq = D), from GQ = C D Cs^T and GV = [Ct; Cc] Dv Cs^T (Cs = [C; Ct; Cc]; GQ =
+    C D C^T and GV empty without friction). The terms whose tangent moved from the preload's,
+    and with friction the slip's and the pressure's, are corrected exactly, the others by
+    fixed-point iteration, which is the evaluated corrector (PECE) when none is taken. With
+    friction, a step whose residual does not fall is halved (woodbury.backtrack): Newton alone
+    overshoots the saturating regularized sign and cycles.
+    exponential_reduced treats the remainder explicitly and diverges once contact stiffens far
+    beyond the preload's tangent at a step set by accuracy (a hard tap on pad_disc: 4 kN), or
+    once friction sticks (its tangent w p mu / v_eps); here it stays stable. Converged when the
+    residual's motion D R is below IMPLICIT_TOL of the step's (on pad_disc's tap the histories
+    then agree with the evaluated corrector's to 4e-6, at one contact pass per step or two),
+    and with friction Dv R below IMPLICIT_TOL of the velocity's change; NO_CONVERGENCE after
+    max_iter iterations. q stays the last state evaluated, v is propagated with the forces
+    found there. Otherwise as exponential_reduced."""
     q, v = state[0], state[1]
     t = state[3, 0]
     n = q.shape[0]
     m = C.shape[0]
+    friction = fr[0].shape[0] > 0
+    stride = 3 if friction else 1
     rem = np.empty(n)
     fext = np.empty(n)
     fext0 = np.empty(n)
     f0 = np.empty(n)
     f1 = np.empty(n)
+    x = np.empty(n)
     q0 = np.empty(n)
     v0 = np.empty(n)
     qb = np.empty(n)
+    vb = np.empty(n)
     y = np.empty(n)
+    uz = np.empty(n)
+    x_prev = np.empty(n)
+    delta = np.empty(n)
+    ones = np.ones(n)
+    Dq = np.ascontiguousarray(coef[:, 6])
+    Dv = np.ascontiguousarray(coef[:, 7])
     svals = np.empty(patterns.shape[0])
     gap = np.empty(m)
     press = np.empty(m)
-    e = np.empty(m)
-    u = np.empty(m)
-    active = np.empty(m, np.int64)
-    Gd = np.empty(m)
-    for i in range(m):
-        Gd[i] = G[i, i]
+    cu = np.empty((stride * m, 3))
+    size = np.empty(stride * m)
+    active = np.empty(stride * m, np.int64)
     fbuf = np.empty((blocks.shape[0] - 1, n))
     energy = np.empty(5)
+    ff = np.empty(n)
+    slip = np.empty((2, fr[0].shape[0]))
+    dq = np.empty(n)
+    ff0 = state[6] if friction else np.empty(n)
     _external(t, patterns, sig, svals, fext0)
     for k in range(n):
         f0[k] = fstart[k]
@@ -167,39 +186,72 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
         for k in range(n):
             q0[k] = q[k]
             v0[k] = v[k]
-            f1[k] = 2.0 * f0[k] - fprev[k]          # predictor: forces extrapolated
+            x[k] = 2.0 * f0[k] - fprev[k]          # predictor: forces extrapolated
         t += dt
         _external(t, patterns, sig, svals, fext)
-        _propagate(coef, q0, v0, f0, f1, q, v)
+        _propagate(coef, q0, v0, f0, x, q, v)
         for k in range(n):
-            qb[k] = q[k] - coef[k, 6] * f1[k]
+            qb[k] = q[k] - Dq[k] * x[k]
+            vb[k] = v[k] - Dv[k] * x[k]
         converged = False
+        p_in = 0.0
+        rprev = np.inf
+        alpha = 1.0
         for it in range(max_iter):
             phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
                                        fbuf)
-            rnorm = 0.0
+            p_in = friction_pass(fr, w, press, v, ff, rem, slip)
+            rf = 0.0
+            rq = 0.0
+            rv = 0.0
             motion = 0.0
-            size = 0.0
+            size_q = 0.0
+            change = 0.0
+            size_v = 0.0
             for k in range(n):
                 f1[k] = fext[k] + rem[k]
-                r = qb[k] + coef[k, 6] * f1[k] - q[k]
+                r = x[k] - f1[k]
                 y[k] = r
-                rnorm += r * r
+                rf += r * r
+                rq += (Dq[k] * r) ** 2
+                rv += (Dv[k] * r) ** 2
                 motion += (q[k] - q0[k]) ** 2
-                size += q[k] * q[k]
-            if rnorm <= IMPLICIT_TOL * IMPLICIT_TOL * max(motion, 1e-20 * size, 1e-300):
+                size_q += q[k] * q[k]
+                change += (v[k] - v0[k]) ** 2
+                size_v += v[k] * v[k]
+            tol2 = IMPLICIT_TOL * IMPLICIT_TOL
+            if rq <= tol2 * max(motion, 1e-20 * size_q, 1e-300) and (
+                    not friction or rv <= tol2 * max(change, 1e-20 * size_v, 1e-300)):
                 converged = True
                 break
-            n_active = active_rows(code, params, gap, w, kt0, 1.0, Gd, e, active)
+            if friction and backtrack(rf, rprev, alpha):
+                alpha *= 0.5
+                for k in range(n):
+                    x[k] = x_prev[k] - alpha * delta[k]
+                    q[k] = qb[k] + Dq[k] * x[k]
+                    v[k] = vb[k] + Dv[k] * x[k]
+                continue
+            n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu,
+                                    size, active)
             if n_active > 0:
-                woodbury_dense(y, C, u, active, n_active, e, Z, G)
+                coupled_solve(y, Dq, Dv, ones, C, fr[0], fr[1], GQ, GV, cu, active, n_active,
+                              uz)
             for k in range(n):
-                q[k] += y[k]
+                x_prev[k] = x[k]
+                delta[k] = y[k]
+                x[k] -= y[k]
+                q[k] = qb[k] + Dq[k] * x[k]
+                v[k] = vb[k] + Dv[k] * x[k]
+            rprev = rf
+            alpha = 1.0
         # v from the forces found; q stays the state they were evaluated at (within the
         # tolerance of the propagated one), so a chunk restarting from it finds the same forces
         _propagate(coef, q0, v0, f0, f1, qb, v)
         modal_step_energies(q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt, acc,
                             energy)
+        for k in range(n):
+            dq[k] = q[k] - q0[k]
+        friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
         for k in range(n):
             fprev[k] = f0[k]
             f0[k] = f1[k]

@@ -9,6 +9,10 @@ into what the sliding puts in, tau_t V, and what the slip dissipates, tau . s >=
 
 Per point: code (TANH, ATAN; FRICTIONLESS: no friction), v_eps, and a table of mu against |s| (one
 entry: constant) in the packed tables (speeds, values, counts).
+
+The implicit kernels also need the traction's derivatives (woodbury.coupled_rows): with
+c(s) = mu(s) sgn_reg(s) / s, tau = w p c(|s|) s, so d tau / d s = w p (c I + c'(|s|) |s| e e^T)
+(e = s / |s|), and d tau / d g = -k_t w c s.
 """
 import numpy as np
 
@@ -46,14 +50,57 @@ def sign_over_speed(code, s, v_eps):
 
 
 @njit_fast
-def friction_dense(Ct, Cc, w, press, V, code, v_eps, table, tab_v, tab_mu, tab_n, v, f):
+def coefficient_slope(t, s, tab_v, tab_mu, tab_n):
+    """(mu(s), dmu/ds) of table t (the slope of the segment s lies on, 0 beyond the ends)."""
+    k = tab_n[t]
+    if k == 1 or s <= tab_v[t, 0] or s >= tab_v[t, k - 1]:
+        return friction_coefficient(t, s, tab_v, tab_mu, tab_n), 0.0
+    j = 1
+    while tab_v[t, j] < s:
+        j += 1
+    slope = (tab_mu[t, j] - tab_mu[t, j - 1]) / (tab_v[t, j] - tab_v[t, j - 1])
+    return tab_mu[t, j - 1] + slope * (s - tab_v[t, j - 1]), slope
+
+
+@njit_fast
+def sign_slope(code, s, v_eps):
+    """(sgn_reg(s), d sgn_reg / ds - sgn_reg(s) / s): the second is what the traction's
+    derivative along the slip needs, -2/3 x^2 / v_eps (times 2 / pi for atan) to leading
+    order in x = s / v_eps, taken as that series where the difference would cancel."""
+    x = s / v_eps
+    if code == TANH:
+        g = np.tanh(x)
+        if x < 1e-4:
+            return g, (-2.0 / 3.0) * x * x / v_eps
+        return g, ((1.0 - g * g) - g / x) / v_eps
+    g = (2.0 / np.pi) * np.arctan(x)
+    if x < 1e-4:
+        return g, (2.0 / np.pi) * (-2.0 / 3.0) * x * x / v_eps
+    return g, ((2.0 / np.pi) / (1.0 + x * x) - g / x) / v_eps
+
+
+@njit_fast
+def slip_tangent(code, v_eps, t, tab_v, tab_mu, tab_n, st, sc):
+    """(c, c' |s|) at slip (st, sc): the traction per unit w p is c s, its derivative
+    c I + c' |s| e e^T (module docstring)."""
+    s = np.sqrt(st * st + sc * sc)
+    mu, dmu = coefficient_slope(t, s, tab_v, tab_mu, tab_n)
+    g, rest = sign_slope(code, s, v_eps)
+    return mu * sign_over_speed(code, s, v_eps), dmu * g + mu * rest
+
+
+@njit_fast
+def friction_dense(Ct, Cc, w, press, V, code, v_eps, table, tab_v, tab_mu, tab_n, v, f, slip):
     """f += Ct^T tau_t + Cc^T tau_c at velocity v (n,), pressures press (m,) of the normal
-    pass. Returns (input power tau_t . V, dissipated power tau . s) [W]."""
+    pass; slip (2, m) gets each point's sliding velocity (along, across), open or not.
+    Returns (input power tau_t . V, dissipated power tau . s) [W]."""
     m, n = Ct.shape
     p_in = 0.0
     p_diss = 0.0
     for i in range(m):
-        if code[i] == FRICTIONLESS or press[i] == 0.0:
+        if code[i] == FRICTIONLESS:
+            slip[0, i] = V[i]
+            slip[1, i] = 0.0
             continue
         rt = Ct[i]
         rc = Cc[i]
@@ -62,6 +109,10 @@ def friction_dense(Ct, Cc, w, press, V, code, v_eps, table, tab_v, tab_mu, tab_n
         for j in range(n):
             st -= rt[j] * v[j]
             sc -= rc[j] * v[j]
+        slip[0, i] = st
+        slip[1, i] = sc
+        if press[i] <= 0.0:          # open, or a bilateral tie in tension: no friction
+            continue
         s = np.sqrt(st * st + sc * sc)
         mu = friction_coefficient(table[i], s, tab_v, tab_mu, tab_n)
         c = w[i] * press[i] * mu * sign_over_speed(code[i], s, v_eps[i])

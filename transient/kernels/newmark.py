@@ -17,9 +17,9 @@ import numpy as np
 from ..jit import njit_fast
 from .sparse import csr_abs_matvec, csr_matvec, factor_solve
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
-from .stepping import (_energies, _external, _finite, _store, _store_sparse, modal_step_energies,
-                       remainder_dense, remainder_sparse)
-from .woodbury import active_rows, woodbury, woodbury_dense
+from .stepping import (_energies, _external, _finite, _store, _store_sparse, friction_energy,
+                       friction_pass, modal_step_energies, remainder_dense, remainder_sparse)
+from .woodbury import active_rows, backtrack, coupled_rows, coupled_solve, woodbury
 
 
 @njit_fast
@@ -32,17 +32,24 @@ def _corrected(qp, vp, a, dt, q, v):
 
 @njit_fast
 def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0, code, params,
-                    patterns, sig, S, blocks, Z, G, tol, max_iter, out_t, out_s, out_g, out_p,
-                    out_e):
-    """Newmark on the reduced system (M = I, diagonal damping and K_lin): S is diagonal.
-    Z (n, m) and G (m, m) as in the module docstring. Converged when the residual is below tol
-    times the force scale (external, contact, elastic, inertial, and the momentum over a half
-    step, which sets the scale in free flight); NO_CONVERGENCE after max_iter iterations. state, acc and outputs as
-    in stepping.explicit_reduced."""
+                    fr, patterns, sig, S, blocks, GQ, GV, tol, max_iter, out_t, out_s, out_g,
+                    out_p, out_e):
+    """Newmark on the reduced system (M = I, diagonal damping and K_lin): S is diagonal, and
+    the Jacobian with the contact's and the friction's exact terms is that of
+    woodbury.coupled_rows with x = a, P = S, Dq = dt^2/4, Dv = dt/2: GQ = C Dq S^-1 Cs^T and
+    GV = [Ct; Cc] Dv S^-1 Cs^T (Cs = [C; Ct; Cc]; GQ = C Dq S^-1 C^T and GV empty without
+    friction, fr's Ct with no rows); with friction, a step whose residual does not fall is
+    halved (woodbury.backtrack). Converged when the residual is below tol times the force
+    scale (external, contact, elastic, inertial, and the momentum over a half step, which sets
+    the scale in free flight); NO_CONVERGENCE after max_iter iterations. state, acc and
+    outputs as in stepping.explicit_reduced; friction at the end velocity, state[6] and
+    acc[3] carrying its force and input power (stepping.friction_energy)."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
     n = q.shape[0]
     m = C.shape[0]
+    friction = fr[0].shape[0] > 0
+    stride = 3 if friction else 1
     rem = np.empty(n)
     fext = np.empty(n)
     fext_old = np.empty(n)
@@ -52,18 +59,24 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
     v_old = np.empty(n)
     op = np.empty(n)
     y = np.empty(n)
+    uz = np.empty(n)
+    a_prev = np.empty(n)
+    delta = np.empty(n)
     svals = np.empty(patterns.shape[0])
     gap = np.empty(m)
     press = np.empty(m)
-    e = np.empty(m)
-    u = np.empty(m)
-    active = np.empty(m, np.int64)
-    Gd = np.empty(m)
-    for i in range(m):
-        Gd[i] = G[i, i]
+    cu = np.empty((stride * m, 3))
+    size = np.empty(stride * m)
+    active = np.empty(stride * m, np.int64)
     fbuf = np.empty((blocks.shape[0] - 1, n))
     energy = np.empty(5)
+    ff = np.empty(n)
+    slip = np.empty((2, fr[0].shape[0]))
+    dq = np.empty(n)
+    ff0 = state[6] if friction else np.empty(n)
     h2 = 0.25 * dt * dt
+    Dq = np.full(n, h2)
+    Dv = np.full(n, 0.5 * dt)
     v_scale = 2.0 / dt if dt > 0.0 else 0.0     # momentum over a step: a force scale in flight
     for k in range(n):
         op[k] = 1.0 + 0.5 * dt * damp[k] + h2 * omega2[k]
@@ -80,10 +93,14 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
         t += dt
         _external(t, patterns, sig, svals, fext)
         converged = False
+        p_in = 0.0
+        rprev = np.inf
+        alpha = 1.0
         for it in range(max_iter):
             _corrected(qp, vp, a, dt, q, v)
             phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
                                        fbuf)
+            p_in = friction_pass(fr, w, press, v, ff, rem, slip)
             rnorm = 0.0
             fnorm = 0.0
             for k in range(n):
@@ -95,16 +112,28 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
             if rnorm <= tol * tol * max(fnorm, 1e-300):
                 converged = True
                 break
-            n_active = active_rows(code, params, gap, w, kt0, h2, Gd, e, active)
+            if friction and backtrack(rnorm, rprev, alpha):
+                alpha *= 0.5
+                for k in range(n):
+                    a[k] = a_prev[k] - alpha * delta[k]
+                continue
+            n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu,
+                                    size, active)
             if n_active:
-                woodbury_dense(y, C, u, active, n_active, e, Z, G)
+                coupled_solve(y, Dq, Dv, op, C, fr[0], fr[1], GQ, GV, cu, active, n_active, uz)
             for k in range(n):
+                a_prev[k] = a[k]
+                delta[k] = y[k]
                 a[k] -= y[k]
+            rprev = rnorm
+            alpha = 1.0
         _corrected(qp, vp, a, dt, q, v)
         modal_step_energies(q, v, q_old, v_old, fext_old, fext, damp, omega2, lin, phi, dt,
                             acc, energy)
         for k in range(n):
             fext_old[k] = fext[k]
+            dq[k] = q[k] - q_old[k]
+        friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
         if not (_finite(q) and _finite(v) and _finite(energy)):
             state[3, 0] = t
             return NOT_FINITE, step

@@ -136,16 +136,17 @@ def _energies(energy, kin, strain, phi, acc, work, dissipated):
 
 
 @njit_fast
-def friction_pass(fr, w, press, v, ff, f):
-    """The friction force ff at velocity v (kernels.friction), added into f too, when the
-    system has friction: fr = (Ct, Cc, V, code, v_eps, table, speeds, values, counts), Ct
-    (0, n) without. Returns the sliding's input power [W]."""
+def friction_pass(fr, w, press, v, ff, f, slip):
+    """The friction force ff at velocity v (kernels.friction), added into f too, and the
+    points' slip velocities (2, m), when the system has friction: fr = (Ct, Cc, V, code,
+    v_eps, table, speeds, values, counts), Ct (0, n) without. Returns the sliding's input
+    power [W]."""
     if fr[0].shape[0] == 0:
         return 0.0
     for j in range(ff.shape[0]):
         ff[j] = 0.0
     p_in, _ = friction_dense(fr[0], fr[1], w, press, fr[2], fr[3], fr[4], fr[5], fr[6],
-                             fr[7], fr[8], v, ff)
+                             fr[7], fr[8], v, ff, slip)
     for j in range(ff.shape[0]):
         f[j] += ff[j]
     return p_in
@@ -211,6 +212,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
     energy = np.empty(5)
     dq = np.empty(n)
     ff = np.empty(n)
+    slip = np.empty((2, fr[0].shape[0]))
     # the friction force at the step's start, carried in the state (with friction only: a
     # frictionless state may have fewer rows)
     ff0 = state[6] if fr[0].shape[0] > 0 else np.empty(n)
@@ -227,7 +229,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
         t += dt
         _external(t, patterns, sig, svals, fext)
         phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf)
-        p_in = friction_pass(fr, w, press, v, ff, f)
+        p_in = friction_pass(fr, w, press, v, ff, f, slip)
         _track_min(gap, gmin)
         kin = 0.0
         strain = -lin

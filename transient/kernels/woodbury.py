@@ -6,13 +6,25 @@ the precomputed Z = S^-1 U C^T and G = C Z as
     J^-1 r = y - Z_A (I + diag(e_A) G_AA)^-1 diag(e_A) C_A y,   y = S^-1 r,
 for the set A of rows that matter (the others, whose sum of |e_i| G_ii stays below
 WOODBURY_REST, are left to the fixed-operator iteration, which they slow by at most that factor).
+
+With friction the contact forces depend on the velocity too and the Jacobian is not
+symmetric: coupled_rows and coupled_solve take the general form of an implicit step (see
+there), of which the above is the frictionless case.
 """
 import numpy as np
 
 from ..jit import njit_fast
+from .codes import FRICTIONLESS
+from .friction import slip_tangent
 from .laws import pressure
 
 WOODBURY_REST = 0.1
+# The friction's Newton iteration backtracks (halves its step) while the residual does not fall
+# by the Armijo fraction ARMIJO of the step, down to MIN_STEP of the Newton step: on the
+# saturating regularized sign, full steps overshoot and cycle (naive twins' hard system: no
+# convergence in 50 iterations; one halving, then quadratic convergence).
+ARMIJO = 1e-4
+MIN_STEP = 1.0 / 32.0
 
 
 @njit_fast
@@ -58,12 +70,138 @@ def woodbury(y, u, active, n_active, e, Z, G):
 
 
 @njit_fast
-def woodbury_dense(y, C, u, active, n_active, e, Z, G):
-    """woodbury for dense contact rows C (m, n): u = C_A y first (u is scratch)."""
-    for j in range(n_active):
-        row_c = C[active[j]]
+def coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu, size, active):
+    """The Jacobian's terms to correct exactly, for a step whose unknown x (n) moves the end
+    state as q = qb + Dq x, v = vb + Dv x (Dq, Dv diagonal) and whose residual is
+    R = P x + b - f(q, v), P diagonal, f the contact and friction forces. Then
+        J = P + sum_c U_c V_c^T
+    with, per contact point i, three candidate terms c = 3 i + kind (one, kind 0, without
+    friction, fr[0] with no rows):
+      kind 0, the gap: V = Dq C_i^T, U = e_i C_i^T + g_i (s_t Ct_i^T + s_c Cc_i^T), with
+        e_i = w (k_t - k_t*) the tangent's move from the preload's and g_i = w k_t c the
+        friction's change with the pressure;
+      kinds 1 and 2, the slip along and across: V = Dv Ct_i^T or Dv Cc_i^T, U the matching
+        column of [Ct_i^T Cc_i^T] H_i, H_i = d tau / d s = w p (c I + c' |s| e e^T).
+    U_c = cu[c, 0] C_i^T + cu[c, 1] Ct_i^T + cu[c, 2] Cc_i^T. The size of a term is its
+    entry of V^T P^-1 U in absolute value (from GQ = C Dq P^-1 Cs^T and GV = [Ct; Cc] Dv P^-1
+    Cs^T, Cs = [C; Ct; Cc]); as in active_rows, the largest are taken until the others sum
+    to at most WOODBURY_REST. Fills cu, size and active; returns the count taken."""
+    m = gap.shape[0]
+    stride = 3 if fr[0].shape[0] > 0 else 1
+    total = 0.0
+    for i in range(m):
+        _, kt = pressure(code[i], params[i], gap[i])
+        c = stride * i
+        e = w[i] * (kt - kt0[i])
+        cu[c, 0] = e
+        cu[c, 1] = 0.0
+        cu[c, 2] = 0.0
+        size[c] = abs(e) * GQ[i, i]
+        if stride == 3:
+            for k in range(1, 3):
+                cu[c + k, 0] = 0.0
+                cu[c + k, 1] = 0.0
+                cu[c + k, 2] = 0.0
+                size[c + k] = 0.0
+            if fr[3][i] != FRICTIONLESS and press[i] > 0.0:
+                st = slip[0, i]
+                sc = slip[1, i]
+                ct, d = slip_tangent(fr[3][i], fr[4][i], fr[5][i], fr[6], fr[7], fr[8], st, sc)
+                gq = w[i] * kt * ct
+                cu[c, 1] = gq * st
+                cu[c, 2] = gq * sc
+                size[c] += abs(cu[c, 1] * GQ[i, m + i]) + abs(cu[c, 2] * GQ[i, 2 * m + i])
+                s2 = st * st + sc * sc
+                a = d / s2 if s2 > 0.0 else 0.0
+                wp = w[i] * press[i]
+                h00 = wp * (ct + a * st * st)
+                h01 = wp * a * st * sc
+                h11 = wp * (ct + a * sc * sc)
+                cu[c + 1, 1] = h00
+                cu[c + 1, 2] = h01
+                cu[c + 2, 1] = h01
+                cu[c + 2, 2] = h11
+                size[c + 1] = abs(h00 * GV[i, m + i]) + abs(h01 * GV[i, 2 * m + i])
+                size[c + 2] = abs(h11 * GV[m + i, 2 * m + i]) + abs(h01 * GV[m + i, m + i])
+        for k in range(stride):
+            total += size[c + k]
+    if total <= WOODBURY_REST:
+        return 0
+    order = np.argsort(-size[:stride * m])
+    n_active = 0
+    for c in order:
+        if total <= WOODBURY_REST:
+            break
+        active[n_active] = c
+        n_active += 1
+        total -= size[c]
+    return n_active
+
+
+@njit_fast
+def _term_row(X, kind, i, m):
+    """The row of GQ (kind 0) or GV (kinds 1, 2) that V_c^T P^-1 runs along."""
+    return X[i] if kind <= 1 else X[m + i]
+
+
+@njit_fast
+def coupled_solve(y, Dq, Dv, P, C, Ct, Cc, GQ, GV, cu, active, n_active, uz):
+    """y = P^-1 R on entry, J^-1 R = y - P^-1 U (I + V^T P^-1 U)^-1 V^T y on exit, for the
+    n_active terms of coupled_rows (uz (n,) is scratch)."""
+    m, n = C.shape
+    stride = 3 if Ct.shape[0] > 0 else 1
+    k = n_active
+    H = np.empty((k, k))
+    rhs = np.empty(k)
+    for a in range(k):
+        ca = active[a]
+        ia = ca // stride
+        kind = ca % stride
         s = 0.0
-        for k in range(y.shape[0]):
-            s += row_c[k] * y[k]
-        u[j] = s
-    woodbury(y, u, active, n_active, e, Z, G)
+        if kind == 0:
+            row = C[ia]
+            for j in range(n):
+                s += row[j] * Dq[j] * y[j]
+            X = _term_row(GQ, 0, ia, m)
+        else:
+            row = Ct[ia] if kind == 1 else Cc[ia]
+            for j in range(n):
+                s += row[j] * Dv[j] * y[j]
+            X = _term_row(GV, kind, ia, m)
+        rhs[a] = s
+        for b in range(k):
+            cb = active[b]
+            ib = cb // stride
+            h = cu[cb, 0] * X[ib]
+            if stride == 3:
+                h += cu[cb, 1] * X[m + ib] + cu[cb, 2] * X[2 * m + ib]
+            H[a, b] = h
+        H[a, a] += 1.0
+    z = np.linalg.solve(H, rhs)
+    for j in range(n):
+        uz[j] = 0.0
+    for b in range(k):
+        cb = active[b]
+        ib = cb // stride
+        c0 = z[b] * cu[cb, 0]
+        if c0 != 0.0:
+            row = C[ib]
+            for j in range(n):
+                uz[j] += c0 * row[j]
+        if stride == 3:
+            c1 = z[b] * cu[cb, 1]
+            c2 = z[b] * cu[cb, 2]
+            rt = Ct[ib]
+            rc = Cc[ib]
+            for j in range(n):
+                uz[j] += c1 * rt[j] + c2 * rc[j]
+    for j in range(n):
+        y[j] -= uz[j] / P[j]
+
+
+@njit_fast
+def backtrack(rnorm2, rprev2, alpha):
+    """Whether to halve the last Newton step (of fraction alpha) again: its squared residual
+    rnorm2 did not fall by ARMIJO alpha from rprev2, the step's start, and alpha is above
+    MIN_STEP."""
+    return alpha > MIN_STEP and rnorm2 > (1.0 - ARMIJO * alpha) ** 2 * rprev2
