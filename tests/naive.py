@@ -229,13 +229,16 @@ def _finite(*arrays):
     return all(np.all(np.isfinite(x)) for x in arrays)
 
 
-def _store(outs, row, t, observed, gap, press, energy):
-    out_t, out_s, out_g, out_p, out_e = outs
+def _store(outs, row, t, observed, gap, press, energy, slip=None):
+    """An output row; the slip velocities (2, m) too where their rows have columns."""
+    out_t, out_s, out_g, out_p, out_v, out_e = outs
     out_t[row] = t
     out_s[row] = observed
     if out_g.shape[1] > 0:
         out_g[row] = gap
         out_p[row] = press
+    if out_v.shape[2] > 0:
+        out_v[row] = slip
     out_e[row] = energy
 
 
@@ -266,6 +269,15 @@ def no_friction(n):
     return (np.zeros((0, n)), np.zeros((0, n)), np.zeros(0), np.zeros(0, np.int64),
             np.zeros(0), np.zeros(0, np.int64), np.zeros((1, 1)), np.zeros((1, 1)),
             np.ones(1, np.int64))
+
+
+def slips(fr, v):
+    """The points' slip velocities (2, m) at v: (V - Ct v, -Cc v), and (V, 0) where a point
+    has no friction law."""
+    Ct, Cc, V, code = fr[:4]
+    s = np.array([V - Ct @ v, -(Cc @ v)])
+    s[:, code == NONE] = np.array([V, 0.0 * V])[:, code == NONE]
+    return s
 
 
 def friction_force(fr, w, press, v):
@@ -407,7 +419,7 @@ def coupled_newton(terms, P, R):
 # ----------------------------------------------------------------------------- explicit
 
 def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0, code,
-                     params, fr, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p,
+                     params, fr, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p, out_v,
                      out_e):
     """Velocity Verlet on the modal system, the diagonal damping taken implicitly at the end
     of the step: v_{n+1} = (v_{n+1/2} + dt/2 f_{n+1}) / (1 + dt/2 c); friction at the
@@ -417,7 +429,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
     m, n = C.shape
     f, gap, press = np.empty(n), np.empty(m), np.empty(m)
     fbuf = np.empty((len(blocks) - 1, n))
-    outs = (out_t, out_s, out_g, out_p, out_e)
+    outs = (out_t, out_s, out_g, out_p, out_v, out_e)
     fext_old = external(t, patterns, sig)
     row = 0
     for step in range(1, n_steps + 1):
@@ -429,6 +441,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
         fext = external(t, patterns, sig)
         phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf)
         ff, p_in = friction_force(fr, w, press, v_half)
+        slip = slips(fr, v_half)
         if ff is not None:
             f += ff
         gmin[:] = np.fmin(gmin, gap)
@@ -445,14 +458,14 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
             state[3, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
-            _store(outs, row, t, S @ q, gap, press, energy)
+            _store(outs, row, t, S @ q, gap, press, energy, slip)
             row += 1
     state[3, 0] = t
     return OK, n_steps
 
 
 def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w, kt0, code,
-                  params, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_e):
+                  params, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_v, out_e):
     """Central differences with a lumped mass: alpha M implicit at the end of the step, beta K
     on the half-step velocity. The dissipation is the trapezoid of the damping power
     v . (alpha M v + beta K v_half) at the steps' ends, carried between calls in acc[2]."""
@@ -461,7 +474,7 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
     n, m = len(q), len(g0)
     Km, Sm = csr(K, n), csr(S, n)
     f, gap, press = np.empty(n), np.empty(m), np.empty(m)
-    outs = (out_t, out_s, out_g, out_p, out_e)
+    outs = (out_t, out_s, out_g, out_p, out_v, out_e)
     fext_old = external(t, patterns, sig)
     power_old = acc[2]                  # the damping power the last call ended with
     row = 0
@@ -505,7 +518,7 @@ def _finish(state, t, f0, fstart, omega2, damp):
 
 def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
                         code, params, fr, patterns, sig, S, blocks, corrections,
-                        propagate_last, fprev, fstart, out_t, out_s, out_g, out_p, out_e):
+                        propagate_last, fprev, fstart, out_t, out_s, out_g, out_p, out_v, out_e):
     """Exact modal propagation under forces linear over the step. The end forces are first
     extrapolated from the step's start and fprev (the previous step's start), then evaluated
     1 + corrections times, each at the state propagated with the last ones; if
@@ -517,7 +530,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     m, n = C.shape
     rem, gap, press = np.empty(n), np.empty(m), np.empty(m)
     fbuf = np.empty((len(blocks) - 1, n))
-    outs = (out_t, out_s, out_g, out_p, out_e)
+    outs = (out_t, out_s, out_g, out_p, out_v, out_e)
     fext0 = external(t, patterns, sig)
     f0 = fstart.copy()
     row = 0
@@ -531,6 +544,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
             phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
                                        fbuf)
             ff, p_in = friction_force(fr, w, press, v)
+            slip = slips(fr, v)
             f1 = fext + rem + (ff if ff is not None else 0.0)
         if propagate_last:
             q[:], v[:] = propagate(coef, q0, v0, f0, f1)
@@ -543,7 +557,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
             _finish(state, t, f0, fstart, omega2, damp)
             return NOT_FINITE, step
         if step % every == 0:
-            _store(outs, row, t, S @ q, gap, press, energy)
+            _store(outs, row, t, S @ q, gap, press, energy, slip)
             row += 1
     _finish(state, t, f0, fstart, omega2, damp)
     return OK, n_steps
@@ -551,7 +565,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
 
 def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
                          code, params, fr, patterns, sig, S, blocks, GQ, GV, max_iter, fprev,
-                         fstart, out_t, out_s, out_g, out_p, out_e):
+                         fstart, out_t, out_s, out_g, out_p, out_v, out_e):
     """The exponential step with the end forces x implicit: q = qb + D x, v = vb + Dv x
     (D, Dv = diag(G1x), diag(G1v)), R(x) = x - fext - remainder(q) - friction(q, v) = 0 solved
     by Newton from the extrapolated forces, with J = I + the terms of coupled_terms solved
@@ -564,7 +578,7 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
     friction = len(fr[0]) > 0
     rem, gap, press = np.empty(n), np.empty(m), np.empty(m)
     fbuf = np.empty((len(blocks) - 1, n))
-    outs = (out_t, out_s, out_g, out_p, out_e)
+    outs = (out_t, out_s, out_g, out_p, out_v, out_e)
     D, Dv, ones = coef[:, 6], coef[:, 7], np.ones(n)
     fext0 = external(t, patterns, sig)
     f0 = fstart.copy()
@@ -582,6 +596,7 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
             phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
                                        fbuf)
             ff, p_in = friction_force(fr, w, press, v)
+            slip = slips(fr, v)
             f1 = fext + rem + (ff if ff is not None else 0.0)
             R = x - f1
 
@@ -610,7 +625,7 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
             _finish(state, t, f0, fstart, omega2, damp)
             return NO_CONVERGENCE, step
         if step % every == 0:
-            _store(outs, row, t, S @ q, gap, press, energy)
+            _store(outs, row, t, S @ q, gap, press, energy, slip)
             row += 1
     _finish(state, t, f0, fstart, omega2, damp)
     return OK, n_steps
@@ -652,6 +667,7 @@ def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, 
             v[:] = vp + 0.5 * dt * a
             rem, gap, press, (phi, lin) = remainder(q)
             ff, p_in = friction_force(fr, w, press, v) if friction else (None, 0.0)
+            slip = slips(fr, v) if friction else None
             f = fext + rem + (ff if ff is not None else 0.0)
             ku = K @ q
             r = M @ a + cdamp @ v + ku - f
@@ -685,7 +701,7 @@ def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, 
             state[3, 0] = t
             return NO_CONVERGENCE, step
         if step % every == 0:
-            _store(outs, row, t, observe(q), gap, press, energy)
+            _store(outs, row, t, observe(q), gap, press, energy, slip)
             row += 1
     state[3, 0] = t
     return OK, n_steps
@@ -693,7 +709,7 @@ def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, 
 
 def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0, code, params,
                     fr, patterns, sig, S, blocks, GQ, GV, tol, max_iter, out_t, out_s, out_g,
-                    out_p, out_e):
+                    out_p, out_v, out_e):
     """Newmark on the modal system (M = I, diagonal damping and K_lin), friction included.
     GQ and GV are taken for the signature only (see _newmark)."""
     m, n = C.shape
@@ -706,12 +722,12 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
 
     return _newmark(state, acc, n_steps, every, dt, np.eye(n), np.diag(omega2), np.diag(damp),
                     C, (remainder, code, params, w, kt0), patterns, sig, lambda q: S @ q, tol,
-                    max_iter, (out_t, out_s, out_g, out_p, out_e), fr)
+                    max_iter, (out_t, out_s, out_g, out_p, out_v, out_e), fr)
 
 
 def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt0, code,
                  params, patterns, sig, S, factor, Z, G, tol, max_iter, out_t, out_s, out_g,
-                 out_p, out_e):
+                 out_p, out_v, out_e):
     """Newmark on the full model, K (K_lin), M, C and S CSR triplets, Rayleigh damping
     alpha M + beta K. The iteration operator is formed and solved densely: factor, Z and G are
     taken for the signature only."""
@@ -727,4 +743,4 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
 
     return _newmark(state, acc, n_steps, every, dt, Md, Kd, cdamp, Cs.toarray(),
                     (remainder, code, params, w, kt0), patterns, sig, lambda q: Sm @ q, tol,
-                    max_iter, (out_t, out_s, out_g, out_p, out_e))
+                    max_iter, (out_t, out_s, out_g, out_p, out_v, out_e))

@@ -336,16 +336,18 @@ def run(fn, state, dt, args, chunks=STEPS, every=EVERY, contact_outputs=True, ac
     acc = np.zeros(4) if acc is None else acc.copy()
     outs, statuses = [], []
     m = N_POINTS if contact_outputs else 0
+    # the slip velocities are stored with friction only (its arrays: the 9-tuple fr)
+    friction = any(isinstance(a, tuple) and len(a) == 9 and len(a[0]) for a in args)
     for n_steps in chunks:
         rows = n_steps // every
         out = (np.zeros(rows), np.zeros((rows, 3)), np.zeros((rows, m)), np.zeros((rows, m)),
-               np.zeros((rows, 5)))
+               np.zeros((rows, 2, m if friction else 0)), np.zeros((rows, 5)))
         statuses.append(tuple(int(x) for x in fn(state, acc, n_steps, every, dt, *args, *out)))
         outs.append(out)
     arrays = {"q": state[0], "v": state[1], "a": state[2], "time": state[3, :1], "acc": acc}
     if len(state) > 6:
         arrays["friction"] = state[6]
-    for k, name in enumerate(("out_t", "out_s", "out_g", "out_p", "out_e")):
+    for k, name in enumerate(("out_t", "out_s", "out_g", "out_p", "out_v", "out_e")):
         arrays[name] = np.concatenate([o[k] for o in outs])
     # gmin and fprev, the float vectors updated in place (the others compare equal)
     arrays.update({f"args[{k}]": a for k, a in enumerate(args)

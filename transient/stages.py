@@ -16,7 +16,7 @@ from .contact.pair import build_contact, contact_stiffness
 from .dynamics import schemes
 from .dynamics.chunks import buffer
 from .dynamics.critical import CONTACT_OMEGA_DT, REMAINDER_OMEGA_DT, critical_tangent
-from .dynamics.state import State
+from .dynamics.state import Rows, State
 from .dynamics.system import full_system, reduced_system
 from .errors import CaseError
 from .kernels.codes import ENERGY_TERMS, NO_CONVERGENCE, NOT_FINITE, OK
@@ -256,13 +256,13 @@ def simulate(case, setup, dt, n_steps, every=1):
     t0 = time.perf_counter()
     status, done = stepper(case, setup.system, dt)(state, n_steps, every, out)
     seconds = time.perf_counter() - t0
-    rows = [np.concatenate([first[:1], x[:done // every]])
-            for first, x in zip(setup.rows0.arrays, out.arrays)]
-    result = {"time": rows[0]}
-    result.update({f"sensors/{name}": rows[1][:, k]
+    rows = Rows(*(np.concatenate([first[:1], x[:done // every]])
+                  for first, x in zip(setup.rows0.arrays, out.arrays)))
+    result = {"time": rows.time}
+    result.update({f"sensors/{name}": rows.sensors[:, k]
                    for k, name in enumerate(setup.system.sensor_names)})
-    result.update({f"energy/{term}": rows[4][:, k] for k, term in enumerate(ENERGY_TERMS)})
+    result.update({f"energy/{term}": rows.energy[:, k] for k, term in enumerate(ENERGY_TERMS)})
     if case.output.contact:
-        result["contact/gap"], result["contact/pressure"] = rows[2], rows[3]
+        result["contact/gap"], result["contact/pressure"] = rows.gap, rows.pressure
     return result, {OK: "complete", NOT_FINITE: "not finite",
                     NO_CONVERGENCE: "no convergence"}[status], seconds

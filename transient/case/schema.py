@@ -336,7 +336,8 @@ OUTPUT = Table("outputs", {
                   "case's name with .h5)", ""),
     "every": Value("int", "store one step in this many", 1, minimum=1),
     "sensors": Value("bool", "store the sensors' histories", True),
-    "contact": Value("bool", "store gap and pressure at the contact points", False),
+    "contact": Value("bool", "store gap and pressure at the contact points, and with "
+                     "friction their slip velocities along and across the sliding", False),
     "energy": Value("bool", "store the energy balance terms (always computed: the run "
                     "checks the balance)", True),
     "field": Value("bool", "store the state q every `every` steps (reduced coordinates, or "

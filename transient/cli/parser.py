@@ -133,6 +133,14 @@ def _plot_parser(sub):
                    "a thousandth of it)")
     p.add_argument("--band", metavar="F0:F1", help="the series' part in this band [Hz] only "
                    "(one mode's growth among others)")
+    p = kinds.add_parser("friction", help="the friction of a run with output.contact: the "
+                         "sliding's input and the slip's dissipated power in time, the shares "
+                         "of the contact area open, sticking (|slip| < v_eps) and slipping, and "
+                         "their map on Gamma at a time")
+    _history_args(p, "friction")
+    p.add_argument("--pair", metavar="NAME", help="contact pair (default: the first stored)")
+    p.add_argument("--time", type=float, metavar="T", help="time [s] of the map (default: the "
+                   "last row)")
     p = kinds.add_parser("pressure", help="contact pressure maps on Gamma, one panel per "
                          "history side by side with one colour scale (e.g. fine, centre and "
                          "regularized rules)")

@@ -13,7 +13,26 @@ from ..errors import CaseError
 def cmd_plot(args):
     return {"compat": _plot_compat, "history": _plot_history, "spectrum": _plot_spectrum,
             "frf": _plot_frf, "pressure": _plot_pressure, "cea": _plot_cea,
-            "spectrogram": _plot_spectrogram, "envelope": _plot_envelope}[args.kind](args)
+            "spectrogram": _plot_spectrogram, "envelope": _plot_envelope,
+            "friction": _plot_friction}[args.kind](args)
+
+
+def _plot_friction(args):
+    from ..plots.friction import friction_figure, friction_series
+    from ..io.stored import open_history
+    stored = open_history(args.file)
+    series = friction_series(stored, args.pair)
+    path = _png_path(args, stored.path)
+    rows = []
+    _save(lambda: rows.append(friction_figure(stored, series, path, args.time)), path)
+    t, row = series["time"], rows[0]
+    p_in, p_diss = series["input"], series["dissipated"]
+    print(f"friction on '{series['pair']}': mean input {p_in.mean():.6g} W, mean dissipation "
+          f"{p_diss.mean():.6g} W over {t[0]:.6g}-{t[-1]:.6g} s; at t = {t[row]:.6g} s "
+          + ", ".join(f"{name} {100 * x:.3g}%" for name, x in
+                      zip(("open", "stick", "slip"), series["shares"][row]))
+          + " of the contact area")
+    return 0
 
 
 def _plot_spectrogram(args):

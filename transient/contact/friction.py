@@ -36,7 +36,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import CaseError
-from ..kernels.codes import ATAN, TANH
+from ..kernels.codes import ATAN, FRICTIONLESS, TANH
 from ..mesh.mesh import unit
 
 CODES = {"tanh": TANH, "atan": ATAN}
@@ -170,3 +170,51 @@ def tangential_rows(pair, sliding, ndof):
             out.append(sp.csr_matrix(sp.csr_matrix(rule.C1) @ T1
                                      - sp.csr_matrix(rule.C2) @ T2))
     return tuple(out)
+
+
+# What a point of a stored history is doing (contact_status): apart, in the regularization's
+# zone (|s| < v_eps, where sgn_reg is below tanh(1) = 0.76 of the full traction), or sliding.
+OPEN, STICK, SLIP = 0, 1, 2
+STATUS_NAMES = ("open", "stick", "slip")
+
+
+def contact_status(gap, slip, v_eps):
+    """Status codes (OPEN, STICK, SLIP) of points with gaps (..., m) [m] and slip velocities
+    (..., 2, m) [m/s] along and across the sliding: open where the gap is positive (for the
+    exponential law p < p0), stick where |s| < v_eps, slip otherwise."""
+    speed = np.hypot(slip[..., 0, :], slip[..., 1, :])
+    return np.where(gap > 0.0, OPEN, np.where(speed < v_eps, STICK, SLIP))
+
+
+def traction_factor(code, v_eps, table, tables, speed):
+    """c(|s|) = mu(|s|) sgn_reg(|s|) / |s| of each point (its traction per unit w p is c s),
+    at slip speeds (..., m), with its limit at 0 (kernels.friction's law, in NumPy)."""
+    speeds, values, counts = tables
+    mu = np.empty_like(speed)
+    for t in range(len(counts)):
+        on = table == t
+        k = counts[t]
+        mu[..., on] = np.interp(speed[..., on], speeds[t, :k], values[t, :k])
+    c = np.empty_like(speed)
+    for code_i, scale in ((TANH, 1.0), (ATAN, 2.0 / np.pi)):
+        on = code == code_i
+        s, eps = speed[..., on], v_eps[on]
+        x = s / eps
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sign = np.tanh(x) if code_i == TANH else scale * np.arctan(x)
+            c[..., on] = np.where(x < 1e-6, scale * (1.0 - x * x / 3.0) / eps, sign / s)
+    c[..., code == FRICTIONLESS] = 0.0
+    return mu * c
+
+
+def friction_powers(law, weights, pressure, slip):
+    """(the sliding's input, the slip's dissipation) [W] per row, from the points' pressures
+    (rows, m) [Pa] and slip velocities (rows, 2, m): sum w p c s_t V and sum w p c |s|^2, with
+    law = (code, v_eps, table, tables, V) of the points (kernels.friction: the structure takes
+    their difference)."""
+    code, v_eps, table, tables, V = law
+    s_t, s_c = slip[:, 0, :], slip[:, 1, :]
+    c = traction_factor(code, v_eps, table, tables, np.hypot(s_t, s_c))
+    wp = weights * np.maximum(pressure, 0.0)
+    return (np.sum(wp * c * s_t * V, axis=1),
+            np.sum(wp * c * (s_t * s_t + s_c * s_c), axis=1))

@@ -30,7 +30,7 @@ class Chunk:
 
 def buffer(system, rows, store_contact):
     """Output rows for chunks of `rows` rows."""
-    return Rows.empty(rows, system.sensors.shape[0], system.n_points if store_contact else 0)
+    return Rows.of(system, rows, store_contact)
 
 
 def chunks(stepper, state, n_total, chunk, every, out, step=0, threads=None):

@@ -229,7 +229,7 @@ def initial_acceleration(system, state, store_contact, M=None):
     from the forces at the initial state: an explicit step of length 0. M: a consistent mass
     of the full model to redo a(0) with (the explicit step divides by the lumped one)."""
     trial = state.copy()
-    rows = Rows.empty(1, system.sensors.shape[0], system.n_points if store_contact else 0)
+    rows = Rows.of(system, 1, store_contact)
     explicit(system, 0.0)(trial, 1, 1, rows)
     state.a[:] = trial.a
     state.acc[2] = trial.acc[2]          # explicit_full's damping power at t = 0

@@ -58,22 +58,33 @@ class State:
 @dataclass(frozen=True)
 class Rows:
     """Output rows of a chunk: time [s], sensors (then the state itself when the field is
-    stored), gaps [m] and pressures [Pa] of the contact points if stored, energy terms [J]."""
+    stored), gaps [m] and pressures [Pa] of the contact points if stored, and their slip
+    velocities along and across the sliding [m/s] if stored with friction, energy terms
+    [J]."""
     time: np.ndarray         # (r,)
     sensors: np.ndarray      # (r, s)
     gap: np.ndarray          # (r, m) or (r, 0)
     pressure: np.ndarray
+    slip: np.ndarray         # (r, 2, m) or (r, 2, 0)
     energy: np.ndarray       # (r, 5), columns ENERGY_TERMS
 
     @classmethod
-    def empty(cls, rows, n_sensors, n_contact):
+    def empty(cls, rows, n_sensors, n_contact, n_slip=0):
         return cls(np.zeros(rows), np.zeros((rows, n_sensors)), np.zeros((rows, n_contact)),
-                   np.zeros((rows, n_contact)), np.zeros((rows, len(ENERGY_TERMS))))
+                   np.zeros((rows, n_contact)), np.zeros((rows, 2, n_slip)),
+                   np.zeros((rows, len(ENERGY_TERMS))))
+
+    @classmethod
+    def of(cls, system, rows, store_contact):
+        """The rows of a system's outputs: contact ones if stored, slips with friction."""
+        m = system.n_points if store_contact else 0
+        slips = m if system.contacts.friction is not None else 0
+        return cls.empty(rows, system.sensors.shape[0], m, slips)
 
     @property
     def arrays(self):
         """The outputs in the kernels' order."""
-        return self.time, self.sensors, self.gap, self.pressure, self.energy
+        return self.time, self.sensors, self.gap, self.pressure, self.slip, self.energy
 
     def head(self, n):
         """The first n rows."""

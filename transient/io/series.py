@@ -13,6 +13,8 @@ def layout(system, output):
         for name, s in system.contacts.slices.items():
             shapes[f"contact/{name}/gap"] = (s.stop - s.start,)
             shapes[f"contact/{name}/pressure"] = (s.stop - s.start,)
+            if system.contacts.friction is not None:
+                shapes[f"contact/{name}/slip"] = (2, s.stop - s.start)
     if output.energy:
         shapes.update({f"energy/{term}": () for term in ENERGY_TERMS})
     return shapes
@@ -29,6 +31,8 @@ def series(system, output, rows):
         for name, s in system.contacts.slices.items():
             out[f"contact/{name}/gap"] = rows.gap[:, s]
             out[f"contact/{name}/pressure"] = rows.pressure[:, s]
+            if system.contacts.friction is not None:
+                out[f"contact/{name}/slip"] = rows.slip[:, :, s]
     if output.energy:
         out.update({f"energy/{term}": rows.energy[:, k] for k, term in enumerate(ENERGY_TERMS)})
     return out

@@ -75,6 +75,16 @@ class Stored:
             out[key] = value
         return out
 
+    def friction_law(self, pair):
+        """The friction law of a stored pair's points (io.systems.read_friction_law), None
+        without friction."""
+        from .systems import read_friction_law
+        with self.open() as f:
+            try:
+                return read_friction_law(f, pair)
+            except (KeyError, TypeError, ValueError) as exc:
+                raise self.error("system/contacts/friction", f"damaged history: {exc}") from None
+
     def case(self):
         """The case the history was run with, rebuilt from the text, path and overrides it
         keeps."""

@@ -49,6 +49,19 @@ def read_system(f):
     return cls(**values)
 
 
+def read_friction_law(f, pair):
+    """(code, v_eps, table, tables, V) of a stored pair's points (contact.friction's law, as
+    contact.friction.friction_powers takes it), without reading the rest of the system; None
+    when the system has no friction."""
+    node = f.get(f"{GROUP}/contacts")
+    if node is None or "friction" not in node:
+        return None
+    a, b = _json(node, "slices")[pair]
+    r = node["friction"]
+    return (r["code"][a:b], r["v_eps"][a:b], r["table"][a:b], _read(r, "tables"),
+            r["speed"][a:b])
+
+
 def _write(g, name, value):
     if value is None:
         g.attrs[name] = "null"

@@ -37,7 +37,7 @@ def _finish(state, t, f0, fstart, omega2, damp):
 @njit_fast
 def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
                         code, params, fr, patterns, sig, S, blocks, corrections, propagate,
-                        fprev, fstart, out_t, out_s, out_g, out_p, out_e):
+                        fprev, fstart, out_t, out_s, out_g, out_p, out_v, out_e):
     """Exponential integrator on the reduced system: each mode's linear part (K_lin, damping)
     is propagated exactly over a step, the forces F = patterns s(t) + remainder(q) taken linear
     in time between the step's ends (first-order hold).
@@ -114,7 +114,8 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
             _finish(state, t, f0, fstart, omega2, damp)
             return NOT_FINITE, step
         if step % every == 0:
-            _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
+            _store(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v,
+                   out_e)
             row += 1
     _finish(state, t, f0, fstart, omega2, damp)
     return OK, n_steps
@@ -123,7 +124,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
 @njit_fast
 def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
                          code, params, fr, patterns, sig, S, blocks, GQ, GV, max_iter, fprev,
-                         fstart, out_t, out_s, out_g, out_p, out_e):
+                         fstart, out_t, out_s, out_g, out_p, out_v, out_e):
     """The exponential integrator with the forces at the step's end taken implicitly.
 
     The end state is affine in the end forces x, q = qb + D x and v = vb + Dv x with
@@ -263,7 +264,8 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
             _finish(state, t, f0, fstart, omega2, damp)
             return NO_CONVERGENCE, step
         if step % every == 0:
-            _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
+            _store(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v,
+                   out_e)
             row += 1
     _finish(state, t, f0, fstart, omega2, damp)
     return OK, n_steps

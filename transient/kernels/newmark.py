@@ -33,7 +33,7 @@ def _corrected(qp, vp, a, dt, q, v):
 @njit_fast
 def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0, code, params,
                     fr, patterns, sig, S, blocks, GQ, GV, tol, max_iter, out_t, out_s, out_g,
-                    out_p, out_e):
+                    out_p, out_v, out_e):
     """Newmark on the reduced system (M = I, diagonal damping and K_lin): S is diagonal, and
     the Jacobian with the contact's and the friction's exact terms is that of
     woodbury.coupled_rows with x = a, P = S, Dq = dt^2/4, Dv = dt/2: GQ = C Dq S^-1 Cs^T and
@@ -141,7 +141,8 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
             state[3, 0] = t
             return NO_CONVERGENCE, step
         if step % every == 0:
-            _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
+            _store(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v,
+                   out_e)
             row += 1
     state[3, 0] = t
     return OK, n_steps
@@ -150,7 +151,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
 @njit_fast
 def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt0, code,
                  params, patterns, sig, S, factor, Z, G, tol, max_iter, out_t, out_s, out_g,
-                 out_p, out_e):
+                 out_p, out_v, out_e):
     """Newmark on the free dofs of the full model: K (K_lin) and M CSR triplets, Rayleigh
     damping alpha M + beta K, C and S CSR triplets; factor = (p_in, L, U, p_out) of
     S = (1 + dt/2 alpha) M + (dt/2 beta + h2) K_lin (linsolve.triangular_factors), Z (n, m),
@@ -265,7 +266,8 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
             state[3, 0] = t
             return NO_CONVERGENCE, step
         if step % every == 0:
-            _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
+            _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p,
+                          out_e)
             row += 1
     state[3, 0] = t
     return OK, n_steps

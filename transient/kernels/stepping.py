@@ -174,7 +174,9 @@ def friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt):
 
 
 @njit_fast
-def _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e):
+def _store(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v, out_e):
+    """An output row of a reduced kernel: the sensors S q, and the contact points' gaps,
+    pressures and (with friction) slip velocities when stored (out_v (r, 2, m), or none)."""
     out_t[row] = t
     for k in range(S.shape[0]):
         s = 0.0
@@ -184,12 +186,14 @@ def _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e):
     if out_g.shape[1] > 0:
         out_g[row] = gap
         out_p[row] = press
+    if out_v.shape[2] > 0:
+        out_v[row] = slip
     out_e[row] = energy
 
 
 @njit_fast
 def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0, code,
-                     params, fr, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p,
+                     params, fr, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p, out_v,
                      out_e):
     """Central differences (velocity Verlet) on the reduced system, diagonal damping taken
     implicitly in the half step. state (6, n): q, v, a, state[3, 0] the time, and the forces
@@ -251,7 +255,8 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
             state[3, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
-            _store(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
+            _store(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v,
+                   out_e)
             row += 1
     state[3, 0] = t
     return OK, n_steps
@@ -281,7 +286,7 @@ def remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press):
 
 @njit_fast
 def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w, kt0, code,
-                  params, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_e):
+                  params, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_v, out_e):
     """Central differences on the free dofs of the full model: K = (indptr, indices, data) of
     K_lin (CSR), lumped mass (n,), Rayleigh damping alpha M (implicit in the half step) and
     beta K (on the half-step velocity); C and S dense-free CSR triplets. Same state and outputs
@@ -345,7 +350,8 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
             state[3, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
-            _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e)
+            _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p,
+                          out_e)
             row += 1
     state[3, 0] = t
     return OK, n_steps
