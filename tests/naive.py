@@ -21,7 +21,7 @@ import scipy.sparse as sp
 
 from transient.kernels.codes import NO_CONVERGENCE, NOT_FINITE, OK
 from transient.kernels.exponential import IMPLICIT_TOL
-from transient.kernels.woodbury import ARMIJO, MIN_STEP, WOODBURY_REST
+from transient.kernels.woodbury import ARMIJO, FIXED_POINT_RATE, MIN_STEP, WOODBURY_REST
 
 # contact laws: the codes and parameter rows (4,) of kernels/laws.py
 EXPONENTIAL, LINEAR, BILATERAL = 0, 1, 2
@@ -382,11 +382,21 @@ def coupled_terms(code, params, gap, press, w, kt0, fr, v, P, Dq, Dv, C):
 
 
 class LineSearch:
-    """The friction's Newton steps, halved while the squared residual does not fall by
+    """The friction's iteration of a step: fixed-point steps while the residual falls by
+    FIXED_POINT_RATE, then Newton steps, halved while the squared residual does not fall by
     ARMIJO times the step's fraction (down to MIN_STEP of it): kernels.woodbury.backtrack."""
 
-    def __init__(self):
+    def __init__(self, fixed_point=False):
         self.start, self.step, self.r2, self.alpha = None, None, np.inf, 1.0
+        self.fixed_point, self.last = fixed_point, np.inf
+
+    def newton_started(self, r2):
+        """Whether the iteration is (now) Newton's, given the residual r2 just evaluated."""
+        if self.fixed_point and r2 <= FIXED_POINT_RATE ** 2 * self.last:
+            self.last = r2
+            return False
+        self.fixed_point = False
+        return True
 
     def newton(self, x, step, r2):
         """The full Newton step from x (residual r2 there)."""
@@ -591,7 +601,7 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
         q[:], v[:] = propagate(coef, q0, v0, f0, x)
         qb, vb = q - D * x, v - Dv * x
         converged = False
-        line = LineSearch()
+        line = LineSearch(fixed_point=friction)
         for _ in range(max_iter):
             phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
                                        fbuf)
@@ -606,7 +616,9 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
             if small(D * R, q, q0) and (not friction or small(Dv * R, v, v0)):
                 converged = True
                 break
-            if friction and line.shorter(np.dot(R, R)):
+            if not line.newton_started(np.dot(R, R)):
+                x = x - R                                 # the fixed point
+            elif friction and line.shorter(np.dot(R, R)):
                 x = line.point()
             else:
                 terms = coupled_terms(code, params, gap, press, w, kt0, fr, v, ones, D, Dv, C)
@@ -661,7 +673,7 @@ def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, 
         t += dt
         fext = external(t, patterns, sig)
         converged = False
-        line = LineSearch()
+        line = LineSearch(fixed_point=friction)
         for _ in range(max_iter):
             q[:] = qp + h2 * a
             v[:] = vp + 0.5 * dt * a
@@ -676,7 +688,9 @@ def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, 
             if np.dot(r, r) <= tol * tol * max(scale, 1e-300):
                 converged = True
                 break
-            if friction and line.shorter(np.dot(r, r)):
+            if friction and not line.newton_started(np.dot(r, r)):
+                a -= r / np.diag(Sop)                     # the fixed point
+            elif friction and line.shorter(np.dot(r, r)):
                 a[:] = line.point()
             elif friction:
                 P = np.diag(Sop)

@@ -9,7 +9,7 @@ from ..jit import njit_fast
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
 from .stepping import (_external, _finite, _store, friction_energy, friction_pass,
                        modal_step_energies, remainder_dense)
-from .woodbury import backtrack, coupled_rows, coupled_solve
+from .woodbury import FIXED_POINT_RATE, backtrack, coupled_rows, coupled_solve
 
 IMPLICIT_TOL = 1e-3     # the implicit corrector's residual, relative to the step's motion
 
@@ -134,8 +134,11 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
     C D C^T and GV empty without friction). The terms whose tangent moved from the preload's,
     and with friction the slip's and the pressure's, are corrected exactly, the others by
     fixed-point iteration, which is the evaluated corrector (PECE) when none is taken. With
-    friction, a step whose residual does not fall is halved (woodbury.backtrack): Newton alone
-    overshoots the saturating regularized sign and cycles.
+    friction, whose linear coupling makes most points' terms count in coupled_rows' sum even
+    where the explicit corrector converges, the step iterates on the fixed point while the
+    residual falls by FIXED_POINT_RATE an iteration, and by Newton once it does not; there a
+    step whose residual does not fall is halved (woodbury.backtrack): Newton alone overshoots
+    the saturating regularized sign and cycles.
     exponential_reduced treats the remainder explicitly and diverges once contact stiffens far
     beyond the preload's tangent at a step set by accuracy (a hard tap on pad_disc: 4 kN), or
     once friction sticks (its tangent w p mu / v_eps); here it stays stable. Converged when the
@@ -198,6 +201,7 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
         p_in = 0.0
         rprev = np.inf
         alpha = 1.0
+        newton = not friction
         for it in range(max_iter):
             phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
                                        fbuf)
@@ -225,6 +229,16 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
                     not friction or rv <= tol2 * max(change, 1e-20 * size_v, 1e-300)):
                 converged = True
                 break
+            if not newton:
+                if rf <= FIXED_POINT_RATE * FIXED_POINT_RATE * rprev:
+                    for k in range(n):
+                        x[k] -= y[k]
+                        q[k] = qb[k] + Dq[k] * x[k]
+                        v[k] = vb[k] + Dv[k] * x[k]
+                    rprev = rf
+                    continue
+                newton = True
+                rprev = np.inf
             if friction and backtrack(rf, rprev, alpha):
                 alpha *= 0.5
                 for k in range(n):

@@ -19,7 +19,8 @@ from .sparse import csr_abs_matvec, csr_matvec, factor_solve
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
 from .stepping import (_energies, _external, _finite, _store, _store_sparse, friction_energy,
                        friction_pass, modal_step_energies, remainder_dense, remainder_sparse)
-from .woodbury import active_rows, backtrack, coupled_rows, coupled_solve, woodbury
+from .woodbury import (FIXED_POINT_RATE, active_rows, backtrack, coupled_rows, coupled_solve,
+                       woodbury)
 
 
 @njit_fast
@@ -38,8 +39,9 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
     the Jacobian with the contact's and the friction's exact terms is that of
     woodbury.coupled_rows with x = a, P = S, Dq = dt^2/4, Dv = dt/2: GQ = C Dq S^-1 Cs^T and
     GV = [Ct; Cc] Dv S^-1 Cs^T (Cs = [C; Ct; Cc]; GQ = C Dq S^-1 C^T and GV empty without
-    friction, fr's Ct with no rows); with friction, a step whose residual does not fall is
-    halved (woodbury.backtrack). Converged when the residual is below tol times the force
+    friction, fr's Ct with no rows); with friction, the fixed point first, then Newton with
+    its steps halved while the residual does not fall (as exponential.exponential_implicit).
+    Converged when the residual is below tol times the force
     scale (external, contact, elastic, inertial, and the momentum over a half step, which sets
     the scale in free flight); NO_CONVERGENCE after max_iter iterations. state, acc and
     outputs as in stepping.explicit_reduced; friction at the end velocity, state[6] and
@@ -96,6 +98,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
         p_in = 0.0
         rprev = np.inf
         alpha = 1.0
+        newton = not friction
         for it in range(max_iter):
             _corrected(qp, vp, a, dt, q, v)
             phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
@@ -112,6 +115,14 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
             if rnorm <= tol * tol * max(fnorm, 1e-300):
                 converged = True
                 break
+            if not newton:
+                if rnorm <= FIXED_POINT_RATE * FIXED_POINT_RATE * rprev:
+                    for k in range(n):
+                        a[k] -= y[k]
+                    rprev = rnorm
+                    continue
+                newton = True
+                rprev = np.inf
             if friction and backtrack(rnorm, rprev, alpha):
                 alpha *= 0.5
                 for k in range(n):
