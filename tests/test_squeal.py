@@ -94,3 +94,48 @@ def test_newmark_growth_rate_converges_with_the_step():
         lam, rates, _ = modal_rates("implicit", "evaluated", dt)
         errors.append(abs(rates[0] / lam[0].real - 1))
     assert errors[1] < errors[0] / 3 and errors[2] < errors[1] / 3
+
+
+def sticking_point(v_eps=1e-3, mu=0.4, wp=10.0):
+    """One mode carrying one contact point held at a constant pressure (a linear penalty
+    pressed in, its gap row zero) whose surface does not slide (V = 0): the tanh law makes
+    it a damping w p mu / v_eps at rest, the stiffest the friction gets."""
+    from types import SimpleNamespace
+    import naive as nv
+    k = 1e10
+    g0 = np.array([-wp / k])                              # w = 1: p = k (-g0) = wp
+    law = (np.ones((1, 1)), np.zeros((1, 1)), np.zeros(1), np.array([nv.TANH]),
+           np.array([v_eps]), np.zeros(1, np.int64), np.zeros((1, 1)), np.full((1, 1), mu),
+           np.ones(1, np.int64))
+    friction = SimpleNamespace(dm=np.zeros(1), turn=np.zeros(1), code=law[3], v_eps=law[4],
+                               table=law[5], tables=(law[6], law[7], law[8]))
+    contacts = SimpleNamespace(friction=friction, weights=np.ones(1))
+    return law, contacts, g0, nv.penalty_params(k)
+
+
+@pytest.mark.parametrize("factor, grows", [(0.95, False), (1.05, True)])
+def test_stick_bound_is_where_explicit_friction_turns_unstable(factor, grows):
+    """critical.friction_steps' sticking bound, 2 v_eps / (w p mu) for this point, is the
+    explicit kernel's own: just below it a vibration dies out, just above it grows."""
+    from transient.dynamics import critical
+    from transient.kernels import codes, stepping
+    law, contacts, g0, params = sticking_point()
+    slide, stick = critical.friction_steps(law[0], law[1], contacts, np.array([10.0]))
+    assert stick == pytest.approx(2 * 1e-3 / (10.0 * 0.4), rel=1e-12)
+    assert slide == np.inf                                # no slope where it slides
+    dt = factor * stick
+    n, steps = 1, 60
+    state = np.zeros((7, n))
+    state[1, 0] = 1e-5                                   # a slip of 1% of v_eps
+    out = (np.zeros(steps), np.zeros((steps, 0)), np.zeros((steps, 0)), np.zeros((steps, 0)),
+           np.zeros((steps, 2, 1)), np.zeros((steps, 5)))
+    code = np.array([codes.LINEAR], np.int64)
+    status, _ = stepping.explicit_reduced(
+        state, np.zeros(4), steps, 1, dt, np.zeros(1), np.zeros(1), np.zeros((1, 1)), g0,
+        np.ones(1), np.zeros(1), code, params[None, :], law, np.zeros((0, 1)),
+        (np.zeros(0, np.int64), np.zeros((0, 8)), np.zeros((0, 1)), np.zeros((0, 1)),
+         np.zeros(0, np.int64)), np.zeros((0, 1)), np.array([0, 1]), np.zeros(1), *out)
+    assert status == codes.OK
+    # the slip, at the half step's velocity, changes sign and by 1 - c dt each step
+    slip = np.abs(out[4][:, 0, 0])
+    assert (slip[-1] > 1e-5) == grows and (slip[-1] < 1e-6) != grows

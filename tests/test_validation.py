@@ -69,6 +69,7 @@ def sets(*overrides):
     ("cea", PAD, ["contact.pad_disc.friction.mu=0.4", "motion.disc.omega=0.0"],
      "contact.pad_disc.friction.mu"),
     ("cea", PAD, ["contact.pad_disc.friction.v_eps=0.0"], "contact.pad_disc.friction.v_eps"),
+    ("run", PAD, ["contact.pad_disc.friction.mu=0.4", "solver.dt=1e-5"], "solver.dt"),
     ("run", PAD, ["contact.pad_disc.friction.mu=0.4", 'solver.scheme="explicit"',
                   "solver.reduction.enabled=false", 'contact.pad_disc.rule="fine"'],
      "contact.pad_disc.friction.mu"),

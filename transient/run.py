@@ -131,8 +131,10 @@ def _loop(case, path, start, progress, t_start, stop):
                     t_stored = float(c.rows.time[-1])
                 step = c.step
                 if c.status == NOT_FINITE:
+                    hint = system.critical.stick_hint(dt, case.solver.scheme,
+                                                      case.solver.corrector)
                     raise RunAborted(f"state not finite after t = {state.time:.6g} s (the "
-                                     "last finite row kept)")
+                                     f"last finite row kept){hint}")
                 history.checkpoint({**state.arrays(), "step": np.array([step]),
                                     "blocks": scheme.blocks if system.reduced
                                     else np.zeros(0), "balance": balance.arrays()})

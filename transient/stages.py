@@ -129,7 +129,7 @@ def _prepare(case, stages, model=None):
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
         system = reduced_system(red.X, red.AW, red.omega2, solver.reduction.fmax,
                                 solver.damping, contacts, preload.tangent, patterns, signals,
-                                sensors, names, case.output.field)
+                                sensors, names, case.output.field, preload.pressure)
         state = State.zeros(system.n, contacts.n_points)
         state.q[:], state.v[:] = red.q0, red.v0
     else:
@@ -203,6 +203,14 @@ def choose_dt(case, setup, stored=None):
                   critical.remainder_dt(solver.corrector))
         if dt == 0.0:
             dt = min(1.0 / (20.0 * solver.reduction.fmax), 0.9 * dt_max)
+        elif dt > dt_max and not solver.force_dt and dt > critical.friction_dt:
+            raise CaseError(case.path, "solver.dt", f"{dt:.3e} s: the {solver.corrector} "
+                            "corrector takes the friction explicitly, and its damping at "
+                            f"steady sliding bounds the step at {critical.friction_dt:.3e} s "
+                            "(w p mu / V across the sliding, w p dmu/ds along): "
+                            "solver.corrector "
+                            '= "implicit", a smaller step, or solver.force_dt = true to run '
+                            "anyway")
         elif dt > dt_max and not solver.force_dt:
             pair = critical.stiffest_point(dt)[1]
             raise CaseError(case.path, "solver.dt", f"{dt:.3e} s: the {solver.corrector} "
@@ -217,13 +225,18 @@ def choose_dt(case, setup, stored=None):
     critical = setup.system.critical
     if dt == 0.0:
         # stable, and within the range where an impact conserves energy
-        dt = min(0.9 * critical.dt, critical.contact_dt)
+        dt = min(0.9 * critical.dt, critical.contact_dt, 0.9 * critical.friction_dt)
         if not np.isfinite(dt):
             raise CaseError(case.path, "solver.dt", "no stiffness bounds the step: give dt")
     elif dt > critical.dt and not solver.force_dt:
         raise CaseError(case.path, "solver.dt", f"{dt:.3e} s is above the critical step of "
                         f"central differences {critical.dt:.3e} s (set solver.force_dt = true "
                         "to run anyway)")
+    elif dt > critical.friction_dt and not solver.force_dt:
+        raise CaseError(case.path, "solver.dt", f"{dt:.3e} s is above the step at which "
+                        "central differences take the friction's damping at steady sliding "
+                        f"stably, {critical.friction_dt:.3e} s (w p mu / V across the "
+                        "sliding, w p dmu/ds along; solver.force_dt = true to run anyway)")
     elif dt > critical.contact_dt and not solver.force_dt:
         pair = critical.stiffest_point(dt)[1]
         raise CaseError(case.path, "solver.dt", f"{dt:.3e} s runs the contact's penalty "

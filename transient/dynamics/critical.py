@@ -12,7 +12,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..kernels.codes import EXPONENTIAL
+from ..kernels.codes import ATAN, EXPONENTIAL, FRICTIONLESS
 
 # An explicit impact keeps its energy (drift within 1% of the peak) while the penalties alone
 # on the lumped mass oscillate at omega_c dt <= 0.7, though central differences stay stable
@@ -39,6 +39,8 @@ class CriticalStep:
     contacts: object         # ContactSet: weights and laws of the points
     omega_contact: float = 0.0   # the contact's own highest frequency, penalty closed [rad/s]
     omega_remainder: float = 0.0  # the same of what the linear part leaves out (reduced) [rad/s]
+    friction_dt: float = np.inf   # the explicit friction's bound at steady sliding [s]
+    stick_dt: float = np.inf      # and with every point sticking (friction_steps) [s]
 
     def at(self, gmin):
         """The largest stable step with every point at its smallest gap so far."""
@@ -56,9 +58,21 @@ class CriticalStep:
 
     def remainder_dt(self, corrector):
         """The largest step the exponential scheme's corrector takes the contact remainder
-        at (REMAINDER_OMEGA_DT; unbounded for the implicit one)."""
+        at (REMAINDER_OMEGA_DT), and the sliding friction (friction_dt); unbounded for the
+        implicit one."""
         limit = REMAINDER_OMEGA_DT.get(corrector, np.inf)
-        return limit / self.omega_remainder if self.omega_remainder > 0 else np.inf
+        contact = limit / self.omega_remainder if self.omega_remainder > 0 else np.inf
+        return contact if corrector == "implicit" else min(contact, self.friction_dt)
+
+    def stick_hint(self, dt, scheme, corrector):
+        """What a run with friction taken explicitly that went unstable should be told, ''
+        when its step would hold a sticking point."""
+        if scheme == "implicit" or (scheme == "exponential" and corrector == "implicit") or \
+                dt <= self.stick_dt:
+            return ""
+        return (f"; friction taken explicitly: a point sticking needs dt <= {self.stick_dt:.2e}"
+                f" s (proportional to contact.*.friction.v_eps), solver.corrector = "
+                f'"implicit" takes it exactly')
 
     def drift_hint(self, dt):
         """What an explicit run losing its energy balance at step dt should be told: the
@@ -84,6 +98,30 @@ class CriticalStep:
         return 2.0 * dt / self.dt, name, float(self.kt_checked[i])
 
 
+def friction_steps(Ct, Cc, contacts, pressure):
+    """(sliding, sticking) bounds on the step of the schemes that take friction explicitly
+    (central differences at the half step's velocity, the exponential scheme's explicit
+    correctors): the friction is a damping there, D = Ct^T diag(w p d tau_t / d s_t) Ct +
+    Cc^T diag(w p d tau_c / d s_c) Cc per unit pressure's slope, and an explicit damping is
+    stable to dt lambda_max(D) = 2. Sliding at V the slopes are the law's (FrictionSet.dm
+    along, .turn = m / V across: small for V >> v_eps); a point sticking has mu(0) / v_eps
+    both ways (tanh; 2 / pi of it for atan), so its bound is proportional to v_eps: pad_disc at
+    mu = 0.4 slides at 6.2e-6 s and would stick at 7.6e-9 s. Reduced systems (dense Ct, Cc)
+    only; (inf, inf) without friction."""
+    f = contacts.friction
+    if f is None or Ct is None:
+        return np.inf, np.inf
+    wp = contacts.weights * np.maximum(pressure, 0.0)
+    mu0 = f.tables[1][f.table, 0]
+    at_rest = np.where(f.code == ATAN, 2.0 / np.pi, 1.0) * np.where(
+        f.code == FRICTIONLESS, 0.0, mu0 / f.v_eps)
+
+    def bound(along, across):
+        lam = _largest((Ct.T * (wp * along)) @ Ct + (Cc.T * (wp * across)) @ Cc)
+        return 2.0 / lam if lam > 0 else np.inf
+    return bound(np.abs(f.dm), f.turn), bound(at_rest, at_rest)
+
+
 def critical_tangent(contacts, tangent):
     """The preload's tangents, raised to k for the penalty laws."""
     kt = tangent.copy()
@@ -92,8 +130,9 @@ def critical_tangent(contacts, tangent):
     return kt
 
 
-def reduced(omega2, Cr, contacts, tangent):
-    """CriticalStep of a reduced system (M = I): eigenvalues of the small dense matrix."""
+def reduced(omega2, Cr, contacts, tangent, Ct=None, Cc=None, pressure=None):
+    """CriticalStep of a reduced system (M = I): eigenvalues of the small dense matrix; with
+    friction (Ct, Cc and the preload's pressure), its explicit bounds too."""
     kt = critical_tangent(contacts, tangent)
     dkw = contacts.weights * (kt - tangent)
     # the remainder's stiffness, what the linear part leaves out of the penalties
@@ -101,8 +140,10 @@ def reduced(omega2, Cr, contacts, tangent):
     lam = _largest(np.diag(omega2) + R)
     dt = 2.0 / np.sqrt(lam) if lam > 0 else np.inf
     omega_c = np.sqrt(_largest((Cr.T * (contacts.weights * kt)) @ Cr)) if len(dkw) else 0.0
+    slide, stick = (friction_steps(Ct, Cc, contacts, pressure) if pressure is not None
+                    else (np.inf, np.inf))
     return CriticalStep(dt, kt, np.einsum("ij,ij->i", Cr, Cr), contacts, float(omega_c),
-                        float(np.sqrt(_largest(R))))
+                        float(np.sqrt(_largest(R))), float(slide), float(stick))
 
 
 def _largest(A):

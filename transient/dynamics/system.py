@@ -74,13 +74,14 @@ def patterns_matrix(vectors, n):
 
 
 def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, signals,
-                   sensors, sensor_names, field):
+                   sensors, sensor_names, field, pressure=None):
     """The reduced system on the basis T = X AW (X (ndof, m), AW (m, n)) with eigenvalues
     omega2. T itself (ndof x n, the setup's largest product at scale: 4x pad_disc's 198 GFLOP)
     is formed only for field output; the contact rows, sensors and loads come from X.
 
     damping: DampingSpec; modes above fmax [Hz] take the residual ratio on top of the modal.
     patterns: load vectors on the model's dofs; sensors (s, ndof) their observation.
+    pressure: the preload's at the points, for the friction's explicit step bounds.
     """
     omega = np.sqrt(omega2)
     above = omega > 2 * np.pi * fmax
@@ -95,7 +96,8 @@ def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, si
     return ReducedSystem(contacts, tangent,
                          patterns_matrix([AW.T @ (X.T @ p) for p in patterns], n),
                          signals, S, sensor_names, n if field else 0,
-                         critical.reduced(omega2, Cr, contacts, tangent), omega2=omega2,
+                         critical.reduced(omega2, Cr, contacts, tangent, Ct, Cc, pressure),
+                         omega2=omega2,
                          damp=damp, C=Cr, T=X @ AW if field else None, Ct=Ct, Cc=Cc)
 
 

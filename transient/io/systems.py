@@ -45,7 +45,9 @@ def read_system(f):
     crit = values["critical"]
     values["critical"] = CriticalStep(crit["dt"], crit["kt_checked"], crit["rows"],
                                       values["contacts"], crit.get("omega_contact", 0.0),
-                                      crit.get("omega_remainder", 0.0))
+                                      crit.get("omega_remainder", 0.0),
+                                      crit.get("friction_dt", np.inf),
+                                      crit.get("stick_dt", np.inf))
     return cls(**values)
 
 
@@ -95,6 +97,7 @@ def _write(g, name, value):
         s.attrs["type"], s.attrs["dt"] = "critical", value.dt
         s.attrs["omega_contact"] = value.omega_contact
         s.attrs["omega_remainder"] = value.omega_remainder
+        s.attrs["friction_dt"], s.attrs["stick_dt"] = value.friction_dt, value.stick_dt
         s.create_dataset("kt_checked", data=value.kt_checked)
         s.create_dataset("rows", data=value.rows)
     elif isinstance(value, tuple) and all(isinstance(v, np.ndarray) for v in value):
@@ -136,7 +139,9 @@ def _read(g, name):
         return {"dt": float(node.attrs["dt"]), "kt_checked": node["kt_checked"][()],
                 "rows": node["rows"][()],
                 "omega_contact": float(node.attrs.get("omega_contact", 0.0)),
-                "omega_remainder": float(node.attrs.get("omega_remainder", 0.0))}
+                "omega_remainder": float(node.attrs.get("omega_remainder", 0.0)),
+                "friction_dt": float(node.attrs.get("friction_dt", np.inf)),
+                "stick_dt": float(node.attrs.get("stick_dt", np.inf))}
     return tuple(node[str(k)][()] for k in range(int(node.attrs["length"])))
 
 
