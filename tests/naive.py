@@ -301,7 +301,7 @@ def friction_force(fr, w, press, v):
 
 
 def friction_energy(state, acc, energy, ff, dq, p_in, dt):
-    """The friction's energies of a step (kernels.stepping.friction_energy): its work on the
+    """The friction's energies of a step (kernels.friction.friction_energy): its work on the
     structure 1/2 (ff0 + ff) . dq, the sliding's input by the trapezoid; ff0 in state[6]."""
     onto = 0.5 * np.dot(state[6] + ff, dq)
     inflow = 0.5 * dt * (acc[3] + p_in)
@@ -475,14 +475,17 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
 
 
 def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w, kt0, code,
-                  params, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_v, out_e):
+                  params, fr, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_v, out_e):
     """Central differences with a lumped mass: alpha M implicit at the end of the step, beta K
     on the half-step velocity. The dissipation is the trapezoid of the damping power
-    v . (alpha M v + beta K v_half) at the steps' ends, carried between calls in acc[2]."""
+    v . (alpha M v + beta K v_half) at the steps' ends, carried between calls in acc[2].
+    Friction (fr with CSR rows) at the half-step velocity, as explicit_reduced takes it."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
     n, m = len(q), len(g0)
     Km, Sm = csr(K, n), csr(S, n)
+    fr = (csr(fr[0], n).toarray(), csr(fr[1], n).toarray()) + tuple(fr[2:])
+    slip = None
     f, gap, press = np.empty(n), np.empty(m), np.empty(m)
     outs = (out_t, out_s, out_g, out_p, out_v, out_e)
     fext_old = external(t, patterns, sig)
@@ -495,6 +498,10 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
         t += dt
         fext = external(t, patterns, sig)
         phi, lin = remainder_sparse(*C, g0, w, kt0, code, params, q, f, gap, press)
+        ff, p_in = friction_force(fr, w, press, v_half)
+        if ff is not None:
+            f = f + ff
+            slip = slips(fr, v_half)
         gmin[:] = np.fmin(gmin, gap)
         ku = Km @ q
         kv = Km @ v_half
@@ -505,12 +512,14 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
         energy = _energies(acc, 0.5 * np.dot(mass * v, v), 0.5 * np.dot(q, ku) - lin, phi,
                            0.5 * np.dot(fext_old + fext, dq), 0.5 * dt * (power_old + power))
         power_old = acc[2] = power
+        if ff is not None:
+            friction_energy(state, acc, energy, ff, dq, p_in, dt)
         fext_old = fext
         if not _finite(q, v, energy):
             state[3, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
-            _store(outs, row, t, Sm @ q, gap, press, energy)
+            _store(outs, row, t, Sm @ q, gap, press, energy, slip)
             row += 1
     state[3, 0] = t
     return OK, n_steps

@@ -103,7 +103,18 @@ def with_friction(r, seed=5):
     f.state[2] += ff
     f.acc = np.array([0.0, 0.0, 0.0, p_in])
     # the rows above: fprev, the forces at t = 0, with the friction's
-    f.fprev = r.fprev + ff
+    if hasattr(r, "fprev"):
+        f.fprev = r.fprev + ff
+    return f
+
+
+def with_friction_full(full, seed=6):
+    """The full system with friction as with_friction gives the reduced one, its rows CSR."""
+    r = with_friction(SimpleNamespace(**{**vars(full), "C": full.C_dense}), seed)
+    f = SimpleNamespace(**vars(full))
+    f.fr = (triplet(r.fr[0]), triplet(r.fr[1])) + r.fr[2:]
+    f.state, f.acc = r.state, r.acc
+    f.state[2] = full.state[2] + r.state[6] / full.mass      # the lumped mass takes the force
     return f
 
 
@@ -187,7 +198,10 @@ def full_system(seed=1, impulse=10.0, dt_factor=0.5):
     state[0] = qstar
     state[1] = 2e-3 * np.sqrt(np.dot(qstar, K_lin @ qstar) / mass.sum()) * rng.standard_normal(n)
     state[2] = -(beta * K_lin @ state[1]) / mass - alpha * state[1]     # as in reduced_system
-    return SimpleNamespace(K=triplet(K_lin), K_dense=K_lin, mass=mass, M=triplet(np.diag(mass)),
+    no_rows = triplet(np.zeros((0, n)))
+    fr = (no_rows, no_rows) + nv.no_friction(n)[2:]
+    return SimpleNamespace(fr=fr, K=triplet(K_lin), K_dense=K_lin, mass=mass,
+                           M=triplet(np.diag(mass)),
                            alpha=alpha, beta=beta, C=triplet(C), C_dense=C, g0=gstar - s, w=w,
                            kt0=kt0, code=code, params=params, patterns=patterns, sig=sig,
                            S=triplet(S), dt=dt, state=state, gap0=gstar)
@@ -222,9 +236,11 @@ def reduced_args(r, *tail, blocks=ONE_BLOCK, friction=False):
                                                              blocks) + tail
 
 
-def full_args(f, *tail):
-    """The full system's arguments from C to S, then tail."""
-    return (f.C, f.g0, f.w, f.kt0, f.code, f.params, f.patterns, f.sig, f.S) + tail
+def full_args(f, *tail, friction=False):
+    """The full system's arguments from C to S (with the friction's, CSR rows, after the laws
+    for the kernels that take them), then tail."""
+    fr = (f.fr,) if friction else ()
+    return (f.C, f.g0, f.w, f.kt0, f.code, f.params) + fr + (f.patterns, f.sig, f.S) + tail
 
 
 def explicit_reduced_args(r, dt, blocks=ONE_BLOCK):
@@ -232,7 +248,7 @@ def explicit_reduced_args(r, dt, blocks=ONE_BLOCK):
 
 
 def explicit_full_args(f, dt):
-    return (f.K, f.mass, f.alpha, f.beta) + full_args(f, f.gap0.copy())
+    return (f.K, f.mass, f.alpha, f.beta) + full_args(f, f.gap0.copy(), friction=True)
 
 
 def exponential_reduced_args(r, dt, corrections, propagate):
@@ -294,6 +310,7 @@ CONFIGS = {
                                                     {"corrections": 0, "propagate": True}),
     "exponential_implicit": (exponential.exponential_implicit, exponential_implicit_args, {}),
     "newmark_reduced": (newmark.newmark_reduced, newmark_reduced_args, {}),
+    "explicit_full-friction": (stepping.explicit_full, explicit_full_args, {}),
     "exponential_implicit-friction": (exponential.exponential_implicit,
                                       exponential_implicit_args, {}),
     "newmark_reduced-friction": (newmark.newmark_reduced, newmark_reduced_args, {}),
@@ -312,7 +329,8 @@ def systems():
             (False, True): reduced_system(impulse=10.0, dt_factor=2.0),
             (True, True): full_system(impulse=15.0, dt_factor=2.0),
             "friction": with_friction(reduced_system()),
-            "friction-hard": with_friction(reduced_system(impulse=10.0, dt_factor=2.0))}
+            "friction-hard": with_friction(reduced_system(impulse=10.0, dt_factor=2.0)),
+            "friction-full": with_friction_full(full_system())}
 
 
 def setup(name, systems, hard=True, dt=None, **options):
@@ -321,7 +339,8 @@ def setup(name, systems, hard=True, dt=None, **options):
     kernel, build, defaults = CONFIGS[name]
     system = systems[(kernel in FULL, hard and kernel in IMPLICIT)]
     if name.endswith("-friction"):
-        system = systems["friction-hard" if hard and kernel in IMPLICIT else "friction"]
+        system = systems["friction-full" if kernel in FULL else
+                         "friction-hard" if hard and kernel in IMPLICIT else "friction"]
     args = build(system, dt or system.dt, **{**defaults, **options})
     return kernel, getattr(nv, kernel.__name__), system, args
 
@@ -337,7 +356,8 @@ def run(fn, state, dt, args, chunks=STEPS, every=EVERY, contact_outputs=True, ac
     outs, statuses = [], []
     m = N_POINTS if contact_outputs else 0
     # the slip velocities are stored with friction only (its arrays: the 9-tuple fr)
-    friction = any(isinstance(a, tuple) and len(a) == 9 and len(a[0]) for a in args)
+    friction = any(isinstance(a, tuple) and len(a) == 9 and (
+        len(a[0]) if isinstance(a[0], np.ndarray) else len(a[0][0]) > 1) for a in args)
     for n_steps in chunks:
         rows = n_steps // every
         out = (np.zeros(rows), np.zeros((rows, 3)), np.zeros((rows, m)), np.zeros((rows, m)),
@@ -615,7 +635,8 @@ ENERGY_TOL = {"explicit_reduced": 6e-4, "explicit_reduced-two-blocks": 6e-4,
               # take that slope in their Jacobian: 1.4e-4 (exponential) and 1.2e-4 (Newmark)
               "explicit_reduced-friction": 6e-4, "exponential_reduced-PECE-friction": 1.6e-2,
               "exponential_reduced-PEC-propagated-friction": 1.6e-3,
-              "exponential_implicit-friction": 3e-4, "newmark_reduced-friction": 3e-4}
+              "exponential_implicit-friction": 3e-4, "newmark_reduced-friction": 3e-4,
+              "explicit_full-friction": 2e-3}
 
 
 @pytest.mark.parametrize("name", CONFIGS)

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numba
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 
 from ..errors import CaseError
 from ..jit import spinning
@@ -56,7 +57,7 @@ def _contact(system):
 
 
 def friction_arrays(system):
-    """The friction's arrays for the reduced kernels (kernels.stepping.friction_pass): Ct, Cc,
+    """The friction's arrays for the reduced kernels (kernels.friction.friction_pass): Ct, Cc,
     V, law code, v_eps, table, and the tables; Ct with no rows when the system has none."""
     f = system.contacts.friction
     if f is None:
@@ -66,6 +67,19 @@ def friction_arrays(system):
                 np.ones(1, np.int64))
     return (system.Ct, system.Cc, f.speed, f.code.astype(np.int64), f.v_eps,
             f.table.astype(np.int64), *f.tables)
+
+
+def friction_arrays_sparse(system):
+    """friction_arrays for the full model's kernels (kernels.friction.friction_pass_sparse):
+    Ct and Cc as CSR triplets, Ct of no row when the system has no friction."""
+    f = system.contacts.friction
+    if f is None:
+        rows = csr_triplet(sp.csr_matrix((0, system.K.shape[0])))
+        return (rows, rows, np.zeros(0), np.zeros(0, np.int64), np.zeros(0),
+                np.zeros(0, np.int64), np.zeros((1, 1)), np.zeros((1, 1)),
+                np.ones(1, np.int64))
+    return (csr_triplet(system.Ct), csr_triplet(system.Cc), f.speed, f.code.astype(np.int64),
+            f.v_eps, f.table.astype(np.int64), *f.tables)
 
 
 def explicit(system, dt, blocks=None):
@@ -80,8 +94,8 @@ def explicit(system, dt, blocks=None):
                                              blocks, state.gmin, *rows.arrays)
     else:
         args = (csr_triplet(system.K), system.mass, system.alpha, system.beta,
-                csr_triplet(system.C),
-                *_contact(system), system.patterns, system.signals, csr_triplet(system.sensors))
+                csr_triplet(system.C), *_contact(system), friction_arrays_sparse(system),
+                system.patterns, system.signals, csr_triplet(system.sensors))
 
         def advance(state, n_steps, every, rows, blocks):
             return stepping.explicit_full(state.array, state.acc, n_steps, every, dt, *args,

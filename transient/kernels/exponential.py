@@ -7,8 +7,8 @@ import numpy as np
 
 from ..jit import njit_fast
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
-from .stepping import (_external, _finite, _store, friction_energy, friction_pass,
-                       modal_step_energies, remainder_dense)
+from .friction import friction_energy, friction_pass
+from .stepping import _external, _finite, _store, modal_step_energies, remainder_dense
 from .woodbury import FIXED_POINT_RATE, backtrack, coupled_rows, coupled_solve
 
 IMPLICIT_TOL = 1e-3     # the implicit corrector's residual, relative to the step's motion
@@ -56,7 +56,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     With propagate, the gaps, pressures and contact energy stored are those of the last
     evaluation, a local error away from the final state. state, acc and outputs as in
     explicit_reduced; the acceleration left in the state is that of the forces carried.
-    fr: the friction's arrays (stepping.friction_pass), its tractions part of the remainder,
+    fr: the friction's arrays (friction.friction_pass), its tractions part of the remainder,
     at each evaluation's velocity; state[6] and acc[3] carry its force and input power."""
     q, v = state[0], state[1]
     t = state[3, 0]

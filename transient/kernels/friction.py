@@ -17,7 +17,7 @@ c(s) = mu(s) sgn_reg(s) / s, tau = w p c(|s|) s, so d tau / d s = w p (c I + c'(
 import numpy as np
 
 from ..jit import njit_fast
-from .codes import FRICTIONLESS, TANH
+from .codes import DISSIPATED, FRICTIONLESS, TANH, WORK
 SMALL = 1e-6     # |s| / v_eps below which sgn_reg(|s|) / |s| is its series (no 0 / 0)
 
 
@@ -123,3 +123,99 @@ def friction_dense(Ct, Cc, w, press, V, code, v_eps, table, tab_v, tab_mu, tab_n
         p_in += tt * V[i]
         p_diss += tt * st + tc * sc
     return p_in, p_diss
+
+
+@njit_fast
+def friction_sparse(Ct, Cc, w, press, V, code, v_eps, table, tab_v, tab_mu, tab_n, v, f, slip):
+    """friction_dense for CSR triplets Ct, Cc (m rows) on the full model's dofs."""
+    Tp, Ti, Td = Ct
+    Up, Ui, Ud = Cc
+    m = Tp.shape[0] - 1
+    p_in = 0.0
+    p_diss = 0.0
+    for i in range(m):
+        if code[i] == FRICTIONLESS:
+            slip[0, i] = V[i]
+            slip[1, i] = 0.0
+            continue
+        st = V[i]
+        sc = 0.0
+        for k in range(Tp[i], Tp[i + 1]):
+            st -= Td[k] * v[Ti[k]]
+        for k in range(Up[i], Up[i + 1]):
+            sc -= Ud[k] * v[Ui[k]]
+        slip[0, i] = st
+        slip[1, i] = sc
+        if press[i] <= 0.0:
+            continue
+        s = np.sqrt(st * st + sc * sc)
+        mu = friction_coefficient(table[i], s, tab_v, tab_mu, tab_n)
+        c = w[i] * press[i] * mu * sign_over_speed(code[i], s, v_eps[i])
+        tt = c * st
+        tc = c * sc
+        for k in range(Tp[i], Tp[i + 1]):
+            f[Ti[k]] += tt * Td[k]
+        for k in range(Up[i], Up[i + 1]):
+            f[Ui[k]] += tc * Ud[k]
+        p_in += tt * V[i]
+        p_diss += tt * st + tc * sc
+    return p_in, p_diss
+
+
+@njit_fast
+def friction_pass(fr, w, press, v, ff, f, slip):
+    """The friction force ff at velocity v (kernels.friction), added into f too, and the
+    points' slip velocities (2, m), when the system has friction: fr = (Ct, Cc, V, code,
+    v_eps, table, speeds, values, counts), Ct (0, n) without. Returns the sliding's input
+    power [W]."""
+    if fr[0].shape[0] == 0:
+        return 0.0
+    for j in range(ff.shape[0]):
+        ff[j] = 0.0
+    p_in, _ = friction_dense(fr[0], fr[1], w, press, fr[2], fr[3], fr[4], fr[5], fr[6],
+                             fr[7], fr[8], v, ff, slip)
+    for j in range(ff.shape[0]):
+        f[j] += ff[j]
+    return p_in
+
+
+@njit_fast
+def friction_pass_sparse(fr, w, press, v, ff, f, slip):
+    """friction_pass on the full model: fr = (Ct, Cc, V, code, v_eps, table, speeds, values,
+    counts) with Ct, Cc CSR triplets (Ct's indptr of one entry without friction)."""
+    if fr[0][0].shape[0] <= 1:
+        return 0.0
+    for j in range(ff.shape[0]):
+        ff[j] = 0.0
+    p_in, _ = friction_sparse(fr[0], fr[1], w, press, fr[2], fr[3], fr[4], fr[5], fr[6],
+                              fr[7], fr[8], v, ff, slip)
+    for j in range(ff.shape[0]):
+        f[j] += ff[j]
+    return p_in
+
+
+@njit_fast
+def friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt):
+    """The friction's share of a step's energies. Its work on the structure is taken as the
+    loads' is, 1/2 (ff0 + ff) . dq (ff0 at the step's start, ff at its end), so that the
+    balance closes on the scheme's own arithmetic; the sliding's input, tau_t V, by the
+    trapezoid of its power (acc[3] carries the power at the start) goes to the external work,
+    and what of it the structure did not take to the dissipated energy. ff0 becomes ff."""
+    if fr[0].shape[0] == 0:
+        return
+    friction_work(acc, energy, ff0, ff, dq, p_in, dt)
+
+
+@njit_fast
+def friction_work(acc, energy, ff0, ff, dq, p_in, dt):
+    """friction_energy with friction (the full model's kernels, whose fr is sparse)."""
+    onto = 0.0
+    for j in range(ff.shape[0]):
+        onto += 0.5 * (ff0[j] + ff[j]) * dq[j]
+        ff0[j] = ff[j]
+    inflow = 0.5 * dt * (acc[3] + p_in)
+    acc[0] += inflow
+    acc[1] += inflow - onto
+    acc[3] = p_in
+    energy[WORK] = acc[0]
+    energy[DISSIPATED] = acc[1]

@@ -17,8 +17,9 @@ import numpy as np
 from ..jit import njit_fast
 from .sparse import csr_abs_matvec, csr_matvec, factor_solve
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
-from .stepping import (_energies, _external, _finite, _store, _store_sparse, friction_energy,
-                       friction_pass, modal_step_energies, remainder_dense, remainder_sparse)
+from .friction import friction_energy, friction_pass
+from .stepping import (_energies, _external, _finite, _store, _store_sparse, modal_step_energies,
+                       remainder_dense, remainder_sparse)
 from .woodbury import (FIXED_POINT_RATE, active_rows, backtrack, coupled_rows, coupled_solve,
                        woodbury)
 
@@ -45,7 +46,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
     scale (external, contact, elastic, inertial, and the momentum over a half step, which sets
     the scale in free flight); NO_CONVERGENCE after max_iter iterations. state, acc and
     outputs as in stepping.explicit_reduced; friction at the end velocity, state[6] and
-    acc[3] carrying its force and input power (stepping.friction_energy)."""
+    acc[3] carrying its force and input power (friction.friction_energy)."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
     n = q.shape[0]
@@ -199,6 +200,7 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
     for i in range(m):
         Gd[i] = G[i, i]
     energy = np.empty(5)
+    no_slip = np.empty((2, 0))          # no friction on the full model yet
     h2 = 0.25 * dt * dt
     v_scale = 2.0 / dt if dt > 0.0 else 0.0     # momentum over a step: a force scale in flight
     _external(t, patterns, sig, svals, fext_old)
@@ -277,8 +279,8 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
             state[3, 0] = t
             return NO_CONVERGENCE, step
         if step % every == 0:
-            _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p,
-                          out_e)
+            _store_sparse(row, t, q, S, gap, press, no_slip, energy, out_t, out_s, out_g,
+                          out_p, out_v, out_e)
             row += 1
     state[3, 0] = t
     return OK, n_steps

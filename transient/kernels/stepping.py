@@ -21,7 +21,7 @@ import numpy as np
 
 from ..jit import njit, njit_fast, njit_parallel
 from .codes import CONTACT, DISSIPATED, KINETIC, NOT_FINITE, OK, STRAIN, WORK
-from .friction import friction_dense
+from .friction import friction_energy, friction_pass, friction_pass_sparse, friction_work
 from .laws import pressure_potential
 from .signals import signal_values
 from .sparse import csr_matvec
@@ -131,44 +131,6 @@ def _energies(energy, kin, strain, phi, acc, work, dissipated):
     energy[KINETIC] = kin
     energy[STRAIN] = strain
     energy[CONTACT] = phi
-    energy[WORK] = acc[0]
-    energy[DISSIPATED] = acc[1]
-
-
-@njit_fast
-def friction_pass(fr, w, press, v, ff, f, slip):
-    """The friction force ff at velocity v (kernels.friction), added into f too, and the
-    points' slip velocities (2, m), when the system has friction: fr = (Ct, Cc, V, code,
-    v_eps, table, speeds, values, counts), Ct (0, n) without. Returns the sliding's input
-    power [W]."""
-    if fr[0].shape[0] == 0:
-        return 0.0
-    for j in range(ff.shape[0]):
-        ff[j] = 0.0
-    p_in, _ = friction_dense(fr[0], fr[1], w, press, fr[2], fr[3], fr[4], fr[5], fr[6],
-                             fr[7], fr[8], v, ff, slip)
-    for j in range(ff.shape[0]):
-        f[j] += ff[j]
-    return p_in
-
-
-@njit_fast
-def friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt):
-    """The friction's share of a step's energies. Its work on the structure is taken as the
-    loads' is, 1/2 (ff0 + ff) . dq (ff0 at the step's start, ff at its end), so that the
-    balance closes on the scheme's own arithmetic; the sliding's input, tau_t V, by the
-    trapezoid of its power (acc[3] carries the power at the start) goes to the external work,
-    and what of it the structure did not take to the dissipated energy. ff0 becomes ff."""
-    if fr[0].shape[0] == 0:
-        return
-    onto = 0.0
-    for j in range(ff.shape[0]):
-        onto += 0.5 * (ff0[j] + ff[j]) * dq[j]
-        ff0[j] = ff[j]
-    inflow = 0.5 * dt * (acc[3] + p_in)
-    acc[0] += inflow
-    acc[1] += inflow - onto
-    acc[3] = p_in
     energy[WORK] = acc[0]
     energy[DISSIPATED] = acc[1]
 
@@ -286,11 +248,13 @@ def remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press):
 
 @njit_fast
 def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w, kt0, code,
-                  params, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_v, out_e):
+                  params, fr, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_v, out_e):
     """Central differences on the free dofs of the full model: K = (indptr, indices, data) of
     K_lin (CSR), lumped mass (n,), Rayleigh damping alpha M (implicit in the half step) and
-    beta K (on the half-step velocity); C and S dense-free CSR triplets. Same state and outputs
-    as explicit_reduced; acc[2] carries the damping power at the end of the last step."""
+    beta K (on the half-step velocity); C and S dense-free CSR triplets; fr the friction's
+    arrays with CSR rows (friction_pass_sparse), taken at the half-step velocity as in
+    explicit_reduced. Same state and outputs as explicit_reduced; acc[2] carries the damping
+    power at the end of the last step."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
     n = q.shape[0]
@@ -307,6 +271,10 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
     gap = np.empty(m)
     press = np.empty(m)
     energy = np.empty(5)
+    friction = fr[0][0].shape[0] > 1
+    ff = np.empty(n)
+    slip = np.empty((2, fr[0][0].shape[0] - 1))
+    ff0 = state[6] if friction else np.empty(n)
     _external(t, patterns, sig, svals, fext_old)
     # the damping power at the end of the last step, carried (it takes K at the half-step
     # velocity, which a chunk's start does not have)
@@ -321,6 +289,7 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
         t += dt
         _external(t, patterns, sig, svals, fext)
         phi, lin = remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press)
+        p_in = friction_pass_sparse(fr, w, press, v, ff, f, slip)
         _track_min(gap, gmin)
         csr_matvec(Kp, Ki, Kd, q, ku)
         if beta != 0.0:
@@ -346,19 +315,22 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
         _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
         power_old = power
         acc[2] = power
+        if friction:
+            friction_work(acc, energy, ff0, ff, dq, p_in, dt)
         if not (_finite(q) and _finite(v) and _finite(energy)):
             state[3, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
-            _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p,
-                          out_e)
+            _store_sparse(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p,
+                          out_v, out_e)
             row += 1
     state[3, 0] = t
     return OK, n_steps
 
 
 @njit_fast
-def _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, out_e):
+def _store_sparse(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v,
+                  out_e):
     Sp, Si, Sd = S
     out_t[row] = t
     for k in range(Sp.shape[0] - 1):
@@ -369,6 +341,8 @@ def _store_sparse(row, t, q, S, gap, press, energy, out_t, out_s, out_g, out_p, 
     if out_g.shape[1] > 0:
         out_g[row] = gap
         out_p[row] = press
+    if out_v.shape[2] > 0:
+        out_v[row] = slip
     out_e[row] = energy
 
 
