@@ -88,10 +88,11 @@ def coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu, size, a
         friction's change with the pressure;
       kinds 1 and 2, the slip along and across: V = Dv Ct_i^T or Dv Cc_i^T, U the matching
         column of [Ct_i^T Cc_i^T] H_i, H_i = d tau / d s = w p (c I + c' |s| e e^T).
-    U_c = cu[c, 0] C_i^T + cu[c, 1] Ct_i^T + cu[c, 2] Cc_i^T. The size of a term is its
-    entry of V^T P^-1 U in absolute value (from GQ = C Dq P^-1 Cs^T and GV = [Ct; Cc] Dv P^-1
-    Cs^T, Cs = [C; Ct; Cc]); as in active_rows, the largest are taken until the others sum
-    to at most WOODBURY_REST. Fills cu, size and active; returns the count taken."""
+    U_c = cu[c, 0] C_i^T + cu[c, 1] Ct_i^T + cu[c, 2] Cc_i^T. The size of a term bounds its
+    diagonal entry of V^T P^-1 U: the sum of its parts' entries in absolute value (from
+    GQ = C Dq P^-1 Cs^T and GV = [Ct; Cc] Dv P^-1 Cs^T, Cs = [C; Ct; Cc]); as in active_rows,
+    the largest are taken until the others sum to at most WOODBURY_REST. Fills cu, size and
+    active; returns the count taken."""
     m = gap.shape[0]
     stride = 3 if fr[0].shape[0] > 0 else 1
     total = 0.0
