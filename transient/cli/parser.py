@@ -54,6 +54,11 @@ def build_parser():
                    "the sampled rule, regularized at the case's eps, comma separated (default "
                    "3e-2,1e-2,3e-3; empty for none)")
     p.add_argument("--t-end", type=float, help="simulated time [s] (default: the case's)")
+    p.add_argument("--reference", default="fine", help="fine (the fine rule, default) or case "
+                   "(the case's own rule at half its step: a saturated squeal, where the fine "
+                   "rule's implicit steps cost too much)")
+    p.add_argument("--cycle-from", type=float, help="with friction: the start of the limit "
+                   "cycle's window [s] (default: the run's last quarter)")
     p.add_argument("--out", metavar="DIR", help="directory of bench.csv, bench.json and "
                    "bench.png (default: <case name>_bench in the working directory)")
     p.add_argument("--json", action="store_true", help="print the rows as JSON")

@@ -13,6 +13,17 @@ time, then compared with the reference:
 - pressure_max_error: the largest contact pressure reached (over points and time), relative;
 - frequency_error: the largest relative error of the first 30 contact-linearized frequencies
   (the structure with the contact tangents at the preload).
+With friction (a squeal: growth, then a limit cycle), each run's oscillation is summed up too
+(`oscillation`) and compared: growth_rate [1/s], fitted on the envelope of the largest sensor
+motion over its linear phase; in the limit cycle's window (the run's last quarter, or from
+cycle_from), cycle_rms, the norm of the sensors' RMS about their means, and cycle_frequency, the
+dominant frequency of the largest sensor; their relative errors growth_error, cycle_rms_error
+(on the vector of RMS) and cycle_frequency_error.
+
+The reference is the fine rule, or (reference "case") the case's own rule at half its step,
+followed by the case's own rule at its step: the fine rule's points are too many for a
+saturated squeal's implicit steps (each point's three terms exact), and the limit cycle is then
+measured against dt / 2 (its own error) and the sweep against that.
 """
 import csv
 import json
@@ -27,24 +38,35 @@ import scipy.sparse.linalg as spla
 from ..case.checks import check_transient
 from ..case.loading import load
 from ..errors import CaseError
+from ..plots.signals import EDGE, SATURATION, envelope, growth_rate
 from ..stages import choose_dt, prepare, simulate
 
 N_FREQUENCIES = 30
 COLUMNS = ("rule", "label", "regularized", "eps", "points", "kept", "reduced_dofs", "steps",
            "setup_s", "kernel_s", "total_s", "steps_per_s", "error_rms", "preload_error",
-           "pressure_max_error", "frequency_error", "status")
+           "pressure_max_error", "frequency_error", "growth_rate", "growth_error", "cycle_rms",
+           "cycle_rms_error", "cycle_frequency", "cycle_frequency_error", "status")
+CYCLE = 0.25             # the limit cycle's window by default: the run's last quarter
+ROWS = 2000              # rows a run keeps at most...
+PER_PERIOD = 10          # ...unless a period of the highest frequency would get fewer samples
+REFERENCES = ("fine", "case")
 
 
 @dataclass(frozen=True)
 class Variant:
-    rule: str          # "fine" for the reference row, as the bench's JSON names it
+    rule: str          # "fine" for the reference row, as the bench's JSON names it; "case"
+    #                    the case's own rule
     label: str         # what the plot and the table call it
     settings: dict     # contact.<pair>.<key> -> value
+    dt_factor: float = 1.0   # of the case's step
 
 
-def variants(eps_list, points_list, tolerances=()):
+def variants(eps_list, points_list, tolerances=(), reference="fine"):
     """The sweep: reference first. points 0 means the rank of the kept shapes."""
-    rows = [Variant("fine", "fine", {"rule": "fine", "regularized": False})]
+    if reference == "case":
+        rows = [Variant("case", "case dt/2", {}, 0.5), Variant("case", "case", {})]
+    else:
+        rows = [Variant("fine", "fine", {"rule": "fine", "regularized": False})]
     rows += [Variant("fine", f"fine reg eps={e:g}",
                      {"rule": "fine", "regularized": True, "eps": e}) for e in eps_list]
     rows += [Variant("centre", "centre", {"rule": "centre", "regularized": False}),
@@ -85,10 +107,10 @@ def run_variant(path, overrides, pair, variant, t_end):
     check_transient(case)
     t0 = time.perf_counter()
     setup = prepare(case)
-    dt = choose_dt(case, setup)
+    dt = choose_dt(case, setup) * variant.dt_factor
     setup_s = time.perf_counter() - t0
     steps = int(round(case.solver.t_end / dt))
-    series, status, kernel = simulate(case, setup, dt, steps, max(1, steps // 2000))
+    series, status, kernel = simulate(case, setup, dt, steps, every(case, dt, steps))
     meta = setup.meta["pairs"][pair]
     row = {"rule": variant.rule, "label": variant.label, "regularized": meta["regularized"],
            "eps": meta["eps"] if meta["regularized"] else None, "points": meta["points"],
@@ -96,6 +118,15 @@ def run_variant(path, overrides, pair, variant, t_end):
            "steps": steps, "setup_s": setup_s, "kernel_s": kernel, "total_s": setup_s + kernel,
            "steps_per_s": steps / max(kernel, 1e-12), "status": status}
     return row, series, _frequencies(setup.system)
+
+
+def every(case, dt, steps):
+    """Steps between kept rows: ROWS over the run, but PER_PERIOD samples at least in a period
+    of the case's highest frequency (its modes' fmax): a squeal's limit cycle is read from its
+    spectrum, which a coarse sampling would alias."""
+    fmax = case.solver.modes.fmax
+    cap = int(1.0 / (PER_PERIOD * fmax * dt)) if fmax > 0 else steps
+    return max(1, min(steps // ROWS, cap))
 
 
 def _frequencies(system):
@@ -134,16 +165,94 @@ def compare(ref, series, ref_freq, freq):
             "frequency_error": float(f_err)}
 
 
+def oscillation(series, cycle_from=None):
+    """growth_rate, cycle_rms, the vector of the sensors' RMS in the window (for the error) and
+    cycle_frequency of a run (see the module's docstring); NaN where there is no motion."""
+    t = series["time"]
+    names = [k for k in series if k.startswith("sensors/")]
+    nan = {"growth_rate": np.nan, "cycle_rms": np.nan, "cycle_frequency": np.nan}
+    if not names or len(t) < 16:
+        return nan, np.full(len(names), np.nan)
+    dt = t[1] - t[0]
+    motion = np.stack([series[k] - series[k][0] for k in names])
+    start = cycle_from if cycle_from is not None else t[0] + (1 - CYCLE) * (t[-1] - t[0])
+    window = t >= start
+    if window.sum() < 16:
+        raise CaseError("command line", "--cycle-from", f"{start:g} s leaves "
+                        f"{window.sum()} rows of the run (to {t[-1]:g} s) for its limit cycle")
+    part = motion[:, window]
+    rms = np.sqrt(np.mean((part - part.mean(axis=1, keepdims=True)) ** 2, axis=1))
+    if not np.all(np.isfinite(motion)) or rms.max() == 0:
+        return nan, np.full(len(names), np.nan)
+    main = int(np.argmax(rms))
+    env = envelope(motion[main], dt)
+    try:
+        sigma = growth_rate(t, env, growth_window(t, env))[0]
+    except ValueError:
+        sigma = np.nan
+    # the spectrum's peak, zero-padded eightfold, refined on the parabola through its log
+    # neighbours (a Hann window's peak is near-Gaussian: a small fraction of a bin)
+    x = part[main] - part[main].mean()
+    pad = np.concatenate([x * np.hanning(len(x)), np.zeros(7 * len(x))])
+    a = np.abs(np.fft.rfft(pad))
+    k = 1 + int(np.argmax(a[1:-1]))
+    la, lb, lc = np.log(a[k - 1:k + 2] + 1e-300)
+    shift = 0.5 * (la - lc) / (la - 2 * lb + lc) if la - 2 * lb + lc < 0 else 0.0
+    frequency = (k + shift) / (len(pad) * dt)
+    return ({"growth_rate": float(sigma), "cycle_rms": float(np.linalg.norm(rms)),
+             "cycle_frequency": float(frequency)}, rms)
+
+
+def growth_window(t, env):
+    """The growth's window: the later half of its linear phase, where the fastest mode has
+    outgrown the others the tap excited too. The phase ends where growth_rate's automatic
+    window does (SATURATION of the peak) if the run saturates, else at the run's end (less
+    its Hilbert edge); a run that decays has no growth and gets growth_rate's own window."""
+    n = len(t)
+    lo, hi = int(EDGE * n), n - int(EDGE * n)
+    if hi - lo < 8:
+        return None
+    inner = env[lo:hi]
+    peak = int(np.argmax(inner))
+    if inner[0] >= SATURATION * inner[peak] and peak < 0.5 * (hi - lo):
+        return None                                   # a decay
+    end = hi - 1 if peak >= len(inner) - 1 - (hi - lo) // 50 else \
+        lo + int(np.argmax(inner >= SATURATION * inner[peak]))
+    return 0.5 * (t[lo] + t[end]), t[end]
+
+
+def compare_oscillation(ref, ref_rms, run, rms):
+    """The relative errors of a run's oscillation against the reference's."""
+    def rel(a, b):
+        return float(abs(a - b) / abs(b)) if np.isfinite(a) and np.isfinite(b) and b else np.nan
+    return {"growth_error": rel(run["growth_rate"], ref["growth_rate"]),
+            "cycle_rms_error": float(np.linalg.norm(rms - ref_rms) / np.linalg.norm(ref_rms))
+            if np.all(np.isfinite(rms)) and np.linalg.norm(ref_rms) > 0 else np.nan,
+            "cycle_frequency_error": rel(run["cycle_frequency"], ref["cycle_frequency"])}
+
+
 def bench(path, overrides=(), pair=None, eps_list=(1e-6, 1e-4, 1e-3, 1e-2),
-          points_list=None, t_end=None, progress=None, tolerances=(3e-2, 1e-2, 3e-3)):
-    """Rows of the sweep, reference first (rule 'fine'). points_list None: the greedy rule's
-    own count r (m = 0), then r / 2, r / 4, 4 r and 10 r (those below the fine rule's);
-    tolerances: the sampled rule's."""
+          points_list=None, t_end=None, progress=None, tolerances=(3e-2, 1e-2, 3e-3),
+          reference="fine", cycle_from=None):
+    """Rows of the sweep, reference first (rule 'fine', or with reference 'case' the case's rule
+    at dt / 2). points_list None: the greedy rule's own count r (m = 0), then r / 2, r / 4, 4 r
+    and 10 r (those below the fine rule's); tolerances: the sampled rule's. With friction, the
+    oscillation's numbers too, the limit cycle from cycle_from [s] (default: the last
+    quarter)."""
+    if reference not in REFERENCES:
+        raise CaseError("command line", "--reference", f"expected one of "
+                        f"{', '.join(REFERENCES)}, got '{reference}'")
     case = load(path, list(overrides))
     pair = _pair_name(case, pair)
+    end = t_end or case.solver.t_end
+    if cycle_from is not None and not 0 <= cycle_from < end:
+        raise CaseError("command line", "--cycle-from", f"expected a time in [0, {end:g}) s "
+                        f"(the run's), got {cycle_from:g}")
+    squeal = any(c.friction is not None and c.friction.active for c in case.contact.values())
     rows = []
-    ref = ref_freq = None
-    todo = variants(eps_list, points_list if points_list is not None else [0], tolerances)
+    ref = ref_freq = ref_osc = None
+    todo = variants(eps_list, points_list if points_list is not None else [0], tolerances,
+                    reference)
     k = 0
     while k < len(todo):
         variant = todo[k]
@@ -162,13 +271,20 @@ def bench(path, overrides=(), pair=None, eps_list=(1e-6, 1e-4, 1e-3, 1e-2),
         if ref is None:
             ref, ref_freq = series, freq
         row.update(compare(ref, series, ref_freq, freq))
+        if squeal:
+            osc, rms = oscillation(series, cycle_from)
+            if ref_osc is None:
+                ref_osc = osc, rms
+            row.update(osc)
+            row.update(compare_oscillation(*ref_osc, osc, rms))
         rows.append(row)
         if progress:
             progress(row)
         if points_list is None and variant.settings.get("points") == 0:
             # below the rank the error grows fast; above it the rule converges to the fine
             # one (pad_disc: 1% needs about 10 r), so the sweep reaches both ways
-            r, fine = row["points"], rows[0]["points"]
+            r = row["points"]
+            fine = rows[0]["points"] if reference == "fine" else np.inf
             todo += [Variant("greedy", f"greedy m={m}", dict(variant.settings, points=m))
                      for m in (r // 2, r // 4, 4 * r, 10 * r) if 0 < m < fine]
     return rows
@@ -187,7 +303,7 @@ def target(rows):
     """The best regularized coarse row within 1% error_rms of the reference at a third or less
     of its kernel time (None if there is none)."""
     ref = rows[0]
-    good = [r for r in rows[1:] if r["regularized"] and r["rule"] != "fine"
+    good = [r for r in rows[1:] if r["regularized"] and r["rule"] not in ("fine", "case")
             and r["error_rms"] is not None and r["error_rms"] <= 0.01 and r["kernel_s"] <= ref["kernel_s"] / 3]
     return min(good, key=lambda r: r["kernel_s"]) if good else None
 
@@ -213,7 +329,7 @@ def _plot(rows, path):
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
     floor = 1e-6     # the reference's own error is 0: drawn at the floor
-    markers = {"fine": "o", "centre": "s", "greedy": "^", "sampled": "D"}
+    markers = {"fine": "o", "centre": "s", "greedy": "^", "sampled": "D", "case": "*"}
     for ax, key, name in zip(axes, ("kernel_s", "total_s"), ("kernel", "setup + kernel")):
         for row in rows:
             if row["error_rms"] is None or not np.isfinite(row["error_rms"]):
@@ -231,9 +347,10 @@ def _plot(rows, path):
         ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.set_xlabel(f"{name} time [s]")
         ax.grid(True, which="both", alpha=0.3)
-    axes[0].set_ylabel("error_rms of the sensor histories vs the fine rule")
+    ref = rows[0]["label"]
+    axes[0].set_ylabel(f"error_rms of the sensor histories vs {ref}")
     fig.suptitle("Contact rules: error against run time (open markers: not regularized; "
-                 "the fine rule drawn at 1e-6)", fontsize=10)
+                 f"{ref} drawn at 1e-6)", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
@@ -247,9 +364,20 @@ def format_row(row):
             f"{row['setup_s']:8.2f} {row['kernel_s']:8.2f} {row['total_s']:8.2f} "
             f"{row['steps_per_s']:9.0f} {row['error_rms']:9.2e} {row['preload_error']:9.2e} "
             f"{row['pressure_max_error']:9.2e} "
-            f"{row['frequency_error']:9.2e} {row['status']}")
+            f"{row['frequency_error']:9.2e} {_oscillation_cells(row)}{row['status']}")
+
+
+def _oscillation_cells(row):
+    """The squeal's columns of a row, when it has them."""
+    if row.get("growth_rate") is None:
+        return ""
+    return (f"{row['growth_rate']:9.1f} {row['growth_error']:9.2e} {row['cycle_rms']:9.2e} "
+            f"{row['cycle_rms_error']:9.2e} {row['cycle_frequency']:9.1f} "
+            f"{row['cycle_frequency_error']:9.2e} ")
 
 
 HEADER = (f"{'rule':<22} {'points':>6} {'kept':>5} {'setup s':>8} {'kernel s':>8} "
           f"{'total s':>8} {'steps/s':>9} {'error_rms':>9} {'preload':>9} {'p_max err':>9} "
           f"{'freq err':>9}")
+OSCILLATION_HEADER = (f" {'growth':>9} {'grow err':>9} {'cycle rms':>9} {'rms err':>9} "
+                      f"{'cycle Hz':>9} {'Hz err':>9}")
