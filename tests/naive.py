@@ -339,7 +339,8 @@ def _table_slope(tab_v, tab_mu, k, s):
 
 def coupled_terms(code, params, gap, press, w, kt0, fr, v, P, Dq, Dv, C):
     """The Jacobian terms U_c V_c^T of the implicit steps (kernels.woodbury.coupled_rows:
-    x moves q by Dq x and v by Dv x, J = diag(P) + sum U V^T), as dense (U, V) pairs with each
+    x moves q by Dq x and v by Dv x, J = P + sum U V^T, P a diagonal (n,) or a full
+    operator (n, n)), as dense (U, V) pairs with each
     term's size, the sum of |coefficient x V_c^T P^-1 column| over the columns C_i, Ct_i,
     Cc_i it combines; per point i the gap's term, then the slip's along and across."""
     _, kt, _ = pressure_potential(code, params, gap)
@@ -348,7 +349,9 @@ def coupled_terms(code, params, gap, press, w, kt0, fr, v, P, Dq, Dv, C):
     terms = []
 
     def cross(a, da, b):
-        return abs(float(a * da / P @ b))
+        if P.ndim == 1:
+            return abs(float(a * da / P @ b))
+        return abs(float(a * da @ np.linalg.solve(P, b)))
 
     for i in range(m):
         e = w[i] * (kt[i] - kt0[i])
@@ -415,12 +418,12 @@ class LineSearch:
 
 
 def coupled_newton(terms, P, R):
-    """J_A^-1 R, J_A = diag(P) + the terms of largest size, taken until the others sum to at
-    most WOODBURY_REST, solved densely."""
+    """J_A^-1 R, J_A = P (its diagonal, or in full) + the terms of largest size, taken until
+    the others sum to at most WOODBURY_REST, solved densely."""
     sizes = np.array([t[0] for t in terms])
     order = np.argsort(-sizes)
     rest = sizes.sum() - np.concatenate([[0.0], np.cumsum(sizes[order])])
-    J = np.diag(P)
+    J = np.diag(P) if P.ndim == 1 else P.copy()
     for c in order[:np.argmax(rest <= WOODBURY_REST)]:
         J += np.outer(terms[c][1], terms[c][2])
     return np.linalg.solve(J, R)
@@ -661,10 +664,10 @@ def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, 
     e_i = dt^2/4 w_i (k_t,i - k_t*,i), A as in active_rows with G_ii = (C S^-1 C^T)_ii).
     Converged when |R| <= tol |(f, |K| |q|, M a, 2/dt M v)|. The dissipation is the trapezoid
     of the damping power v . cdamp v; contact = (remainder, code, params, w, kt0) with
-    remainder(q) -> (force, gap, pressure, (phi, lin)). With friction (fr, a diagonal
-    operator S), the friction force at v joins the remainder and the Jacobian is that of
-    coupled_terms (x = a, P = diag(S), Dq = dt^2/4, Dv = dt/2); its work and the sliding's
-    input as friction_energy takes them."""
+    remainder(q) -> (force, gap, pressure, (phi, lin)). With friction (fr, dense rows), the
+    friction force at v joins the remainder and the Jacobian is that of coupled_terms (x = a,
+    P = S, Dq = dt^2/4, Dv = dt/2), after the fixed point a -= S^-1 R; its work and the
+    sliding's input as friction_energy takes them."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
     remainder, code, params, w, kt0 = contact
@@ -698,11 +701,11 @@ def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, 
                 converged = True
                 break
             if friction and not line.newton_started(np.dot(r, r)):
-                a -= r / np.diag(Sop)                     # the fixed point
+                a -= np.linalg.solve(Sop, r)              # the fixed point
             elif friction and line.shorter(np.dot(r, r)):
                 a[:] = line.point()
             elif friction:
-                P = np.diag(Sop)
+                P = Sop
                 terms = coupled_terms(code, params, gap, press, w, kt0, fr, v, P,
                                       np.full(len(q), h2), np.full(len(q), 0.5 * dt), C)
                 a[:] = line.newton(a, coupled_newton(terms, P, r), np.dot(r, r))
@@ -749,12 +752,13 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
 
 
 def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt0, code,
-                 params, patterns, sig, S, factor, Z, G, tol, max_iter, out_t, out_s, out_g,
-                 out_p, out_v, out_e):
+                 params, fr, patterns, sig, S, factor, Z, G, GV, tol, max_iter, out_t, out_s,
+                 out_g, out_p, out_v, out_e):
     """Newmark on the full model, K (K_lin), M, C and S CSR triplets, Rayleigh damping
-    alpha M + beta K. The iteration operator is formed and solved densely: factor, Z and G are
-    taken for the signature only."""
+    alpha M + beta K, friction's rows fr as CSR triplets. The iteration operator is formed and
+    solved densely: factor, Z, G and GV are taken for the signature only."""
     n, m = state.shape[1], len(g0)
+    fr = (csr(fr[0], n).toarray(), csr(fr[1], n).toarray()) + tuple(fr[2:])
     Kd, Md = csr(K, n).toarray(), csr(M, n).toarray()
     Cs, Sm = csr(C, n), csr(S, n)
     cdamp = alpha * Md + beta * Kd
@@ -766,4 +770,4 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
 
     return _newmark(state, acc, n_steps, every, dt, Md, Kd, cdamp, Cs.toarray(),
                     (remainder, code, params, w, kt0), patterns, sig, lambda q: Sm @ q, tol,
-                    max_iter, (out_t, out_s, out_g, out_p, out_v, out_e))
+                    max_iter, (out_t, out_s, out_g, out_p, out_v, out_e), fr)

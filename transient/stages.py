@@ -85,7 +85,8 @@ def _prepare(case, stages, model=None):
     contacts = stack(pairs, model.ndof)
     if solver.scheme == "implicit" and not solver.reduction.enabled:
         # Newmark on the full model keeps S^-1 C^T dense: refused now, not after the setup
-        schemes.check_woodbury(len(model.free), contacts.n_points, case.path)
+        schemes.check_woodbury(len(model.free), contacts.n_points, case.path,
+                               contacts.friction is not None)
     patterns = [model.load_patterns[name] for name in case.loads]
     constant = sum((p for p, load in zip(patterns, case.loads.values())
                     if load.signal["kind"] == "constant"), np.zeros(model.ndof))

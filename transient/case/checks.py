@@ -20,24 +20,11 @@ def check_transient(case):
     run by the commands that integrate in time, before their first stage."""
     _sampled(case)
     _solver(case)
-    explicit_friction = solver_takes_friction(case.solver)
-    for name, c in case.contact.items():
-        if c.friction.active and not explicit_friction:
-            _fail(case, f"contact.{name}.friction.mu", "friction is integrated by every "
-                  "scheme of the reduced model and by central differences on the full one, "
-                  "not yet by Newmark on the full model: set solver.reduction.enabled = true "
-                  "or solver.scheme = \"explicit\", or mu = 0 (and no table)")
     if case.solver.t_end <= 0.0:
         _fail(case, "solver.t_end", "expected > 0 for a transient: the time simulated after "
               "the preload")
     if case.solver.dt > 0.0:
         check_steps(case, case.solver.dt)
-
-
-def solver_takes_friction(solver):
-    """The schemes whose kernels integrate friction: every scheme of the reduced model, and
-    central differences on the full one."""
-    return solver.reduction.enabled or solver.scheme == "explicit"
 
 
 def _fail(case, key, message):

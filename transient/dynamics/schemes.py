@@ -120,12 +120,12 @@ def implicit(system, dt, newton, linear_solver="auto", blocks=None):
                                            blocks, *tail, *rows.arrays)
     else:
         t0 = time.perf_counter()
-        factors, Z, G, meta = _newmark_operator(system, dt, linear_solver)
+        factors, Z, G, GV, meta = _newmark_operator(system, dt, linear_solver)
         stages = {"iteration_operator": time.perf_counter() - t0}
         args = (csr_triplet(system.K), csr_triplet(system.M), system.alpha, system.beta,
-                csr_triplet(system.C),
-                *_contact(system), system.patterns, system.signals, csr_triplet(system.sensors),
-                factors, Z, G, newton.tolerance, newton.max_iter)
+                csr_triplet(system.C), *_contact(system), friction_arrays_sparse(system),
+                system.patterns, system.signals, csr_triplet(system.sensors),
+                factors, Z, G, GV, newton.tolerance, newton.max_iter)
 
         def advance(state, n_steps, every, rows, blocks):
             return newmark.newmark_full(state.array, state.acc, n_steps, every, dt, *args,
@@ -153,21 +153,25 @@ def coupled_operators(system, Dq, Dv, key):
             np.ascontiguousarray((np.vstack([system.Ct, system.Cc]) * Dv) @ Cs.T))
 
 
-def check_woodbury(n, m, path=""):
-    """Refuse Newmark on a full model of n free dofs whose m contact rows make S^-1 C^T too
-    large to keep dense."""
-    if 8.0 * n * m > MAX_WOODBURY_BYTES:
+def check_woodbury(n, m, path="", friction=False):
+    """Refuse Newmark on a full model of n free dofs whose m contact rows make S^-1 C^T (with
+    friction S^-1 [C; Ct; Cc]^T, three rows a point) too large to keep dense."""
+    rows = 3 * m if friction else m
+    if 8.0 * n * rows > MAX_WOODBURY_BYTES:
+        what = "[C; Ct; Cc]^T" if friction else "C^T"
         raise CaseError(path, "solver.scheme", f"the implicit scheme on the full model keeps "
-                        f"S^-1 C^T dense: {n} dofs x {m} contact points is "
-                        f"{8e-9 * n * m:.1f} GB; use a reduced model (solver.reduction)")
+                        f"S^-1 {what} dense: {n} dofs x {rows} contact rows is "
+                        f"{8e-9 * n * rows:.1f} GB; use a reduced model (solver.reduction)")
 
 
 def _newmark_operator(system, dt, linear_solver):
     """Newmark's iteration operator S = (1 + dt/2 alpha) M + (dt/2 beta + dt^2/4) K_lin on the
     full model, factorized for the kernel, with Z = S^-1 C^T and G = C Z for the exact contact
-    corrections."""
+    corrections (GV empty); with friction Z = S^-1 [C; Ct; Cc]^T, G = dt^2/4 C Z and
+    GV = dt/2 [Ct; Cc] Z (kernels.newmark.newmark_full)."""
     n = system.K.shape[0]
-    check_woodbury(n, system.n_points)
+    friction = system.contacts.friction is not None
+    check_woodbury(n, system.n_points, friction=friction)
     h = 0.5 * dt
     op = ((1.0 + h * system.alpha) * system.M + (h * system.beta + h * h) * system.K).tocsr()
     try:
@@ -175,14 +179,18 @@ def _newmark_operator(system, dt, linear_solver):
     except FactorizationError as exc:
         raise CaseError("", "solver", f"Newmark's iteration operator: {exc}") from None
     factors = (p_in, L, U, p_out)
-    Z = newmark.factor_columns(factors, csr_triplet(system.C), n)
+    rows = sp.vstack([system.C, system.Ct, system.Cc]).tocsr() if friction else system.C
+    Z = newmark.factor_columns(factors, csr_triplet(rows), n)
     # the kernel solves with explicit triangular factors, which PARDISO does not hand out
     how = ("cholmod (explicit L L^T for the kernel)" if backend == "cholmod" else
            "superlu (explicit L U for the kernel: PARDISO keeps its factors, CHOLMOD needs "
            "scikit-sparse)")
     meta = {"iteration_operator": {"backend": backend, "why": how,
                                    "factor_nonzeros": int(len(L[2]) + len(U[2]))}}
-    return factors, Z, np.ascontiguousarray(system.C @ Z), meta
+    if not friction:
+        return factors, Z, np.ascontiguousarray(system.C @ Z), np.zeros((0, 0)), meta
+    return (factors, Z, np.ascontiguousarray(0.25 * dt * dt * (system.C @ Z)),
+            np.ascontiguousarray(0.5 * dt * (sp.vstack([system.Ct, system.Cc]) @ Z)), meta)
 
 
 def exponential(system, dt, corrections, corrector, newton, blocks=None):

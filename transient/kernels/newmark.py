@@ -17,11 +17,11 @@ import numpy as np
 from ..jit import njit_fast
 from .sparse import csr_abs_matvec, csr_matvec, factor_solve
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
-from .friction import friction_energy, friction_pass
+from .friction import friction_energy, friction_pass, friction_pass_sparse, friction_work
 from .stepping import (_energies, _external, _finite, _store, _store_sparse, modal_step_energies,
                        remainder_dense, remainder_sparse)
 from .woodbury import (FIXED_POINT_RATE, active_rows, backtrack, coupled_rows, coupled_solve,
-                       woodbury)
+                       coupled_solve_sparse, woodbury)
 
 
 @njit_fast
@@ -162,12 +162,15 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
 
 @njit_fast
 def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt0, code,
-                 params, patterns, sig, S, factor, Z, G, tol, max_iter, out_t, out_s, out_g,
-                 out_p, out_v, out_e):
+                 params, fr, patterns, sig, S, factor, Z, G, GV, tol, max_iter, out_t, out_s,
+                 out_g, out_p, out_v, out_e):
     """Newmark on the free dofs of the full model: K (K_lin) and M CSR triplets, Rayleigh
     damping alpha M + beta K, C and S CSR triplets; factor = (p_in, L, U, p_out) of
-    S = (1 + dt/2 alpha) M + (dt/2 beta + h2) K_lin (linsolve.triangular_factors), Z (n, m),
-    G (m, m). Otherwise as newmark_reduced."""
+    S = (1 + dt/2 alpha) M + (dt/2 beta + h2) K_lin (linsolve.triangular_factors). Without
+    friction (fr as friction_pass_sparse's, Ct of no row; GV empty) Z = S^-1 C^T (n, m) and
+    G = C Z (m, m) for active_rows; with it Z = S^-1 Cs^T (n, 3m), G = h2 C Z and GV =
+    dt/2 [Ct; Cc] Z for coupled_rows, the fixed point first and then Newton with backtracking,
+    as newmark_reduced. Otherwise as newmark_reduced."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
     n = q.shape[0]
@@ -175,7 +178,7 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
     Kp, Ki, Kd = K
     Mp, Mi, Md = M
     Cp, Ci, Cd = C
-    p_in, L, U, p_out = factor
+    perm_in, L, U, perm_out = factor
     rem = np.empty(n)
     fext = np.empty(n)
     fext_old = np.empty(n)
@@ -200,7 +203,16 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
     for i in range(m):
         Gd[i] = G[i, i]
     energy = np.empty(5)
-    no_slip = np.empty((2, 0))          # no friction on the full model yet
+    friction = fr[0][0].shape[0] > 1
+    ff = np.empty(n)
+    slip = np.empty((2, fr[0][0].shape[0] - 1))
+    ff0 = state[6] if friction else np.empty(n)
+    dq = np.empty(n)
+    a_prev = np.empty(n)
+    delta = np.empty(n)
+    cu = np.empty((3 * m if friction else 0, 3))
+    size = np.empty(3 * m if friction else 0)
+    coupled = np.empty(3 * m if friction else 0, np.int64)
     h2 = 0.25 * dt * dt
     v_scale = 2.0 / dt if dt > 0.0 else 0.0     # momentum over a step: a force scale in flight
     _external(t, patterns, sig, svals, fext_old)
@@ -220,9 +232,14 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
         t += dt
         _external(t, patterns, sig, svals, fext)
         converged = False
+        p_in = 0.0
+        rprev = np.inf
+        frac = 1.0
+        newton = not friction
         for it in range(max_iter):
             _corrected(qp, vp, a, dt, q, v)
             phi, lin = remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, rem, gap, press)
+            p_in = friction_pass_sparse(fr, w, press, v, ff, rem, slip)
             csr_matvec(Kp, Ki, Kd, q, ku)
             csr_abs_matvec(Kp, Ki, Kd, q, kabs)
             csr_matvec(Mp, Mi, Md, a, ma)
@@ -241,18 +258,44 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
             if rnorm <= tol * tol * max(fnorm, 1e-300):
                 converged = True
                 break
-            factor_solve(p_in, L, U, p_out, r, y, work_n)
-            n_active = active_rows(code, params, gap, w, kt0, h2, Gd, e, active)
+            factor_solve(perm_in, L, U, perm_out, r, y, work_n)
+            if not friction:
+                n_active = active_rows(code, params, gap, w, kt0, h2, Gd, e, active)
+                if n_active:
+                    for j in range(n_active):
+                        i = active[j]
+                        s = 0.0
+                        for k in range(Cp[i], Cp[i + 1]):
+                            s += Cd[k] * y[Ci[k]]
+                        u[j] = s
+                    woodbury(y, u, active, n_active, e, Z, G)
+                for k in range(n):
+                    a[k] -= y[k]
+                continue
+            if not newton:
+                if rnorm <= FIXED_POINT_RATE * FIXED_POINT_RATE * rprev:
+                    for k in range(n):
+                        a[k] -= y[k]
+                    rprev = rnorm
+                    continue
+                newton = True
+                rprev = np.inf
+            if backtrack(rnorm, rprev, frac):
+                frac *= 0.5
+                for k in range(n):
+                    a[k] = a_prev[k] - frac * delta[k]
+                continue
+            n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, G, GV, cu, size,
+                                    coupled)
             if n_active:
-                for j in range(n_active):
-                    i = active[j]
-                    s = 0.0
-                    for k in range(Cp[i], Cp[i + 1]):
-                        s += Cd[k] * y[Ci[k]]
-                    u[j] = s
-                woodbury(y, u, active, n_active, e, Z, G)
+                coupled_solve_sparse(y, h2, 0.5 * dt, C, fr[0], fr[1], Z, G, GV, cu, coupled,
+                                     n_active)
             for k in range(n):
+                a_prev[k] = a[k]
+                delta[k] = y[k]
                 a[k] -= y[k]
+            rprev = rnorm
+            frac = 1.0
         _corrected(qp, vp, a, dt, q, v)
         csr_matvec(Kp, Ki, Kd, q, ku)
         csr_matvec(Mp, Mi, Md, v, mv)
@@ -263,7 +306,8 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
         strain = -lin
         power = 0.0
         for k in range(n):
-            work += 0.5 * (fext_old[k] + fext[k]) * (q[k] - q_old[k])
+            dq[k] = q[k] - q_old[k]
+            work += 0.5 * (fext_old[k] + fext[k]) * dq[k]
             kin += 0.5 * v[k] * mv[k]
             strain += 0.5 * q[k] * ku[k]
             power += alpha * v[k] * mv[k]
@@ -272,6 +316,8 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
             fext_old[k] = fext[k]
         _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
         power_old = power
+        if friction:
+            friction_work(acc, energy, ff0, ff, dq, p_in, dt)
         if not (_finite(q) and _finite(v) and _finite(energy)):
             state[3, 0] = t
             return NOT_FINITE, step
@@ -279,7 +325,7 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
             state[3, 0] = t
             return NO_CONVERGENCE, step
         if step % every == 0:
-            _store_sparse(row, t, q, S, gap, press, no_slip, energy, out_t, out_s, out_g,
+            _store_sparse(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g,
                           out_p, out_v, out_e)
             row += 1
     state[3, 0] = t

@@ -94,7 +94,7 @@ def coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu, size, a
     the largest are taken until the others sum to at most WOODBURY_REST. Fills cu, size and
     active; returns the count taken."""
     m = gap.shape[0]
-    stride = 3 if fr[0].shape[0] > 0 else 1
+    stride = 3 if GV.shape[0] > 0 else 1         # GV is empty without friction
     total = 0.0
     for i in range(m):
         _, kt = pressure(code[i], params[i], gap[i])
@@ -204,6 +204,51 @@ def coupled_solve(y, Dq, Dv, P, C, Ct, Cc, GQ, GV, cu, active, n_active, uz):
                 uz[j] += c1 * rt[j] + c2 * rc[j]
     for j in range(n):
         y[j] -= uz[j] / P[j]
+
+
+@njit_fast
+def _row_dot(R, i, y):
+    """Row i of a CSR triplet R times y."""
+    Rp, Ri, Rd = R
+    s = 0.0
+    for j in range(Rp[i], Rp[i + 1]):
+        s += Rd[j] * y[Ri[j]]
+    return s
+
+
+@njit_fast
+def coupled_solve_sparse(y, h2, hv, C, Ct, Cc, Z, GQ, GV, cu, active, n_active):
+    """coupled_solve on the full model (x = a, Dq = h2, Dv = hv scalars, C, Ct, Cc CSR
+    triplets), P^-1 Cs^T given as Z = S^-1 [C; Ct; Cc]^T (n, 3m): y = S^-1 R on entry,
+    J^-1 R on exit."""
+    m = C[0].shape[0] - 1
+    k = n_active
+    H = np.empty((k, k))
+    rhs = np.empty(k)
+    for a in range(k):
+        ca = active[a]
+        ia = ca // 3
+        kind = ca % 3
+        if kind == 0:
+            rhs[a] = h2 * _row_dot(C, ia, y)
+            X = GQ[ia]
+        else:
+            rhs[a] = hv * _row_dot(Ct if kind == 1 else Cc, ia, y)
+            X = _term_row(GV, kind, ia, m)
+        for b in range(k):
+            cb = active[b]
+            ib = cb // 3
+            H[a, b] = cu[cb, 0] * X[ib] + cu[cb, 1] * X[m + ib] + cu[cb, 2] * X[2 * m + ib]
+        H[a, a] += 1.0
+    z = np.linalg.solve(H, rhs)
+    for b in range(k):
+        cb = active[b]
+        ib = cb // 3
+        c0 = z[b] * cu[cb, 0]
+        c1 = z[b] * cu[cb, 1]
+        c2 = z[b] * cu[cb, 2]
+        for j in range(y.shape[0]):
+            y[j] -= c0 * Z[j, ib] + c1 * Z[j, m + ib] + c2 * Z[j, 2 * m + ib]
 
 
 @njit_fast
