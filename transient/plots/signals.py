@@ -115,6 +115,23 @@ def envelope(x, dt, band=None):
     return np.abs(hilbert(x, 2 * n)[:n])
 
 
+def running_amplitude(x, samples):
+    """The amplitude of a series' oscillation, sqrt(2) times its RMS about its running mean,
+    both over a sliding window of `samples` (a period of the oscillation), centred, the ends
+    held. Local, unlike the Hilbert envelope: a squeal growing over decades keeps its early,
+    small amplitude, where the FFT's leakage from the large saturated end would swamp it.
+    Returns (n,) in the unit of x."""
+    x = np.asarray(x, dtype=float)
+    n, w = len(x), max(1, min(int(samples), len(x)))
+
+    def mean(y):
+        c = np.concatenate([[0.0], np.cumsum(y)])
+        m = (c[w:] - c[:-w]) / w
+        lead = (n - len(m)) // 2
+        return np.concatenate([np.full(lead, m[0]), m, np.full(n - len(m) - lead, m[-1])])
+    return np.sqrt(2.0 * np.maximum(mean((x - mean(x)) ** 2), 0.0))
+
+
 EDGE = 0.05          # fraction of the rows at each end left out of a fit (Hilbert's end effects)
 SATURATION = 0.1     # a growth is fitted until the envelope first reaches this fraction of its
 #                      peak: a limit cycle's saturation has slowed the growth by 1% there

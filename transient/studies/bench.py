@@ -14,8 +14,8 @@ time, then compared with the reference:
 - frequency_error: the largest relative error of the first 30 contact-linearized frequencies
   (the structure with the contact tangents at the preload).
 With friction (a squeal: growth, then a limit cycle), each run's oscillation is summed up too
-(`oscillation`) and compared: growth_rate [1/s], fitted on the envelope of the largest sensor
-motion over its linear phase; in the limit cycle's window (the run's last quarter, or from
+(`oscillation`) and compared: growth_rate [1/s], fitted on the amplitude (over a period) of the
+largest sensor motion over the later half of its linear phase; in the limit cycle's window (the run's last quarter, or from
 cycle_from), cycle_rms, the norm of the sensors' RMS about their means, and cycle_frequency, the
 dominant frequency of the largest sensor; their relative errors growth_error, cycle_rms_error
 (on the vector of RMS) and cycle_frequency_error.
@@ -38,7 +38,7 @@ import scipy.sparse.linalg as spla
 from ..case.checks import check_transient
 from ..case.loading import load
 from ..errors import CaseError
-from ..plots.signals import EDGE, SATURATION, envelope, growth_rate
+from ..plots.signals import EDGE, SATURATION, growth_rate, running_amplitude
 from ..stages import choose_dt, prepare, simulate
 
 N_FREQUENCIES = 30
@@ -50,6 +50,7 @@ CYCLE = 0.25             # the limit cycle's window by default: the run's last q
 ROWS = 2000              # rows a run keeps at most...
 PER_PERIOD = 10          # ...unless a period of the highest frequency would get fewer samples
 REFERENCES = ("fine", "case")
+GROWING = 1.5            # a run still grows at its end if its last tenth grew by this factor
 
 
 @dataclass(frozen=True)
@@ -185,11 +186,6 @@ def oscillation(series, cycle_from=None):
     if not np.all(np.isfinite(motion)) or rms.max() == 0:
         return nan, np.full(len(names), np.nan)
     main = int(np.argmax(rms))
-    env = envelope(motion[main], dt)
-    try:
-        sigma = growth_rate(t, env, growth_window(t, env))[0]
-    except ValueError:
-        sigma = np.nan
     # the spectrum's peak, zero-padded eightfold, refined on the parabola through its log
     # neighbours (a Hann window's peak is near-Gaussian: a small fraction of a bin)
     x = part[main] - part[main].mean()
@@ -199,6 +195,14 @@ def oscillation(series, cycle_from=None):
     la, lb, lc = np.log(a[k - 1:k + 2] + 1e-300)
     shift = 0.5 * (la - lc) / (la - 2 * lb + lc) if la - 2 * lb + lc < 0 else 0.0
     frequency = (k + shift) / (len(pad) * dt)
+    # the growth on the amplitude over a period of that frequency: pad_disc_squeal grows
+    # 1973 1/s so (CEA 1991), 360 on the Hilbert envelope, which the saturated end's leakage
+    # and the limit cycle's offset swamp
+    env = running_amplitude(motion[main], round(1.0 / (frequency * dt)))
+    try:
+        sigma = growth_rate(t, env, growth_window(t, env))[0]
+    except ValueError:
+        sigma = np.nan
     return ({"growth_rate": float(sigma), "cycle_rms": float(np.linalg.norm(rms)),
              "cycle_frequency": float(frequency)}, rms)
 
@@ -206,8 +210,9 @@ def oscillation(series, cycle_from=None):
 def growth_window(t, env):
     """The growth's window: the later half of its linear phase, where the fastest mode has
     outgrown the others the tap excited too. The phase ends where growth_rate's automatic
-    window does (SATURATION of the peak) if the run saturates, else at the run's end (less
-    its Hilbert edge); a run that decays has no growth and gets growth_rate's own window."""
+    window does, at SATURATION of the peak, or at the run's end (less its edge) when the
+    amplitude still grew by GROWING over the last tenth (a limit cycle's wanders by less);
+    a run that decays has no growth and gets growth_rate's own window."""
     n = len(t)
     lo, hi = int(EDGE * n), n - int(EDGE * n)
     if hi - lo < 8:
@@ -216,8 +221,11 @@ def growth_window(t, env):
     peak = int(np.argmax(inner))
     if inner[0] >= SATURATION * inner[peak] and peak < 0.5 * (hi - lo):
         return None                                   # a decay
-    end = hi - 1 if peak >= len(inner) - 1 - (hi - lo) // 50 else \
-        lo + int(np.argmax(inner >= SATURATION * inner[peak]))
+    tenth = (hi - lo) // 10
+    if inner[-1] > GROWING * inner[-1 - tenth]:
+        end = hi - 1
+    else:
+        end = lo + int(np.argmax(inner >= SATURATION * inner[peak]))
     return 0.5 * (t[lo] + t[end]), t[end]
 
 
