@@ -62,6 +62,28 @@ def build_parser():
     p.add_argument("--out", metavar="DIR", help="directory of bench.csv, bench.json and "
                    "bench.png (default: <case name>_bench in the working directory)")
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
+    p = sub.add_parser("sweep", help="a campaign: the case run (or analysed) for every "
+                       "combination of parameter values, on Dask")
+    _case_args(p)
+    p.add_argument("--param", action="append", default=[], metavar="KEY=VALUES",
+                   help="a case key and its values: a TOML list ([0.2,0.4]) or "
+                   "start:stop:count (repeatable)")
+    mode = p.add_mutually_exclusive_group()
+    mode.add_argument("--grid", dest="mode", action="store_const", const="grid",
+                      help="every combination of the values (the default)")
+    mode.add_argument("--zip", dest="mode", action="store_const", const="zip",
+                      help="the lists paired, value by value")
+    p.add_argument("--kind", default="run", help="run (a history per variant, the default) "
+                   "or cea (its complex modes)")
+    p.add_argument("--workers", type=int, default=2, help="worker processes of the embedded "
+                   "Dask cluster, one thread each (default 2)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler "
+                   "(tcp://HOST:PORT) instead of the embedded cluster")
+    p.add_argument("--out", metavar="DIR", required=True, help="directory of the variants' "
+                   "outputs, sweep.csv and sweep.json")
+    p.add_argument("--resume", action="store_true", help="skip the variants whose outputs "
+                   "in DIR are complete")
+    p.add_argument("--json", action="store_true", help="print the rows as JSON")
     _plot_parser(sub)
     p = sub.add_parser("export", help="a history as time series for ParaView: the contact "
                        "points of each pair (gap, pressure) and, if output.field was stored, "

@@ -178,6 +178,8 @@ def oscillation(series, cycle_from=None):
     motion = np.stack([series[k] - series[k][0] for k in names])
     start = cycle_from if cycle_from is not None else t[0] + (1 - CYCLE) * (t[-1] - t[0])
     window = t >= start
+    if window.sum() < 16 and cycle_from is None:
+        return nan, np.full(len(names), np.nan)          # too short a run to sum up
     if window.sum() < 16:
         raise CaseError("command line", "--cycle-from", f"{start:g} s leaves "
                         f"{window.sum()} rows of the run (to {t[-1]:g} s) for its limit cycle")

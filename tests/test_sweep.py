@@ -1,0 +1,134 @@
+"""`transient sweep`: the variants of its parameters, a campaign on a LocalCluster of two
+workers equal bit for bit to the same variants run one by one, resume, and refusals."""
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from transient.cli import main
+from transient.errors import CaseError
+from transient.sweep.campaign import THREAD_ENV
+from transient.sweep.variants import make_variants, parse_parameter
+
+ROOT = Path(__file__).resolve().parent.parent
+PAD = ROOT / "cases" / "pad_disc.toml"
+SMALL = ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1,1]",
+         'parts.disc.mesh.element="hex8"', 'parts.pad.mesh.element="hex8"',
+         "motion.disc.omega=50.0", "solver.damping.residual=0.0", "solver.t_end=3e-3",
+         "output.every=2", "loads.tap.vector=[0.0,0.0,-0.02]"]
+
+
+def test_parameters_and_their_variants():
+    mu = parse_parameter("contact.pad_disc.friction.mu=0:0.6:4")
+    assert mu.values == pytest.approx((0.0, 0.2, 0.4, 0.6))
+    p = parse_parameter("loads.piston.value=[1e6, 2e6]")
+    assert p.values == (1e6, 2e6)
+    assert parse_parameter('solver.scheme="implicit"').values == ("implicit",)
+    grid = make_variants([mu, p])
+    assert len(grid) == 8 and grid[1].values == {mu.key: 0.0, p.key: 2e6}
+    assert grid[5].name == "v005" and grid[5].overrides() == [
+        "contact.pad_disc.friction.mu=0.4", "loads.piston.value=2000000.0"]
+    paired = make_variants([parse_parameter("a.b=[1, 2]"), parse_parameter("c.d=[3, 4]")],
+                           "zip")
+    assert [v.values for v in paired] == [{"a.b": 1, "c.d": 3}, {"a.b": 2, "c.d": 4}]
+
+
+@pytest.mark.parametrize("params, mode, key", [
+    (["mu"], "grid", "--param"), (["a.b=1:2:x"], "grid", "--param a.b"),
+    (["a.b=[1,"], "grid", "--param a.b"), (["a.b=[]"], "grid", "--param a.b"),
+    (["a.b=[1,2]", "c.d=[1]"], "zip", "--zip"), (["a.b=1", "a.b=2"], "grid", "--param"),
+    ([], "grid", "--param")])
+def test_bad_parameters_name_their_key(params, mode, key):
+    with pytest.raises(CaseError) as exc:
+        make_variants([parse_parameter(t) for t in params], mode)
+    assert exc.value.key == key
+
+
+def test_a_bad_variant_is_refused_before_anything_runs(tmp_path, capsys):
+    args = ["sweep", str(PAD), "--param", "contact.pad_disc.friction.mu=[0.2,-0.4]",
+            "--out", str(tmp_path / "out")]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "variant v001 (contact.pad_disc.friction.mu=-0.4)" in err
+    assert "contact.pad_disc.friction.mu" in err and not (tmp_path / "out").exists()
+
+
+def _arrays(path):
+    out = {}
+    with h5py.File(path, "r") as f:
+        def visit(name, obj):
+            if isinstance(obj, h5py.Dataset) and not name.startswith(("checkpoint", "timings")):
+                out[name] = obj[()]
+        f.visititems(visit)
+    return out
+
+
+@pytest.fixture(scope="module")
+def campaign(tmp_path_factory):
+    """A mu sweep of three variants on two workers, and the same variants by `transient
+    run`, each in a process with the workers' one-thread environment."""
+    out = tmp_path_factory.mktemp("sweep")
+    args = ["sweep", str(PAD), "--param", "contact.pad_disc.friction.mu=[0.0,0.2,0.4]",
+            "--workers", "2", "--out", str(out / "campaign"), "--json"]
+    for o in SMALL:
+        args += ["--set", o]
+    env = {**os.environ, **THREAD_ENV, "PYTHONPATH": str(ROOT)}
+    done = subprocess.run([sys.executable, "-m", "transient"] + args, capture_output=True,
+                          text=True, env=env, timeout=600)
+    assert done.returncode == 0, done.stderr
+    rows = json.loads(done.stdout.splitlines()[-1])["rows"]
+    alone = []
+    for mu in (0.0, 0.2, 0.4):
+        path = out / f"alone_{mu}.h5"
+        run = [sys.executable, "-m", "transient", "run", str(PAD), "-o", str(path), "--quiet",
+               "--set", f"contact.pad_disc.friction.mu={mu}"]
+        for o in SMALL:
+            run += ["--set", o]
+        assert subprocess.run(run, env=env, timeout=600).returncode == 0
+        alone.append(path)
+    return out / "campaign", rows, alone
+
+
+def test_a_sweep_equals_its_variants_run_one_by_one(campaign):
+    out, rows, alone = campaign
+    assert [r["variant"] for r in rows] == ["v000", "v001", "v002"]
+    assert [r["contact.pad_disc.friction.mu"] for r in rows] == [0.0, 0.2, 0.4]
+    for row, path in zip(rows, alone):
+        assert row["status"] == "complete" and row["seconds"] > 0
+        got, ref = _arrays(out / row["output"]), _arrays(path)
+        assert set(got) == set(ref) and len(got) > 5
+        for name in ref:
+            assert np.array_equal(got[name], ref[name]), name
+    # the summaries: growth at mu = 0.4 only (the small pad and disc flutter above 0.3; a
+    # fit over 3 ms of beating modes, the sign its point)
+    assert rows[2]["growth_rate"] > 500
+    assert rows[0]["growth_rate"] is None or rows[0]["growth_rate"] < 100
+    assert 11e3 < rows[2]["cycle_frequency"] < 12.5e3
+    saved = json.loads((out / "sweep.json").read_text())["rows"]
+    assert saved == rows
+    lines = (out / "sweep.csv").read_text().splitlines()
+    assert len(lines) == 4 and lines[0].startswith("variant,status,seconds,")
+
+
+def test_resume_runs_only_the_missing_variants(campaign, capsys):
+    out, rows, _ = campaign
+    (out / "v001.h5").unlink()
+    with h5py.File(out / "v002.h5", "a") as f:
+        f.attrs["status"] = "aborted: interrupted"           # as a sweep cut off leaves it
+    before = (out / "v000.h5").stat().st_mtime_ns
+    args = ["sweep", str(PAD), "--param", "contact.pad_disc.friction.mu=[0.0,0.2,0.4]",
+            "--workers", "1", "--out", str(out), "--resume", "--json"]
+    for o in SMALL:
+        args += ["--set", o]
+    assert main(args) == 0
+    again = json.loads(capsys.readouterr().out.splitlines()[-1])["rows"]
+    assert [r["resumed"] for r in again] == [True, False, False]
+    assert (out / "v000.h5").stat().st_mtime_ns == before
+    assert all(r["status"] == "complete" for r in again)
+    # rows read back from a complete history, and rerun ones, say the same
+    assert [r["growth_rate"] for r in again] == [r["growth_rate"] for r in rows]

@@ -1,0 +1,147 @@
+"""A campaign on Dask: the variants' tasks on a cluster, their rows in sweep.csv and sweep.json.
+
+The embedded cluster is a dask.distributed LocalCluster of N worker processes of one thread
+each, with BLAS, MKL, OpenMP and Numba at one thread set in their environment before they
+start (so that a worker is the one-thread `transient run` it stands for, and N of them share
+the cores); the Numba cache is shared, its first compile serialized by transient.jit's lock.
+--scheduler ADDRESS runs the same tasks on an existing cluster instead (dask-jobqueue on
+SLURM: the README). A task whose worker dies is rerun on another by the scheduler; a variant
+that is refused or aborts is a row with its reason. --resume skips the variants whose outputs
+are complete (their rows are read back from them) and reruns the others.
+"""
+import csv
+import json
+import time
+from pathlib import Path
+
+from ..errors import CaseError
+from .tasks import KINDS, complete, output_path, run_variant, summary
+from .variants import WHERE
+
+THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+              "NUMBA_NUM_THREADS": "1"}
+FIRST = ("variant", "status", "seconds")
+
+
+def check_variants(case_path, overrides, variants, kind):
+    """Load every variant (and, for runs, check what the transient refuses) before anything
+    runs: the first bad one is a CaseError naming it."""
+    from ..case.checks import check_transient
+    from ..case.loading import load
+    for v in variants:
+        try:
+            case = load(case_path, list(overrides) + v.overrides())
+            if kind == "run":
+                check_transient(case)
+        except CaseError as exc:
+            raise CaseError(exc.path, exc.key, f"variant {v.name} ({v.label()}): "
+                            f"{exc.message}") from None
+
+
+def client_for(scheduler, workers):
+    """(client, cluster or None): a Client on the scheduler, or on a new LocalCluster."""
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise CaseError(WHERE, "sweep", "needs dask.distributed: pip install "
+                        "\"transient[sweep]\" (or dask[distributed])") from None
+    if scheduler:
+        try:
+            return Client(scheduler, timeout="30s"), None
+        except (OSError, TimeoutError) as exc:
+            raise CaseError(WHERE, "--scheduler", f"cannot reach {scheduler}: {exc}") from None
+    if workers < 1:
+        raise CaseError(WHERE, "--workers", f"expected at least 1, got {workers}")
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                           env=THREAD_ENV, dashboard_address=":0", silence_logs=50)
+    return Client(cluster), cluster
+
+
+def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, scheduler=None,
+          resume=False, progress=None, announce=print):
+    """Run the variants; returns their rows (in variant order) and writes the campaign's
+    files in out. progress(done, total, failed) after each variant; announce(text) says
+    where the dashboard is."""
+    if kind not in KINDS:
+        raise CaseError(WHERE, "--kind", f"expected one of {', '.join(KINDS)}, got '{kind}'")
+    check_variants(case_path, overrides, variants, kind)
+    out = Path(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CaseError(out, "--out", f"cannot write: {exc.strerror or exc}") from None
+    rows = {}
+    todo = []
+    for v in variants:
+        path = output_path(out, v.name, kind)
+        if resume and complete(path):
+            rows[v.name] = _restored(path, kind)
+        else:
+            path.unlink(missing_ok=True)        # a partial output from an interrupted sweep
+            todo.append(v)
+    if progress:
+        progress(len(rows), len(variants), 0)
+    if todo:
+        client, cluster = client_for(scheduler, workers)
+        try:
+            if announce:
+                announce(f"dask dashboard: {client.dashboard_link}")
+            _gather(client, case_path, overrides, todo, out, kind, rows, len(variants),
+                    progress)
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    table = [_row(v, rows[v.name], kind, out) for v in variants]
+    write(table, out)
+    return table
+
+
+def _gather(client, case_path, overrides, todo, out, kind, rows, total, progress):
+    from dask.distributed import as_completed
+    futures = {client.submit(run_variant, str(case_path), list(overrides) + v.overrides(),
+                             str(output_path(out, v.name, kind)), kind, key=f"{v.name}-"
+                             f"{time.time_ns()}", pure=False): v for v in todo}
+    failed = 0
+    for future in as_completed(futures):
+        v = futures[future]
+        try:
+            row = future.result()
+        except Exception as exc:       # the task itself failed (a worker lost too often)
+            row = {"status": f"failed: {type(exc).__name__}: {exc}"}
+        rows[v.name] = row
+        failed += row["status"] != "complete"
+        if progress:
+            progress(len(rows), total, failed)
+
+
+def _restored(path, kind):
+    if kind == "cea":
+        modes = json.loads(Path(path).read_text())["modes"]
+        unstable = [m for m in modes if m["unstable"]]
+        strongest = max(unstable, key=lambda m: m["real"]) if unstable else None
+        return {"status": "complete", "resumed": True, "unstable": len(unstable),
+                "max_real": strongest["real"] if strongest else None,
+                "frequency_hz": strongest["frequency_hz"] if strongest else None,
+                "unstable_modes": [[m["frequency_hz"], m["real"]] for m in unstable]}
+    return {"status": "complete", "resumed": True, **summary(path)}
+
+
+def _row(v, row, kind, out):
+    return {"variant": v.name, **v.values, **{k: row.get(k) for k in row if k != "resumed"},
+            "resumed": bool(row.get("resumed")), "output": output_path(out, v.name, kind).name}
+
+
+def write(table, out):
+    """sweep.json (every row) and sweep.csv (its scalar columns)."""
+    out = Path(out)
+    (out / "sweep.json").write_text(json.dumps({"rows": table}, indent=1))
+    columns = list(FIRST)
+    for row in table:
+        columns += [k for k, x in row.items() if k not in columns and not isinstance(x, list)]
+    with open(out / "sweep.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=columns, extrasaction="ignore")
+        w.writeheader()
+        for row in table:
+            w.writerow({k: row.get(k) for k in columns})
+    return [out / "sweep.csv", out / "sweep.json"]

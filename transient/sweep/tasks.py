@@ -1,0 +1,85 @@
+"""What a worker does with one variant: load it, run or analyse it, sum it up in a row.
+
+Kinds: 'run' integrates the variant to its own history (the ordinary file `transient run`
+writes, readable by `transient info`), then sums up its oscillation from the sensors (the
+growth rate, the limit cycle's RMS and dominant frequency: studies.bench.oscillation);
+'cea' computes its complex modes, written as JSON next to the histories, and sums up the
+unstable ones. A variant refused, or a run that aborts, is a row with its reason: the
+campaign goes on.
+"""
+import json
+import time
+from pathlib import Path
+
+from ..errors import CaseError
+
+KINDS = ("run", "cea")
+
+
+def complete(path):
+    """Whether a variant's output at path is complete (resume skips it)."""
+    path = Path(path)
+    if path.suffix == ".json":
+        try:
+            return json.loads(path.read_text()).get("status") == "complete"
+        except (OSError, ValueError):
+            return False
+    try:
+        import h5py
+        with h5py.File(path, "r") as f:
+            return f.attrs.get("status") == "complete"
+    except (OSError, ValueError):
+        return False
+
+
+def output_path(out, name, kind):
+    return Path(out) / (f"{name}.json" if kind == "cea" else f"{name}.h5")
+
+
+def run_variant(case_path, overrides, out, kind):
+    """The row of one variant: status, seconds and the summary numbers of its kind."""
+    t0 = time.perf_counter()
+    try:
+        from ..case.loading import load
+        case = load(case_path, overrides)
+        row = _cea(case, out) if kind == "cea" else _run(case, out)
+    except CaseError as exc:
+        row = {"status": f"refused: {exc.key}: {exc.message}"}
+    row["seconds"] = time.perf_counter() - t0
+    return row
+
+
+def _run(case, out):
+    from ..run import run
+    result = run(case, Path(out), progress=False, key="--out")
+    return {"status": result.status, "steps": result.steps, "dt": result.dt,
+            "kernel_s": result.timings.get("kernel"), "energy_drift": result.energy_drift,
+            **summary(out)}
+
+
+def summary(path):
+    """The oscillation's numbers of a stored history (None where it has no sensor)."""
+    import h5py
+    from ..studies.bench import oscillation
+    with h5py.File(path, "r") as f:
+        series = {"time": f["time"][()]}
+        if "sensors" in f:
+            series.update({f"sensors/{k}": f["sensors"][k][()] for k in f["sensors"]})
+    if not any(k.startswith("sensors/") for k in series):
+        return {"growth_rate": None, "cycle_rms": None, "cycle_frequency": None}
+    numbers, _ = oscillation(series)
+    return {k: (None if v != v else v) for k, v in numbers.items()}        # NaN: None
+
+
+def _cea(case, out):
+    from ..cea.stage import analyse
+    result = analyse(case)
+    modes = result.modes.table()
+    unstable = [m for m in modes if m["unstable"]]
+    strongest = max(unstable, key=lambda m: m["real"]) if unstable else None
+    Path(out).write_text(json.dumps({"status": "complete", "modes": modes,
+                                     "ndof": result.ndof, "reduced": result.reduced}))
+    return {"status": "complete", "unstable": len(unstable),
+            "max_real": strongest["real"] if strongest else None,
+            "frequency_hz": strongest["frequency_hz"] if strongest else None,
+            "unstable_modes": [[m["frequency_hz"], m["real"]] for m in unstable]}
