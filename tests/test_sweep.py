@@ -132,3 +132,55 @@ def test_resume_runs_only_the_missing_variants(campaign, capsys):
     assert all(r["status"] == "complete" for r in again)
     # rows read back from a complete history, and rerun ones, say the same
     assert [r["growth_rate"] for r in again] == [r["growth_rate"] for r in rows]
+
+
+def _holders(path, own):
+    """The processes (other than own) with the file at path open."""
+    pids = []
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit() or int(proc.name) == own:
+            continue
+        try:
+            if any(os.readlink(fd) == str(path) for fd in (proc / "fd").iterdir()):
+                pids.append(int(proc.name))
+        except OSError:
+            continue
+    return pids
+
+
+def test_a_worker_killed_mid_variant_leaves_the_sweep_complete(campaign, tmp_path):
+    """The worker running a variant is killed (SIGKILL) once it holds that variant's history
+    open: the scheduler reruns the task on the other worker, and every history comes out
+    complete and equal to the variant run alone."""
+    import signal
+    import time
+    _, _, alone = campaign
+    out = tmp_path / "campaign"
+    args = [sys.executable, "-m", "transient", "sweep", str(PAD), "--param",
+            "contact.pad_disc.friction.mu=[0.0,0.2,0.4]", "--workers", "2", "--out", str(out),
+            "--json"]
+    for o in SMALL:
+        args += ["--set", o]
+    env = {**os.environ, **THREAD_ENV, "PYTHONPATH": str(ROOT)}
+    child = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             env=env)
+    killed = None
+    deadline = time.monotonic() + 300
+    # the event: a worker process holding a variant's history (its run under way)
+    while killed is None and child.poll() is None and time.monotonic() < deadline:
+        for path in sorted(out.glob("v*.h5")) if out.exists() else []:
+            holders = _holders(path.resolve(), child.pid)
+            if holders:
+                os.kill(holders[0], signal.SIGKILL)
+                killed = path.name
+                break
+        time.sleep(0.01)
+    stdout, stderr = child.communicate(timeout=600)
+    assert killed is not None, "no variant was seen running"
+    assert child.returncode == 0, stderr
+    rows = json.loads(stdout.splitlines()[-1])["rows"]
+    assert all(r["status"] == "complete" for r in rows)
+    for row, path in zip(rows, alone):
+        got, ref = _arrays(out / row["output"]), _arrays(path)
+        for name in ref:
+            assert np.array_equal(got[name], ref[name]), (killed, row["variant"], name)

@@ -51,6 +51,9 @@ def run_variant(case_path, overrides, out, kind):
 
 def _run(case, out):
     from ..run import run
+    # the campaign runs this variant afresh: what a worker killed mid-run left is dropped (a
+    # history cut off in a write may not open as one)
+    Path(out).unlink(missing_ok=True)
     result = run(case, Path(out), progress=False, key="--out")
     return {"status": result.status, "steps": result.steps, "dt": result.dt,
             "kernel_s": result.timings.get("kernel"), "energy_drift": result.energy_drift,
