@@ -9,7 +9,7 @@ from ..jit import njit_fast
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
 from .friction import friction_energy, friction_pass
 from .stepping import _external, _finite, _store, modal_step_energies, remainder_dense
-from .woodbury import FIXED_POINT_RATE, backtrack, coupled_rows, coupled_solve
+from .woodbury import coupled_rows, coupled_solve, friction_move, newton_update
 
 IMPLICIT_TOL = 1e-3     # the implicit corrector's residual, relative to the step's motion
 
@@ -229,36 +229,20 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
                     not friction or rv <= tol2 * max(change, 1e-20 * size_v, 1e-300)):
                 converged = True
                 break
-            if not newton:
-                if rf <= FIXED_POINT_RATE * FIXED_POINT_RATE * rprev:
-                    for k in range(n):
-                        x[k] -= y[k]
-                        q[k] = qb[k] + Dq[k] * x[k]
-                        v[k] = vb[k] + Dv[k] * x[k]
-                    rprev = rf
-                    continue
-                newton = True
-                rprev = np.inf
-            if friction and backtrack(rf, rprev, alpha):
-                alpha *= 0.5
-                for k in range(n):
-                    x[k] = x_prev[k] - alpha * delta[k]
-                    q[k] = qb[k] + Dq[k] * x[k]
-                    v[k] = vb[k] + Dv[k] * x[k]
-                continue
-            n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu,
-                                    size, active)
-            if n_active > 0:
-                coupled_solve(y, Dq, Dv, ones, C, fr[0], fr[1], GQ, GV, cu, active, n_active,
-                              uz)
+            solve, newton, rprev, alpha = friction_move(x, x_prev, delta, y, rf, rprev,
+                                                        newton, alpha, friction)
+            if solve:
+                n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu,
+                                        size, active)
+                if n_active > 0:
+                    coupled_solve(y, Dq, Dv, ones, C, fr[0], fr[1], GQ, GV, cu, active,
+                                  n_active, uz)
+                newton_update(x, x_prev, delta, y)
+                rprev = rf
+                alpha = 1.0
             for k in range(n):
-                x_prev[k] = x[k]
-                delta[k] = y[k]
-                x[k] -= y[k]
                 q[k] = qb[k] + Dq[k] * x[k]
                 v[k] = vb[k] + Dv[k] * x[k]
-            rprev = rf
-            alpha = 1.0
         # v from the forces found; q stays the state they were evaluated at (within the
         # tolerance of the propagated one), so a chunk restarting from it finds the same forces
         _propagate(coef, q0, v0, f0, f1, qb, v)

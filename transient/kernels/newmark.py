@@ -20,8 +20,8 @@ from .codes import NO_CONVERGENCE, NOT_FINITE, OK
 from .friction import friction_energy, friction_pass, friction_pass_sparse, friction_work
 from .stepping import (_energies, _external, _finite, _store, _store_sparse, modal_step_energies,
                        remainder_dense, remainder_sparse)
-from .woodbury import (FIXED_POINT_RATE, active_rows, backtrack, coupled_rows, coupled_solve,
-                       coupled_solve_sparse, woodbury)
+from .woodbury import (active_rows, coupled_rows, coupled_solve, coupled_solve_sparse,
+                       friction_move, newton_update, woodbury)
 
 
 @njit_fast
@@ -116,27 +116,15 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
             if rnorm <= tol * tol * max(fnorm, 1e-300):
                 converged = True
                 break
-            if not newton:
-                if rnorm <= FIXED_POINT_RATE * FIXED_POINT_RATE * rprev:
-                    for k in range(n):
-                        a[k] -= y[k]
-                    rprev = rnorm
-                    continue
-                newton = True
-                rprev = np.inf
-            if friction and backtrack(rnorm, rprev, alpha):
-                alpha *= 0.5
-                for k in range(n):
-                    a[k] = a_prev[k] - alpha * delta[k]
+            solve, newton, rprev, alpha = friction_move(a, a_prev, delta, y, rnorm, rprev,
+                                                        newton, alpha, friction)
+            if not solve:
                 continue
             n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu,
                                     size, active)
             if n_active:
                 coupled_solve(y, Dq, Dv, op, C, fr[0], fr[1], GQ, GV, cu, active, n_active, uz)
-            for k in range(n):
-                a_prev[k] = a[k]
-                delta[k] = y[k]
-                a[k] -= y[k]
+            newton_update(a, a_prev, delta, y)
             rprev = rnorm
             alpha = 1.0
         _corrected(qp, vp, a, dt, q, v)
@@ -272,28 +260,16 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
                 for k in range(n):
                     a[k] -= y[k]
                 continue
-            if not newton:
-                if rnorm <= FIXED_POINT_RATE * FIXED_POINT_RATE * rprev:
-                    for k in range(n):
-                        a[k] -= y[k]
-                    rprev = rnorm
-                    continue
-                newton = True
-                rprev = np.inf
-            if backtrack(rnorm, rprev, frac):
-                frac *= 0.5
-                for k in range(n):
-                    a[k] = a_prev[k] - frac * delta[k]
+            solve, newton, rprev, frac = friction_move(a, a_prev, delta, y, rnorm, rprev,
+                                                       newton, frac, True)
+            if not solve:
                 continue
             n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, G, GV, cu, size,
                                     coupled)
             if n_active:
                 coupled_solve_sparse(y, h2, 0.5 * dt, C, fr[0], fr[1], Z, G, GV, cu, coupled,
                                      n_active)
-            for k in range(n):
-                a_prev[k] = a[k]
-                delta[k] = y[k]
-                a[k] -= y[k]
+            newton_update(a, a_prev, delta, y)
             rprev = rnorm
             frac = 1.0
         _corrected(qp, vp, a, dt, q, v)

@@ -252,6 +252,37 @@ def coupled_solve_sparse(y, h2, hv, C, Ct, Cc, Z, GQ, GV, cu, active, n_active):
 
 
 @njit_fast
+def friction_move(x, x_prev, delta, y, rnorm2, rprev2, newton, frac, friction):
+    """The implicit steps' iteration before a Newton solve, with friction: a fixed-point step
+    x -= y while the residual (rnorm2, squared) falls by FIXED_POINT_RATE, then Newton, whose
+    last step (x_prev - delta) is halved while backtrack says so. Returns (solve, newton,
+    rprev2, frac): solve False when x was moved here and the iteration goes on; without
+    friction always Newton, never halved."""
+    if not newton:
+        if rnorm2 <= FIXED_POINT_RATE * FIXED_POINT_RATE * rprev2:
+            for k in range(x.shape[0]):
+                x[k] -= y[k]
+            return False, False, rnorm2, frac
+        newton = True
+        rprev2 = np.inf
+    if friction and backtrack(rnorm2, rprev2, frac):
+        frac *= 0.5
+        for k in range(x.shape[0]):
+            x[k] = x_prev[k] - frac * delta[k]
+        return False, newton, rprev2, frac
+    return True, newton, rprev2, frac
+
+
+@njit_fast
+def newton_update(x, x_prev, delta, y):
+    """The full Newton step x -= y, kept (x_prev, delta) for friction_move's halving."""
+    for k in range(x.shape[0]):
+        x_prev[k] = x[k]
+        delta[k] = y[k]
+        x[k] -= y[k]
+
+
+@njit_fast
 def backtrack(rnorm2, rprev2, alpha):
     """Whether to halve the last Newton step (of fraction alpha) again: its squared residual
     rnorm2 did not fall by ARMIJO alpha from rprev2, the step's start, and alpha is above
