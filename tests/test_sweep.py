@@ -184,3 +184,35 @@ def test_a_worker_killed_mid_variant_leaves_the_sweep_complete(campaign, tmp_pat
         got, ref = _arrays(out / row["output"]), _arrays(path)
         for name in ref:
             assert np.array_equal(got[name], ref[name]), (killed, row["variant"], name)
+
+
+def test_the_run_sweeps_pictures(campaign, capsys):
+    out, _, _ = campaign
+    assert main(["plot", "sweep", str(out)]) == 0
+    picture = Path(capsys.readouterr().out.split()[-1])
+    assert picture == out / "sweep_run.png" and picture.stat().st_size > 10_000
+    assert main(["plot", "sweep", str(out), "--x", "solver.dt"]) == 2
+    assert "--x" in capsys.readouterr().err
+
+
+def test_a_cea_sweep_and_its_stability_map(tmp_path, capsys):
+    """mu 0 and 0.4 on the small pad and disc: no unstable mode, then its flutter pair's
+    growing member (11-12.5 kHz); the map of every mode against mu."""
+    out = tmp_path / "cea"
+    args = ["sweep", str(PAD), "--param", "contact.pad_disc.friction.mu=[0.0,0.4]", "--kind",
+            "cea", "--workers", "1", "--out", str(out), "--json"]
+    for o in SMALL:
+        args += ["--set", o]
+    assert main(args) == 0
+    rows = json.loads(capsys.readouterr().out.splitlines()[-1])["rows"]
+    assert [r["unstable"] for r in rows][0] == 0 and rows[1]["unstable"] >= 1
+    assert 11e3 < rows[1]["frequency_hz"] < 12.5e3 and rows[1]["max_real"] > 500
+    modes = json.loads((out / "v001.json").read_text())["modes"]
+    assert len(modes) > 10 and sum(m["unstable"] for m in modes) == rows[1]["unstable"]
+    assert main(["plot", "sweep", str(out), "-o", str(tmp_path / "map.png")]) == 0
+    assert (tmp_path / "map.png").stat().st_size > 10_000
+
+
+def test_plot_sweep_needs_a_sweep(tmp_path, capsys):
+    assert main(["plot", "sweep", str(tmp_path)]) == 2
+    assert "sweep.json" in capsys.readouterr().err

@@ -168,6 +168,13 @@ def _plot_parser(sub):
     p.add_argument("--pair", metavar="NAME", help="contact pair (default: the first stored)")
     p.add_argument("--time", type=float, metavar="T", help="time [s] of the map (default: the "
                    "last row)")
+    p = kinds.add_parser("sweep", help="a sweep's pictures: the stability map of a cea sweep "
+                         "(frequency against a parameter, coloured by the real part), a run "
+                         "sweep's growth, limit-cycle RMS and frequency against a parameter")
+    p.add_argument("directory", help="the DIR of transient sweep --out")
+    p.add_argument("--x", metavar="KEY", help="the parameter on the horizontal axis (default: "
+                   "the first; the others split the variants into groups)")
+    p.add_argument("-o", "--png", help="PNG file (default: DIR/sweep_<kind>.png)")
     p = kinds.add_parser("pressure", help="contact pressure maps on Gamma, one panel per "
                          "history side by side with one colour scale (e.g. fine, centre and "
                          "regularized rules)")

@@ -14,7 +14,18 @@ def cmd_plot(args):
     return {"compat": _plot_compat, "history": _plot_history, "spectrum": _plot_spectrum,
             "frf": _plot_frf, "pressure": _plot_pressure, "cea": _plot_cea,
             "spectrogram": _plot_spectrogram, "envelope": _plot_envelope,
-            "friction": _plot_friction}[args.kind](args)
+            "friction": _plot_friction, "sweep": _plot_sweep}[args.kind](args)
+
+
+def _plot_sweep(args):
+    from ..plots.sweep import sweep_figures
+    try:
+        paths = sweep_figures(args.directory, args.x, args.png)
+    except OSError as exc:
+        raise CaseError(args.png or args.directory, "-o", f"cannot write the picture: "
+                        f"{exc}") from None
+    print("\n".join(str(p) for p in paths))
+    return 0
 
 
 def _plot_friction(args):

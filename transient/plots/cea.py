@@ -34,12 +34,18 @@ def stability_figure(analysis, path, title):
 def mu_map_figure(mus, analyses, path, title):
     """The classic squeal map: frequency against mu, coloured by the real part; unstable modes
     outlined."""
+    map_figure(mus, [a.modes for a in analyses], path, title, "friction coefficient mu")
+
+
+def map_figure(values, modes, path, title, xlabel):
+    """Frequency against a parameter's values, coloured by the real part, unstable modes
+    outlined: modes[i] (frequency_hz, real, unstable arrays) at values[i]."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.colors import TwoSlopeNorm
-    mu = np.concatenate([np.full(len(a.modes.real), m) for m, a in zip(mus, analyses)])
-    f, real, bad = (np.concatenate([getattr(a.modes, k) for a in analyses])
+    mu = np.concatenate([np.full(len(m.real), x) for x, m in zip(values, modes)])
+    f, real, bad = (np.concatenate([np.asarray(getattr(m, k)) for m in modes])
                     for k in ("frequency_hz", "real", "unstable"))
     # a flutter pair shares its frequency: the growing member is drawn last, on top
     order = np.argsort(real, kind="stable")
@@ -50,7 +56,7 @@ def mu_map_figure(mus, analyses, path, title):
                edgecolors=np.where(bad[order], "black", "none"), linewidths=0.8)
     sm = plt.cm.ScalarMappable(norm=norm, cmap=MAP_CMAP)
     fig.colorbar(sm, ax=ax, label="real part [1/s] (outlined: unstable)")
-    ax.set_xlabel("friction coefficient mu")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("frequency [kHz]")
     ax.set_title(title)
     ax.grid(alpha=0.3)

@@ -93,7 +93,7 @@ def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, schedul
             if cluster is not None:
                 cluster.close()
     table = [_row(v, rows[v.name], kind, out) for v in variants]
-    write(table, out)
+    write(table, out, list(variants[0].values), kind)
     return table
 
 
@@ -132,10 +132,12 @@ def _row(v, row, kind, out):
             "resumed": bool(row.get("resumed")), "output": output_path(out, v.name, kind).name}
 
 
-def write(table, out):
-    """sweep.json (every row) and sweep.csv (its scalar columns)."""
+def write(table, out, parameters, kind):
+    """sweep.json (every row, the parameters' keys and the kind) and sweep.csv (its scalar
+    columns)."""
     out = Path(out)
-    (out / "sweep.json").write_text(json.dumps({"rows": table}, indent=1))
+    (out / "sweep.json").write_text(json.dumps({"kind": kind, "parameters": parameters,
+                                                "rows": table}, indent=1))
     columns = list(FIRST)
     for row in table:
         columns += [k for k, x in row.items() if k not in columns and not isinstance(x, list)]
