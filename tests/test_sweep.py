@@ -109,8 +109,11 @@ def test_a_sweep_equals_its_variants_run_one_by_one(campaign):
     assert rows[2]["growth_rate"] > 500
     assert rows[0]["growth_rate"] is None or rows[0]["growth_rate"] < 100
     assert 11e3 < rows[2]["cycle_frequency"] < 12.5e3
-    saved = json.loads((out / "sweep.json").read_text())["rows"]
-    assert saved == rows
+    saved = json.loads((out / "sweep.json").read_text())
+    assert saved["rows"] == rows
+    # the model built once for the three (stages.stage_key), by its own task: no variant ran it
+    assert saved["shared"] == {"model": 1}
+    assert all("model" not in r["stages"] and "contact" in r["stages"] for r in rows)
     lines = (out / "sweep.csv").read_text().splitlines()
     assert len(lines) == 4 and lines[0].startswith("variant,status,seconds,")
 
@@ -216,3 +219,65 @@ def test_a_cea_sweep_and_its_stability_map(tmp_path, capsys):
 def test_plot_sweep_needs_a_sweep(tmp_path, capsys):
     assert main(["plot", "sweep", str(tmp_path)]) == 2
     assert "sweep.json" in capsys.readouterr().err
+
+
+class _Recorder:
+    """A case (or any of its specs) that records the dotted paths read through it."""
+
+    def __init__(self, obj, path, reads):
+        self._obj, self._path, self._reads = obj, path, reads
+
+    def _wrap(self, value, path):
+        import dataclasses
+        if dataclasses.is_dataclass(value) or isinstance(value, dict):
+            return _Recorder(value, path, self._reads)
+        self._reads.add(path)
+        return value
+
+    def __getattr__(self, name):
+        return self._wrap(getattr(self._obj, name), f"{self._path}.{name}".lstrip("."))
+
+    def __getitem__(self, key):
+        self._reads.add(self._path)
+        return self._wrap(self._obj[key], self._path)
+
+    def __iter__(self):
+        self._reads.add(self._path)
+        return iter(self._obj)
+
+    def __len__(self):
+        self._reads.add(self._path)
+        return len(self._obj)
+
+    def __contains__(self, key):
+        self._reads.add(self._path)
+        return key in self._obj
+
+    def items(self):
+        self._reads.add(self._path)
+        return [(k, self._wrap(v, self._path)) for k, v in self._obj.items()]
+
+    def values(self):
+        return [v for _, v in self.items()]
+
+    def keys(self):
+        self._reads.add(self._path)
+        return self._obj.keys()
+
+    def get(self, key, default=None):
+        return self[key] if key in self._obj else default
+
+
+@pytest.mark.parametrize("case, more", [(PAD, SMALL), (ROOT / "cases" / "drilled_cube.toml", [])])
+def test_the_model_reads_only_what_its_key_holds(case, more):
+    """build_model through a case that records its reads: every field it reads is under
+    stages.READS['model'] (or names the case's file), so variants equal there may share it."""
+    from transient.case.loading import load
+    from transient.model import build_model
+    from transient.stages import READS
+    reads = set()
+    build_model(_Recorder(load(case, more), "", reads))
+    allowed = READS["model"] + ("path", "directory")
+    outside = sorted(r for r in reads if not any(r == a or r.startswith(a + ".")
+                                                 for a in allowed))
+    assert not outside and any(r.startswith("parts") for r in reads)

@@ -29,6 +29,23 @@ from .solve.lowrank import ContactSolver
 from .solve.preload import PreloadError, solve_preload
 
 
+# The spec fields each shareable stage reads (tests/test_sweep.py records build_model's reads
+# and holds it to these): variants equal on them share the stage's result.
+READS = {"model": ("parts", "materials", "constraints", "loads", "sensors", "solver.quadrature",
+                   "limits")}
+
+
+def stage_key(case, stage):
+    """What a stage's result depends on: the case's directory (its mesh files) and the reprs
+    of the fields it reads (frozen specs: equal reprs, equal inputs)."""
+    def field(path):
+        x = case
+        for name in path.split("."):
+            x = getattr(x, name)
+        return repr(x)
+    return (str(case.directory),) + tuple(field(path) for path in READS[stage])
+
+
 @dataclass(frozen=True)
 class Setup:
     """What the stages of a case give the time integration."""

@@ -51,12 +51,15 @@ def fmax_of(case):
         solver.modes.fmax or solver.reduction.fmax)
 
 
-def analyse(case, check=None):
-    """Complex modes of a case at its steady sliding state (Analysis)."""
+def analyse(case, check=None, model=None):
+    """Complex modes of a case at its steady sliding state (Analysis); model: its Model when
+    built already (a campaign's variants share it)."""
     from ..model import build_model
     from ..stages import prepare
-    model, stages = None, {}
-    if not case.solver.reduction.enabled:
+    stages = {}
+    if model is not None and not case.solver.reduction.enabled:
+        _bounded(case, int((~model.fixed).sum()))
+    elif not case.solver.reduction.enabled:
         # the model first (seconds), its size bounded before the setup's stages
         t0 = time.perf_counter()
         model = build_model(case)

@@ -5,7 +5,9 @@ each, with BLAS, MKL, OpenMP and Numba at one thread set in their environment be
 start (so that a worker is the one-thread `transient run` it stands for, and N of them share
 the cores); the Numba cache is shared, its first compile serialized by transient.jit's lock.
 --scheduler ADDRESS runs the same tasks on an existing cluster instead (dask-jobqueue on
-SLURM: the README). A task whose worker dies is rerun on another by the scheduler; a variant
+SLURM: the README). Variants equal on the fields the model stage reads (stages.READS) share
+one Model, built once by a task of its own and sent to each worker once; the later stages are
+not shared yet. A task whose worker dies is rerun on another by the scheduler; a variant
 that is refused or aborts is a row with its reason. --resume skips the variants whose outputs
 are complete (their rows are read back from them) and reruns the others.
 """
@@ -15,7 +17,7 @@ import time
 from pathlib import Path
 
 from ..errors import CaseError
-from .tasks import KINDS, complete, output_path, run_variant, summary
+from .tasks import KINDS, build_shared_model, complete, output_path, run_variant, summary
 from .variants import WHERE
 
 THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
@@ -25,9 +27,12 @@ FIRST = ("variant", "status", "seconds")
 
 def check_variants(case_path, overrides, variants, kind):
     """Load every variant (and, for runs, check what the transient refuses) before anything
-    runs: the first bad one is a CaseError naming it."""
+    runs: the first bad one is a CaseError naming it. Returns each variant's model key
+    (stages.stage_key): variants with equal keys share one Model."""
     from ..case.checks import check_transient
     from ..case.loading import load
+    from ..stages import stage_key
+    keys = {}
     for v in variants:
         try:
             case = load(case_path, list(overrides) + v.overrides())
@@ -36,6 +41,8 @@ def check_variants(case_path, overrides, variants, kind):
         except CaseError as exc:
             raise CaseError(exc.path, exc.key, f"variant {v.name} ({v.label()}): "
                             f"{exc.message}") from None
+        keys[v.name] = stage_key(case, "model")
+    return keys
 
 
 def client_for(scheduler, workers):
@@ -64,7 +71,7 @@ def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, schedul
     where the dashboard is."""
     if kind not in KINDS:
         raise CaseError(WHERE, "--kind", f"expected one of {', '.join(KINDS)}, got '{kind}'")
-    check_variants(case_path, overrides, variants, kind)
+    keys = check_variants(case_path, overrides, variants, kind)
     out = Path(out)
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -81,27 +88,40 @@ def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, schedul
             todo.append(v)
     if progress:
         progress(len(rows), len(variants), 0)
+    shared = {"model": 0}
     if todo:
         client, cluster = client_for(scheduler, workers)
         try:
             if announce:
                 announce(f"dask dashboard: {client.dashboard_link}")
-            _gather(client, case_path, overrides, todo, out, kind, rows, len(variants),
-                    progress)
+            shared["model"] = _gather(client, case_path, overrides, todo, out, kind, rows,
+                                      len(variants), progress, keys)
         finally:
             client.close()
             if cluster is not None:
                 cluster.close()
     table = [_row(v, rows[v.name], kind, out) for v in variants]
-    write(table, out, list(variants[0].values), kind)
+    write(table, out, list(variants[0].values), kind, shared)
     return table
 
 
-def _gather(client, case_path, overrides, todo, out, kind, rows, total, progress):
+def _gather(client, case_path, overrides, todo, out, kind, rows, total, progress, keys):
+    """Submit the variants and collect their rows; returns the Models built to be shared.
+    The variants of one model key (two or more) take one Model, built by a task of its own:
+    its future is an argument of theirs, so it is built once and travels to each worker
+    once (the scheduler keeps it where it is needed)."""
     from dask.distributed import as_completed
+    groups = {}
+    for v in todo:
+        groups.setdefault(keys[v.name], []).append(v)
+    models = {key: client.submit(build_shared_model, str(case_path),
+                                 list(overrides) + members[0].overrides(),
+                                 key=f"model-{i}-{time.time_ns()}", pure=False)
+              for i, (key, members) in enumerate(groups.items()) if len(members) > 1}
     futures = {client.submit(run_variant, str(case_path), list(overrides) + v.overrides(),
-                             str(output_path(out, v.name, kind)), kind, key=f"{v.name}-"
-                             f"{time.time_ns()}", pure=False): v for v in todo}
+                             str(output_path(out, v.name, kind)), kind,
+                             models.get(keys[v.name]), key=f"{v.name}-{time.time_ns()}",
+                             pure=False): v for v in todo}
     failed = 0
     for future in as_completed(futures):
         v = futures[future]
@@ -113,6 +133,7 @@ def _gather(client, case_path, overrides, todo, out, kind, rows, total, progress
         failed += row["status"] != "complete"
         if progress:
             progress(len(rows), total, failed)
+    return len(models)
 
 
 def _restored(path, kind):
@@ -132,12 +153,13 @@ def _row(v, row, kind, out):
             "resumed": bool(row.get("resumed")), "output": output_path(out, v.name, kind).name}
 
 
-def write(table, out, parameters, kind):
-    """sweep.json (every row, the parameters' keys and the kind) and sweep.csv (its scalar
-    columns)."""
+def write(table, out, parameters, kind, shared=None):
+    """sweep.json (every row, the parameters' keys, the kind and the count of each stage's
+    results built to be shared) and sweep.csv (its scalar columns)."""
     out = Path(out)
     (out / "sweep.json").write_text(json.dumps({"kind": kind, "parameters": parameters,
-                                                "rows": table}, indent=1))
+                                                "shared": shared or {}, "rows": table},
+                                               indent=1))
     columns = list(FIRST)
     for row in table:
         columns += [k for k, x in row.items() if k not in columns and not isinstance(x, list)]

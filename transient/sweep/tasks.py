@@ -36,28 +36,36 @@ def output_path(out, name, kind):
     return Path(out) / (f"{name}.json" if kind == "cea" else f"{name}.h5")
 
 
-def run_variant(case_path, overrides, out, kind):
-    """The row of one variant: status, seconds and the summary numbers of its kind."""
+def run_variant(case_path, overrides, out, kind, model=None):
+    """The row of one variant: status, seconds, the stages it ran and the summary numbers of
+    its kind. model: the variant's Model, shared with others, or None to build it."""
     t0 = time.perf_counter()
     try:
         from ..case.loading import load
         case = load(case_path, overrides)
-        row = _cea(case, out) if kind == "cea" else _run(case, out)
+        row = _cea(case, out, model) if kind == "cea" else _run(case, out, model)
     except CaseError as exc:
         row = {"status": f"refused: {exc.key}: {exc.message}"}
     row["seconds"] = time.perf_counter() - t0
     return row
 
 
-def _run(case, out):
+def build_shared_model(case_path, overrides):
+    """The Model of a group of variants that share it (stages.stage_key), built once."""
+    from ..case.loading import load
+    from ..model import build_model
+    return build_model(load(case_path, overrides))
+
+
+def _run(case, out, model):
     from ..run import run
     # the campaign runs this variant afresh: what a worker killed mid-run left is dropped (a
     # history cut off in a write may not open as one)
     Path(out).unlink(missing_ok=True)
-    result = run(case, Path(out), progress=False, key="--out")
+    result = run(case, Path(out), progress=False, key="--out", model=model)
     return {"status": result.status, "steps": result.steps, "dt": result.dt,
             "kernel_s": result.timings.get("kernel"), "energy_drift": result.energy_drift,
-            **summary(out)}
+            "stages": sorted(result.stages), **summary(out)}
 
 
 def summary(path):
@@ -74,15 +82,15 @@ def summary(path):
     return {k: (None if v != v else v) for k, v in numbers.items()}        # NaN: None
 
 
-def _cea(case, out):
+def _cea(case, out, model):
     from ..cea.stage import analyse
-    result = analyse(case)
+    result = analyse(case, model=model)
     modes = result.modes.table()
     unstable = [m for m in modes if m["unstable"]]
     strongest = max(unstable, key=lambda m: m["real"]) if unstable else None
     Path(out).write_text(json.dumps({"status": "complete", "modes": modes,
                                      "ndof": result.ndof, "reduced": result.reduced}))
-    return {"status": "complete", "unstable": len(unstable),
+    return {"status": "complete", "stages": sorted(result.stages), "unstable": len(unstable),
             "max_real": strongest["real"] if strongest else None,
             "frequency_hz": strongest["frequency_hz"] if strongest else None,
             "unstable_modes": [[m["frequency_hz"], m["real"]] for m in unstable]}
