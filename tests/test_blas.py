@@ -37,3 +37,18 @@ def test_products_on_every_core_equal_one_thread_to_round_off():
     np.testing.assert_allclose(gram, gram1, rtol=0, atol=1e-12 * np.abs(gram1).max())
     assert np.array_equal(gram, gram.T)          # syrk: symmetric to the last bit
     assert np.array_equal(again, every)          # the same split, the same sums
+
+
+def test_every_core_keeps_to_a_one_thread_worker(monkeypatch):
+    """A campaign's workers run with OPENBLAS_NUM_THREADS=1: every_core stays at one thread
+    there, and takes every core where nothing caps it."""
+    from threadpoolctl import threadpool_info
+    from transient.solve import blas
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "1")
+    assert blas.budget() == 1
+    with blas.every_core():
+        assert {i["num_threads"] for i in threadpool_info()
+                if i["internal_api"] == "openblas"} == {1}
+    monkeypatch.delenv("OPENBLAS_NUM_THREADS")
+    monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
+    assert blas.budget() == len(os.sched_getaffinity(0))

@@ -29,10 +29,22 @@ def one_thread():
         yield
 
 
-@contextmanager
-def every_core():
-    """OpenBLAS on every core this process may run on, inside; as before, after."""
+def budget():
+    """The threads this process may use: the cores it may run on, capped by
+    OPENBLAS_NUM_THREADS or OMP_NUM_THREADS when set (a campaign's one-thread workers: N of
+    them share the cores, and every_core taking both on each made the setup's stages 2-5
+    times slower, 6 variants of pad_disc slower on two workers than one by one)."""
     cores = (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
              else os.cpu_count() or 1)
-    with _openblas().limit(limits=cores):
+    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
+        value = os.environ.get(name, "")
+        if value.isdigit() and int(value) > 0:
+            cores = min(cores, int(value))
+    return cores
+
+
+@contextmanager
+def every_core():
+    """OpenBLAS on every core this process may use (budget), inside; as before, after."""
+    with _openblas().limit(limits=budget()):
         yield
