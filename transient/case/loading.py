@@ -71,6 +71,18 @@ def apply_overrides(data, overrides, path):
     return data
 
 
+def literal(value):
+    """A TOML literal of a value: what an override (--set KEY=LITERAL) reads back to
+    the same value."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, (list, tuple)):
+        return "[" + ",".join(literal(v) for v in value) + "]"
+    return repr(value)
+
+
 def load(path, overrides=()):
     """Read, override and validate a case file; raises CaseError on any bad input."""
     path = Path(path)

@@ -36,7 +36,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..case.checks import check_transient
-from ..case.loading import load
+from ..case.loading import literal, load
 from ..errors import CaseError
 from ..plots.signals import EDGE, SATURATION, growth_rate, running_amplitude
 from ..stages import choose_dt, prepare, simulate
@@ -80,14 +80,6 @@ def variants(eps_list, points_list, tolerances=(), reference="fine"):
     return rows
 
 
-def _literal(value):
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return f'"{value}"'
-    return repr(value)
-
-
 def _pair_name(case, pair):
     names = list(case.contact)
     if not names:
@@ -102,7 +94,7 @@ def _pair_name(case, pair):
 
 def run_variant(path, overrides, pair, variant, t_end):
     """Set up and integrate one variant; returns (row, series, frequencies)."""
-    sets = [f"contact.{pair}.{k}={_literal(v)}" for k, v in variant.settings.items()]
+    sets = [f"contact.{pair}.{k}={literal(v)}" for k, v in variant.settings.items()]
     case = load(path, list(overrides) + sets + ["output.contact=true"]
                 + ([f"solver.t_end={t_end!r}"] if t_end else []))
     check_transient(case)
@@ -258,7 +250,7 @@ def bench(path, overrides=(), pair=None, eps_list=(1e-6, 1e-4, 1e-3, 1e-2),
     if cycle_from is not None and not 0 <= cycle_from < end:
         raise CaseError("command line", "--cycle-from", f"expected a time in [0, {end:g}) s "
                         f"(the run's), got {cycle_from:g}")
-    squeal = any(c.friction is not None and c.friction.active for c in case.contact.values())
+    squeal = any(c.friction.active for c in case.contact.values())
     rows = []
     ref = ref_freq = ref_osc = None
     todo = variants(eps_list, points_list if points_list is not None else [0], tolerances,

@@ -17,7 +17,8 @@ import time
 from pathlib import Path
 
 from ..errors import CaseError
-from .tasks import KINDS, build_shared_model, complete, output_path, run_variant, summary
+from .tasks import (KINDS, build_shared_model, cea_summary, complete, output_path,
+                    run_variant, summary)
 from .variants import WHERE
 
 THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
@@ -138,13 +139,8 @@ def _gather(client, case_path, overrides, todo, out, kind, rows, total, progress
 
 def _restored(path, kind):
     if kind == "cea":
-        modes = json.loads(Path(path).read_text())["modes"]
-        unstable = [m for m in modes if m["unstable"]]
-        strongest = max(unstable, key=lambda m: m["real"]) if unstable else None
-        return {"status": "complete", "resumed": True, "unstable": len(unstable),
-                "max_real": strongest["real"] if strongest else None,
-                "frequency_hz": strongest["frequency_hz"] if strongest else None,
-                "unstable_modes": [[m["frequency_hz"], m["real"]] for m in unstable]}
+        return {"status": "complete", "resumed": True,
+                **cea_summary(json.loads(Path(path).read_text())["modes"])}
     return {"status": "complete", "resumed": True, **summary(path)}
 
 

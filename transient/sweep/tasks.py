@@ -86,11 +86,16 @@ def _cea(case, out, model):
     from ..cea.stage import analyse
     result = analyse(case, model=model)
     modes = result.modes.table()
-    unstable = [m for m in modes if m["unstable"]]
-    strongest = max(unstable, key=lambda m: m["real"]) if unstable else None
     Path(out).write_text(json.dumps({"status": "complete", "modes": modes,
                                      "ndof": result.ndof, "reduced": result.reduced}))
-    return {"status": "complete", "stages": sorted(result.stages), "unstable": len(unstable),
-            "max_real": strongest["real"] if strongest else None,
+    return {"status": "complete", "stages": sorted(result.stages), **cea_summary(modes)}
+
+
+def cea_summary(modes):
+    """The unstable modes of a table of complex modes: their count, the strongest one's real
+    part and frequency (None without), and each one's (frequency, real part)."""
+    unstable = [m for m in modes if m["unstable"]]
+    strongest = max(unstable, key=lambda m: m["real"]) if unstable else None
+    return {"unstable": len(unstable), "max_real": strongest["real"] if strongest else None,
             "frequency_hz": strongest["frequency_hz"] if strongest else None,
             "unstable_modes": [[m["frequency_hz"], m["real"]] for m in unstable]}

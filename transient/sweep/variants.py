@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..case.loading import literal
 from ..errors import CaseError
 
 WHERE = "command line"
@@ -33,17 +34,6 @@ class Variant:
 
     def label(self):
         return ", ".join(f"{k}={literal(v)}" for k, v in self.values.items())
-
-
-def literal(value):
-    """A TOML literal of a value (what --set reads back to the same value)."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    if isinstance(value, (list, tuple)):
-        return "[" + ",".join(literal(v) for v in value) + "]"
-    return repr(value)
 
 
 def parse_parameter(text):
