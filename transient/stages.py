@@ -20,7 +20,7 @@ from .dynamics.state import Rows, State
 from .dynamics.system import full_system, reduced_system
 from .errors import CaseError
 from .kernels.codes import ENERGY_TERMS, NO_CONVERGENCE, NOT_FINITE, OK
-from .model import build_model
+from .model import build_model, constant_load
 from .model.dofs import free_block, restrict
 from .reduce.stage import reduce
 from .solve import blas
@@ -105,8 +105,7 @@ def _prepare(case, stages, model=None):
         schemes.check_woodbury(len(model.free), contacts.n_points, case.path,
                                contacts.friction is not None)
     patterns = [model.load_patterns[name] for name in case.loads]
-    constant = sum((p for p, load in zip(patterns, case.loads.values())
-                    if load.signal["kind"] == "constant"), np.zeros(model.ndof))
+    constant = constant_load(case, model)
     free = model.free
     # without constant loads there is no preload: the run starts from the undeformed state
     # (with initial velocities), in equilibrium or not

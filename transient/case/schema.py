@@ -165,16 +165,19 @@ CONTACT = Table("a contact pair: two face sets of two parts, gap observed on the
         "p_lin": Value("float", "exponential: pressure beyond which the law continues linearly "
                        "(no overflow at any penetration)", 1e9, "Pa", open_min=0.0),
     }, optional=True),
-    "order": Value("int", "degree of the triangle Gauss rule of the fine rule on Gamma", 4,
+    "order": Value("int", "degree of the Gauss rules: the fine rule's on Gamma's triangles, "
+                   "the gauss rule's on each master face (4: 6 points on a triangle)", 4,
                    minimum=1, maximum=20),
     "k": Value("float", "stiffness density of the gap energy and of linear penalty contact",
                5e11, "Pa/m", open_min=0.0),
     "rule": Value("choice", "contact points: fine (the exact rule on Gamma), centre (one "
-                  "point per face of the master surface), greedy (a coarse rule selected on "
-                  "the regularized observation) or sampled (the fewest fine points whose "
+                  "point per face of the master surface), gauss (the Gauss points of each "
+                  "master face, of degree order: the paper's rich rule), greedy (a coarse rule "
+                  "selected on the regularized observation) or sampled (the fewest fine points whose "
                   "weights reproduce the contact stiffness that the reduced model's modes below "
                   "fmax see, and the preload: ECSW on the contact-linearized dynamics; needs "
-                  "solver.reduction)", "fine", choices=("fine", "centre", "greedy", "sampled")),
+                  "solver.reduction)", "fine", choices=("fine", "centre", "gauss", "greedy",
+                                                        "sampled")),
     "candidates": Value("choice", "greedy: candidate points, the fine points or the face "
                         "centres of a surface", "fine", choices=("fine", "surface1", "surface2")),
     "points": Value("int", "greedy: number of points m (0: the rank of the kept shapes; more "
@@ -192,7 +195,8 @@ CONTACT = Table("a contact pair: two face sets of two parts, gap observed on the
                      "the two) or exact (NNLS over all candidates: the energy reproduced exactly, "
                      "with as many points as needed; small interfaces only)", "nearest",
                      choices=("nearest", "nnls", "best", "exact")),
-    "master": Value("choice", "surface whose face centres carry the centre rule", "surface1",
+    "master": Value("choice", "surface whose faces carry the centre and gauss rules",
+                    "surface1",
                     choices=("surface1", "surface2")),
     "regularized": Value("bool", "observe the gap through the (1-eps)-compatible shapes only",
                          False),
@@ -258,6 +262,12 @@ SOLVER = Table("solution settings", {
                       "Hz", minimum=0.0),
         "shift": Value("float", "shift of shift-invert Lanczos, below the first frequency; a "
                        "negative value keeps free parts' rigid modes solvable", -1.0, "Hz"),
+        "tie": Value("choice", "how contact pairs enter the modes: penalty (springs of density "
+                     "k on the pair's rule, bilateral), preload (the contact laws' tangents at "
+                     "the preload under the constant loads: the linearization the reduced "
+                     "model starts from) or exact (the gap held at zero on the rule's rows: "
+                     "the limit k -> infinity, the paper's perfect bilateral contact)",
+                     "penalty", choices=("penalty", "preload", "exact")),
     }, optional=True),
     "scheme": Value("choice", "time integration: explicit (central differences), implicit "
                     "(reduced or full model: Newmark average acceleration, iteration operator at "

@@ -131,6 +131,7 @@ class ModesSpec:
     count: int
     fmax: float
     shift: float
+    tie: str
 
 
 @dataclass(frozen=True)

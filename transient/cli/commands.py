@@ -13,10 +13,10 @@ from .plotting import cmd_export, cmd_plot
 
 
 def cmd_modes(args):
-    from ..contact.pair import build_contact, contact_stiffness
+    from ..contact.pair import build_contact
     from ..mesh.meshfile import write_vtu
     from ..model.model import build_model
-    from ..solve.modes import normal_modes
+    from ..solve.tied import contact_modes
     t0 = time.perf_counter()
     case = load(args.case, args.overrides)
     if case.output.vtu:
@@ -24,13 +24,9 @@ def cmd_modes(args):
         check_writable(case.directory / case.output.vtu, "output.vtu")
     model = build_model(case)
     pairs = build_contact(case, model)
-    # contact enters the modes as tied (bilateral linear) springs of density k on the pair's rule
-    K = model.K + contact_stiffness(pairs, model.ndof) if pairs else model.K
-    settings = case.solver.modes
-    modes = normal_modes(K, model.M, model.fixed, settings.count, settings.fmax,
-                         settings.shift, case.solver.linear_solver)
+    modes, tie = contact_modes(case, model, pairs)
     stage_times = {f"contact.{p.name}.{k}": v for p in pairs for k, v in p.timings.items()}
-    timings = {**model.timings, **stage_times, **modes.timings,
+    timings = {**model.timings, **stage_times, **tie.timings, **modes.timings,
                "total": time.perf_counter() - t0}
     if case.output.vtu:
         _write_modes_vtu(case, model, modes, write_vtu)
@@ -38,12 +34,14 @@ def cmd_modes(args):
     if args.json:
         print(json.dumps({"frequencies_hz": modes.frequencies.tolist(), "ndof": model.ndof,
                           "free_dofs": int((~model.fixed).sum()), "backend": modes.backend,
-                          "contact": contact, "timings": timings}))
+                          "contact": contact, "tie": tie.kind, "held": tie.held,
+                          "held_of": tie.dofs,
+                          "timings": timings}))
         return 0
     print(f"{case.path}: {model.ndof} dofs ({int((~model.fixed).sum())} free), "
           f"{len(model.parts)} part(s), factorization: {modes.backend}")
     for c in contact:
-        print(f"  contact {c['pair']}: tied, k = {c['k']:.3g} Pa/m, rule {c['rule']} "
+        print(f"  contact {c['pair']}: {_tie_text(tie, c)}, rule {c['rule']} "
               f"({c['points']} points)" + (f", regularized eps = {c['eps']:.3g}"
                                            if c["regularized"] else ""))
     print(f"{'mode':>5} {'frequency [Hz]':>16}")
@@ -51,6 +49,15 @@ def cmd_modes(args):
         print(f"{i:>5} {f:16.6g}")
     print("time: " + ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
     return 0
+
+
+def _tie_text(tie, pair):
+    if tie.kind == "exact":
+        return (f"tied exactly (the gap held at zero on {tie.held} directions of the rows, "
+                f"of the {tie.dofs} dofs they touch)")
+    if tie.kind == "preload":
+        return f"at the preload ({tie.preload.iterations} Newton iterations), law {pair['law']}"
+    return f"tied, k = {pair['k']:.3g} Pa/m"
 
 
 def cmd_cea(args):
@@ -96,7 +103,8 @@ def cmd_cea(args):
 def _pair_summary(pair):
     out = {"pair": pair.name, "rule": pair.spec.rule, "regularized": pair.spec.regularized,
            "k": pair.k, "points": pair.rule.n_points, "area": pair.rule.area, "eps": pair.eps,
-           "kept": pair.compat.kept(pair.eps) if pair.compat else None}
+           "kept": pair.compat.kept(pair.eps) if pair.compat else None,
+           "law": pair.spec.law.kind}
     if pair.coarse is not None:
         out["coarse"] = {"m": len(pair.coarse.chosen), "energy_error": pair.coarse.energy_error,
                          "weighting": pair.coarse.weighting,

@@ -121,6 +121,26 @@ def _plot_parser(sub):
                    "(or a comma-separated list), e.g. 0:0.6:13: one analysis each")
     p.add_argument("--pair", metavar="NAME", help="contact pair whose mu the map varies "
                    "(default: the first)")
+    p = kinds.add_parser("modal-frf", help="the transfer function between two sensors from "
+                         "the case's modes (contact tied as solver.modes.tie says) against the "
+                         "same case with other settings, and each mode's frequency shift (the "
+                         "paper's figure 11)")
+    _case_args(p)
+    p.add_argument("--input", required=True, metavar="SENSOR", help="the sensor where the "
+                   "force is applied (along its direction)")
+    p.add_argument("--output", required=True, metavar="SENSOR", help="the sensor whose "
+                   "displacement responds")
+    p.add_argument("--against", action="append", default=[], metavar="KEY=VALUE",
+                   help="an override of the second model, on top of --set (repeatable), "
+                   "e.g. contact.pad_disc.rule=gauss")
+    p.add_argument("--labels", nargs=2, metavar="TEXT", help="names of the two models "
+                   "(default: case, and the --against overrides)")
+    p.add_argument("--damping", type=float, default=0.01, help="modal damping ratio of the "
+                   "transfer functions (default 0.01)")
+    p.add_argument("--fmax", type=float, metavar="HZ", help="highest frequency drawn [Hz] "
+                   "(default: just above the highest mode)")
+    p.add_argument("-o", "--png", metavar="PNG", help="picture to write (default: "
+                   "<case name>_modal_frf.png in the working directory)")
     series = ("scalar series to draw: full names (sensors/tip, energy/kinetic) or groups "
               "(sensors, energy); default: every sensor")
     p = kinds.add_parser("history", help="time histories of a history's sensors (or energy "

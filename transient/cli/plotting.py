@@ -14,7 +14,8 @@ def cmd_plot(args):
     return {"compat": _plot_compat, "history": _plot_history, "spectrum": _plot_spectrum,
             "frf": _plot_frf, "pressure": _plot_pressure, "cea": _plot_cea,
             "spectrogram": _plot_spectrogram, "envelope": _plot_envelope,
-            "friction": _plot_friction, "sweep": _plot_sweep}[args.kind](args)
+            "friction": _plot_friction, "sweep": _plot_sweep,
+            "modal-frf": _plot_modal_frf}[args.kind](args)
 
 
 def _plot_sweep(args):
@@ -151,6 +152,49 @@ def _plot_cea(args):
         mu_map_figure(mus, analyses, path, f"{stem}: complex modes against mu ({pair})")
         paths.append(path)
     print("\n".join(str(p) for p in paths))
+    return 0
+
+
+def _plot_modal_frf(args):
+    from ..io.lock import check_writable
+    from ..plots.modal import modal_frf_figure
+    from ..studies.modal import compare
+    case = load(args.case, args.overrides)
+    against = load(args.case, args.overrides + args.against)
+    sensors = list(case.sensors)
+    for key, name in (("--input", args.input), ("--output", args.output)):
+        if name not in sensors:
+            raise CaseError(case.path, key, f"expected a sensor of the case ("
+                            f"{', '.join(sensors) or 'none'}), got '{name}'")
+    if not 0 <= args.damping < 1:
+        raise CaseError(case.path, "--damping", f"expected a ratio in [0, 1), got "
+                        f"{args.damping}")
+    if args.fmax is not None and not args.fmax > 0:
+        raise CaseError(case.path, "--fmax", f"expected a frequency > 0 [Hz], got {args.fmax}")
+    labels = args.labels or ["case", " ".join(args.against) or "case"]
+    if len(labels) != 2:
+        raise CaseError(case.path, "--labels", f"expected two labels, got {len(labels)}")
+    path = Path(args.png or f"{Path(case.path).stem}_modal_frf.png")
+    check_writable(path, "-o")
+    result = compare(case, against, args.input, args.output, args.damping, args.fmax)
+    fa, fb = result.frequencies
+    paired = result.partner >= 0
+    by = "order" if np.isnan(result.mac).all() else "MAC"
+    print(f"{labels[0]}: {len(fa)} modes ({result.ties[0].kind} tie); {labels[1]}: {len(fb)} "
+          f"modes ({result.ties[1].kind} tie); paired by {by}")
+    print(f"{'mode':>5} {'f [Hz]':>12} {'partner [Hz]':>13} {'shift [%]':>10} {'MAC':>6}")
+    for i, f in enumerate(fa):
+        j = result.partner[i]
+        print(f"{i + 1:>5} {f:12.6g} " + (f"{fb[j]:13.6g} {result.shifts[i]:10.3f} "
+                                          f"{result.mac[i]:6.3f}" if j >= 0 else
+                                          f"{'-':>13} {'-':>10} {'-':>6}"))
+    s = result.shifts[paired]
+    if len(s):
+        print(f"shift of {labels[1]} over {labels[0]}: max {s.max():.3g}%, min {s.min():.3g}%, "
+              f"mean {s.mean():.3g}% over {len(s)} paired modes")
+    _save(lambda: modal_frf_figure(result.f, result.transfer, labels, result.shifts, path,
+                                   f"{Path(case.path).stem}: {args.input} -> {args.output}, "
+                                   f"modal damping {args.damping:g}"), path)
     return 0
 
 

@@ -21,7 +21,7 @@ from .interface import InterfaceError, build_interface, build_wall_interface
 from ..model.model import resolve_set
 from .regularize import (dual_factors, factor_projectors, factored_rows, primal_basis,
                          regularized_rule, row_factors)
-from .rules import centre_rule
+from .rules import centre_rule, gauss_rule
 from ..mesh.selections import set_faces
 
 DENSE_FILL = 0.1   # fill of the rows above which C^T diag(k w) C is formed dense
@@ -98,6 +98,9 @@ def build_pair(case, model, name, need_compatibility=False):
         master = spec.master if spec.rule == "centre" else spec.candidates
         rule = centre_rule(interface, master)
         timings["centre_rule"] = time.perf_counter() - t0
+    elif spec.rule == "gauss":
+        rule = gauss_rule(interface, spec.master, spec.order)
+        timings["gauss_rule"] = time.perf_counter() - t0
     else:
         rule = interface.fine
     if spec.regularized:

@@ -280,3 +280,9 @@ def build_model(case):
     names, sensors = _sensors(case, parts, 3 * len(points))
     return Model(points, parts, ops.K, ops.M, ops.lumped_mass, fixed, load, patterns, names,
                  sensors, timings)
+
+
+def constant_load(case, model):
+    """(ndof,) the sum of the loads whose signal is constant: what the preload equilibrates."""
+    return sum((model.load_patterns[name] for name, load in case.loads.items()
+                if load.signal["kind"] == "constant"), np.zeros(model.ndof))

@@ -236,6 +236,48 @@ class ContactSolver:
         return TangentSolve(solve, getattr(self.solve0, "backend", "?") + "+woodbury", known,
                             stiffness)
 
+    def tied(self):
+        """(TangentSolve, rank): solve(b) for the limit of solver(d) as every d grows without bound,
+        the problem with the rows' gap held at zero, and the number of directions it holds.
+
+        (A0 + B D B^T)^-1 b = y - Z (D^-1 + G)^-1 B^T y tends to y - Z G^-1 B^T y (y = A0^-1
+        b): x with B^T x = 0, the constraint's multipliers G^-1 B^T y. B = E V, V an
+        orthonormal basis of the rows' space on the dofs they touch: the rows' singular values
+        above 1e-6 of the largest (ROW_SPACE_TOL on their Gram), so a rich rule's round-off
+        directions stay free. The difference cancels what A0^-1 gives a part that only the
+        contact holds (10^7 times the rest with a 1 Hz shift, the pad on the disc): through an
+        orthonormal V the solve stays symmetric to 3e-9 there, through the rows themselves
+        (their singular values spread over 1e6) to 1e-5, where the Lanczos stalls."""
+        backend = getattr(self.solve0, "backend", "?")
+        if self.m == 0:
+            return TangentSolve(self.solve0, backend), 0
+        if not self.lowrank:
+            raise ValueError(f"the {self.m} contact rows span too many directions for the "
+                             "low-rank update the exact tie needs")
+        solve0, cols = self.solve0, self.cols
+        if self.by_columns:
+            V, G, Z = self.V, self.G, self.responses
+        else:
+            # fewer points than dofs: the responses to the rows' orthonormal basis, solved
+            _, V = row_space(self.C[:, cols].toarray())
+            n, rank = self.A0.shape[0], V.shape[1]
+            if 8.0 * n * rank > MAX_BYTES:
+                raise ValueError(f"the responses to the {rank} directions of the contact "
+                                 f"rows on {n} dofs exceed {MAX_BYTES / 1e9:g} GB")
+            ZV = np.empty((n, rank), order="F")
+            for start in range(0, rank, BLOCK):
+                block = slice(start, min(start + BLOCK, rank))
+                b = np.zeros((n, block.stop - start), order="F")
+                b[cols] = V[:, block]
+                ZV[:, block] = np.atleast_2d(solve0(b).T).T
+            G, Z = V.T @ ZV[cols], ZV.__matmul__
+        cho = sla.cho_factor(G)
+
+        def solve(b):
+            y = solve0(b)
+            return y - Z(sla.cho_solve(cho, V.T @ y[cols]))
+        return TangentSolve(solve, backend + "+tied"), V.shape[1]
+
 
 def factored_row_space(L, B, cols, tol=ROW_SPACE_TOL):
     """row_space of C E = L B[cols]^T (L (m, r), B (n, r) sparse) without the dense rows: with

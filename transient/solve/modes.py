@@ -37,10 +37,11 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
     shift : shift frequency [Hz] of shift-invert, negative values meaning -(2 pi shift)^2, so that
         K - sigma M stays positive definite even with rigid-body modes.
     solve : optional callable applying (K - sigma M)^-1 on the free dofs (a factorization made
-        elsewhere, e.g. lowrank.ContactSolver); otherwise K - sigma M is factorized here.
+        elsewhere, e.g. lowrank.ContactSolver); otherwise K - sigma M is factorized here. With
+        K None, the solve alone defines the problem (a constrained one: solve.tied).
     tol : the block Lanczos' residual tolerance, relative to the largest theta (lanczos.TOL).
     """
-    ndof = K.shape[0]
+    ndof = M.shape[0]
     free = np.arange(ndof) if fixed is None else np.flatnonzero(~np.asarray(fixed))
     # K may be an operator on the free dofs (lowrank.TangentStiffness): the shift-invert
     # needs only its solves, the dense eigensolver and ARPACK its matrix or products
@@ -49,7 +50,7 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
     n = len(free)
     sigma = np.sign(shift) * (2 * np.pi * shift) ** 2
     timings = {}
-    if n <= DENSE_LIMIT:
+    if n <= DENSE_LIMIT and K is not None:
         t0 = time.perf_counter()
         lam, vec = sla.eigh(Kf.toarray(), Mf.toarray())
         timings["eigensolver"] = time.perf_counter() - t0
@@ -77,11 +78,13 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
 
 def _arpack(Kf, Mf, sigma, solve, count, fmax):
     """scipy eigsh in batches of count, doubled until one mode is above fmax."""
-    n = Kf.shape[0]
+    n = Mf.shape[0]
     op = spla.LinearOperator((n, n), matvec=solve, dtype=float)
     v0 = np.random.default_rng(0).standard_normal(n)
-    A = Kf if sp.issparse(Kf) else spla.LinearOperator(Kf.shape, matvec=Kf.__matmul__,
-                                                         dtype=float)
+    # shift-invert mode applies only OPinv and M: K may be an operator, or None (a
+    # constrained problem that its solve alone defines)
+    A = Kf if sp.issparse(Kf) else spla.LinearOperator(
+        (n, n), matvec=Kf.__matmul__ if Kf is not None else op.matvec, dtype=float)
     k = count
     while True:
         k = min(k, n - 2)
@@ -98,3 +101,29 @@ def _modes(lam, vec, free, ndof, backend, timings):
     shapes[free] = vec
     return Modes(frequencies_hz(lam), shapes, backend, timings)
 
+
+
+def receptance(modes, a, b, f, damping):
+    """Transfer function from mass-normalized modes: the displacement along b per unit force
+    along a [m/N] at frequencies f [Hz], each mode a damped oscillator of ratio `damping`:
+    H(f) = sum_j (a . phi_j)(b . phi_j) / (w_j^2 - w^2 + 2 i zeta w_j w). a, b: (ndof,)
+    observation rows (sensors: a node's dof along a direction)."""
+    wj = 2 * np.pi * modes.frequencies
+    w = 2 * np.pi * np.asarray(f, float)[:, None]
+    participation = (a @ modes.shapes) * (b @ modes.shapes)
+    return np.sum(participation / (wj ** 2 - w ** 2 + 2j * damping * wj * w), axis=1)
+
+
+def mac_pairs(shapes_a, shapes_b, M):
+    """For each mode of a, its partner among the modes of b by the modal assurance criterion in
+    the mass (one to one, the assignment that maximizes the summed MAC), and the MAC:
+    (partner index or -1, MAC) arrays of len(a). Shapes mass-normalized on the same dofs."""
+    from scipy.optimize import linear_sum_assignment
+    cross = shapes_a.T @ (M @ shapes_b)
+    norm_a = np.einsum("ij,ij->j", shapes_a, M @ shapes_a)
+    norm_b = np.einsum("ij,ij->j", shapes_b, M @ shapes_b)
+    mac = cross ** 2 / np.outer(norm_a, norm_b)
+    rows, cols = linear_sum_assignment(-mac)
+    partner = np.full(shapes_a.shape[1], -1)
+    partner[rows] = cols
+    return partner, np.where(partner >= 0, mac[np.arange(len(partner)), partner], 0.0)

@@ -1,0 +1,80 @@
+"""The modes of a case with its contact pairs tied (`transient modes`): how a pair's contact
+enters them is `solver.modes.tie`.
+
+- penalty: springs of density k on the pair's rule, C^T diag(k w) C (bilateral: the gap is
+  neither opened nor closed for free), whatever the pair's law;
+- preload: the laws' tangents at the preload under the constant loads, K + C^T diag(w k_t) C:
+  the linearization the reduced model starts from;
+- exact: the gap held at zero on the rule's rows, the limit k -> infinity of the penalty (the
+  paper's "perfect bilateral contact", section 4.2). Over incompatible meshes a rich rule then
+  leaves the interface only its exactly compatible shapes (a handful: the paper's locking),
+  where any finite k leaves the nearly compatible ones soft.
+
+The preload and exact ties go through one factorization of K - sigma M and the contact's
+low-rank update (lowrank.ContactSolver), the penalty through the factorization of K + C^T D C.
+"""
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..contact.contactset import stack
+from ..contact.pair import contact_stiffness
+from ..errors import CaseError
+from ..model import constant_load
+from ..model.dofs import free_block, restrict
+from .lowrank import ContactSolver
+from .modes import normal_modes
+from .preload import PreloadError, solve_preload
+
+TIES = ("penalty", "preload", "exact")
+# The tied solve is a difference of two solves (y - Z G^-1 B^T y), exact to some 1e-10 of its
+# norm: a residual of 1e-12 stalls the Lanczos (tet10 pad and disc: 43 of 55 pairs), 1e-9 (the
+# reduced basis' own tolerance, reduce.basis.MODES_TOL) converges.
+TIED_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Tie:
+    kind: str                # one of TIES
+    timings: dict            # the contact solver's factorization and the preload [s]
+    held: int = 0            # exact: directions of the rows held at zero
+    dofs: int = 0            # exact: the dofs the rows touch
+    preload: object = None   # preload: the Preload the tangents come from
+
+
+def contact_modes(case, model, pairs):
+    """(Modes, Tie) of the case's model with its pairs tied as solver.modes.tie says."""
+    settings = case.solver.modes
+    kind = settings.tie if pairs else "penalty"
+    args = (model.M, model.fixed, settings.count, settings.fmax, settings.shift,
+            case.solver.linear_solver)
+    if kind == "penalty":
+        K = model.K + contact_stiffness(pairs, model.ndof) if pairs else model.K
+        return normal_modes(K, *args), Tie(kind, {})
+    t0 = time.perf_counter()
+    free = model.free
+    contacts = stack(pairs, model.ndof)
+    factors = (None if contacts.factors is None
+               else (contacts.factors[0], contacts.factors[1][free]))
+    # the shift of normal_modes (negative: -(2 pi shift)^2), so that its Lanczos and the
+    # contact solver's factorization are of the same K - sigma M
+    sigma = np.sign(settings.shift) * (2 * np.pi * settings.shift) ** 2
+    cs = ContactSolver(free_block(model.K, free), free_block(model.M, free),
+                       None if contacts.rows is None else restrict(contacts.C, cols=free),
+                       sigma, case.solver.linear_solver, factors)
+    timings = {"contact_factorization": time.perf_counter() - t0}
+    if kind == "exact":
+        solve, held = cs.tied()
+        modes = normal_modes(None, *args, solve=solve, tol=TIED_TOL)
+        return modes, Tie(kind, timings, held, len(cs.cols))
+    t0 = time.perf_counter()
+    try:
+        preload = solve_preload(model.K, model.fixed, constant_load(case, model), contacts, cs,
+                                case.solver.newton.tolerance, case.solver.newton.max_iter)
+    except PreloadError as exc:
+        raise CaseError(case.path, "loads", str(exc)) from None
+    tangent = cs.solver(contacts.weights * preload.tangent)
+    timings["preload"] = time.perf_counter() - t0
+    return (normal_modes(tangent.stiffness, *args, solve=tangent),
+            Tie(kind, timings, preload=preload))

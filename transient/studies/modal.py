@@ -1,0 +1,65 @@
+"""Two modal models of one structure compared (`transient plot modal-frf`): their modes with
+the contact tied as each case says (solve.tied), each mode of the first paired with its MAC
+partner in the second, the frequency shifts, and the transfer function between two sensors.
+
+The paper's figure 11 is such a pair: a rich contact rule tied exactly against the regularized
+centre rule, where the rich rule's locking raises the frequencies."""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..contact.pair import build_contact
+from ..model import build_model
+from ..solve.modes import mac_pairs, receptance
+from ..solve.tied import contact_modes
+from ..stages import stage_key
+
+POINTS = 4000     # frequencies of the transfer function
+
+
+@dataclass(frozen=True)
+class ModalComparison:
+    frequencies: tuple     # (fa, fb) each model's frequencies [Hz]
+    partner: np.ndarray    # (len(fa),) index of each mode's partner in fb (-1: none)
+    mac: np.ndarray        # (len(fa),) MAC of the pair (nan when paired by order)
+    shifts: np.ndarray     # (len(fa),) 100 (fb[partner] / fa - 1) [%]
+    f: np.ndarray          # (POINTS,) frequencies of the transfer functions [Hz]
+    transfer: tuple        # (Ha, Hb) [m/N]
+    ties: tuple            # each model's solve.tied.Tie
+    pairs: tuple           # each model's contact pairs
+
+
+def sensor_row(case, model, name, key):
+    from ..errors import CaseError
+    if name not in model.sensor_names:
+        raise CaseError(case.path, key, f"no sensor '{name}' (sensors: "
+                        f"{', '.join(model.sensor_names) or 'none'})")
+    return model.sensors[model.sensor_names.index(name)].toarray().ravel()
+
+
+def compare(case_a, case_b, sensor_in, sensor_out, damping, fmax=None):
+    """The ModalComparison of two cases of one structure: modes by their solver.modes (tie
+    included), pairs by MAC when both share a model (stages.stage_key), else by order."""
+    model_a = build_model(case_a)
+    shared = stage_key(case_a, "model") == stage_key(case_b, "model")
+    model_b = model_a if shared else build_model(case_b)
+    results = []
+    for case, model in ((case_a, model_a), (case_b, model_b)):
+        pairs = build_contact(case, model)
+        modes, tie = contact_modes(case, model, pairs)
+        results.append((modes, tie, pairs))
+    (ma, tie_a, pairs_a), (mb, tie_b, pairs_b) = results
+    fa, fb = ma.frequencies, mb.frequencies
+    if shared:
+        partner, mac = mac_pairs(ma.shapes, mb.shapes, model_a.M)
+    else:
+        partner = np.where(np.arange(len(fa)) < len(fb), np.arange(len(fa)), -1)
+        mac = np.full(len(fa), np.nan)
+    shifts = np.where(partner >= 0, 100 * (fb[partner] / fa - 1), np.nan)
+    top = fmax or 1.05 * max(fa.max(initial=0.0), fb.max(initial=0.0))
+    f = np.linspace(0.0, top, POINTS)
+    transfer = tuple(receptance(m, sensor_row(c, mod, sensor_in, "--input"),
+                                sensor_row(c, mod, sensor_out, "--output"), f, damping)
+                     for m, c, mod in ((ma, case_a, model_a), (mb, case_b, model_b)))
+    return ModalComparison((fa, fb), partner, mac, shifts, f, transfer, (tie_a, tie_b),
+                           (pairs_a, pairs_b))
