@@ -13,8 +13,9 @@ fragmented into one conforming mesh.
     python tools/mesh_brake.py OUTDIR [--dofs N] [--interface H] [--size H0] [--case CASE]
                                [--growth G] [--tolerance F] [--high-order-optimize K]
 
-writes OUTDIR/disc.msh, OUTDIR/pad.msh (Gmsh 4.1 binary, tet10) and OUTDIR/brake.toml, and
-prints the nodes, elements and dofs of each mesh against the prediction. Then, for example:
+writes OUTDIR/disc.msh, OUTDIR/pad.msh (Gmsh 4.1 binary, tet10) and OUTDIR/brake.toml (or
+--case-out), and prints the nodes, elements and dofs of each mesh against the prediction.
+Then, for example:
 
     python -m transient modes OUTDIR/brake.toml
     python -m transient run OUTDIR/brake.toml --set solver.t_end=0.01
@@ -396,16 +397,19 @@ def parts_of(case):
     return {discs[0]: Disc(case.parts[discs[0]].mesh.params, pad), pads[0]: pad}
 
 
-def write_case(source, out, files, summary):
-    """brake.toml: the mirrored case's tables, its generator meshes replaced by the files."""
+def write_case(source, target, files, summary):
+    """The mirrored case's tables, its generator meshes replaced by the files (paths relative
+    to the target's directory)."""
+    import os
     import tomllib
     data = tomllib.loads(Path(source).read_text())
     for name, path in files.items():
-        data["parts"][name]["mesh"] = {"kind": "file", "path": path.name}
+        data["parts"][name]["mesh"] = {"kind": "file", "path": Path(
+            os.path.relpath(path.resolve(), target.resolve().parent)).as_posix()}
     data["title"] = data.get("title", "") + f" (tet10 meshes by gmsh, {summary})"
     header = (f"# Written by tools/mesh_brake.py from {Path(source).name}, its generator meshes "
               f"replaced by gmsh tet10 meshes\n# ({summary}); regenerate rather than edit.\n")
-    (out / "brake.toml").write_text(header + fuzz_dumps()(data))
+    target.write_text(header + fuzz_dumps()(data))
 
 
 def calibrate(gmsh, parts, sizes, outdir, high_order_optimize):
@@ -440,6 +444,9 @@ def main(argv=None):
     parser.add_argument("--tolerance", type=float, default=0.1,
                         help="mesh again when the dofs are off the target by more (0.1)")
     parser.add_argument("--case", type=Path, default=DEFAULT_CASE, help="case mirrored")
+    parser.add_argument("--case-out", default=None, help="the mirrored case written (default "
+                        "OUTDIR/brake.toml; 'none': the meshes only, for a case written by "
+                        "hand as cases/pad_disc_tet10.toml is)")
     parser.add_argument("--high-order-optimize", type=int, default=0, choices=(0, 1, 2, 3, 4),
                         help="gmsh Mesh.HighOrderOptimize (0: none, the default; the others "
                         "move nodes differently from run to run)")
@@ -504,8 +511,10 @@ def main(argv=None):
     target = "" if args.size else f" (target {args.dofs:.0f}: {100 * off:+.1f}%)"
     refined = f", interface {interface:g} m" if interface else ""
     print(f"total: {total} dofs{target}; h = {h:.5g} m{refined}")
-    write_case(args.case, args.outdir, files, f"{total} dofs, h = {h:.4g} m{refined}")
-    print(f"wrote {args.outdir / 'brake.toml'}")
+    if args.case_out != "none":
+        target = Path(args.case_out) if args.case_out else args.outdir / "brake.toml"
+        write_case(args.case, target, files, f"{total} dofs, h = {h:.4g} m{refined}")
+        print(f"wrote {target}")
 
 
 if __name__ == "__main__":

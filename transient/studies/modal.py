@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..contact.pair import build_contact
+from ..errors import CaseError
 from ..model import build_model
 from ..solve.modes import mac_pairs, receptance
 from ..solve.tied import contact_modes
@@ -30,11 +31,12 @@ class ModalComparison:
 
 
 def sensor_row(case, model, name, key):
-    from ..errors import CaseError
-    if name not in model.sensor_names:
-        raise CaseError(case.path, key, f"no sensor '{name}' (sensors: "
-                        f"{', '.join(model.sensor_names) or 'none'})")
-    return model.sensors[model.sensor_names.index(name)].toarray().ravel()
+    """The (ndof,) observation row of a sensor, refused when the model clamps what it sees."""
+    row = model.sensors[model.sensor_names.index(name)].toarray().ravel()
+    if not np.any(row[model.free]):
+        raise CaseError(case.path, key, f"sensor '{name}' observes clamped dofs only: no "
+                        "force goes in there, and no motion comes out")
+    return row
 
 
 def compare(case_a, case_b, sensor_in, sensor_out, damping, fmax=None):
@@ -43,6 +45,8 @@ def compare(case_a, case_b, sensor_in, sensor_out, damping, fmax=None):
     model_a = build_model(case_a)
     shared = stage_key(case_a, "model") == stage_key(case_b, "model")
     model_b = model_a if shared else build_model(case_b)
+    rows = [(sensor_row(c, m, sensor_in, "--input"), sensor_row(c, m, sensor_out, "--output"))
+            for c, m in ((case_a, model_a), (case_b, model_b))]
     results = []
     for case, model in ((case_a, model_a), (case_b, model_b)):
         pairs = build_contact(case, model)
@@ -58,8 +62,6 @@ def compare(case_a, case_b, sensor_in, sensor_out, damping, fmax=None):
     shifts = np.where(partner >= 0, 100 * (fb[partner] / fa - 1), np.nan)
     top = fmax or 1.05 * max(fa.max(initial=0.0), fb.max(initial=0.0))
     f = np.linspace(0.0, top, POINTS)
-    transfer = tuple(receptance(m, sensor_row(c, mod, sensor_in, "--input"),
-                                sensor_row(c, mod, sensor_out, "--output"), f, damping)
-                     for m, c, mod in ((ma, case_a, model_a), (mb, case_b, model_b)))
+    transfer = tuple(receptance(m, a, b, f, damping) for m, (a, b) in zip((ma, mb), rows))
     return ModalComparison((fa, fb), partner, mac, shifts, f, transfer, (tie_a, tie_b),
                            (pairs_a, pairs_b))
