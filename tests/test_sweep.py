@@ -111,9 +111,12 @@ def test_a_sweep_equals_its_variants_run_one_by_one(campaign):
     assert 11e3 < rows[2]["cycle_frequency"] < 12.5e3
     saved = json.loads((out / "sweep.json").read_text())
     assert saved["rows"] == rows
-    # the model built once for the three (stages.stage_key), by its own task: no variant ran it
-    assert saved["shared"] == {"model": 1}
-    assert all("model" not in r["stages"] and "contact" in r["stages"] for r in rows)
+    # the model, the contact's geometry and the factorization built once for the three
+    # (stages.stage_key), by tasks of their own: no variant ran them, each its own loads
+    assert saved["shared"] == {"model": 1, "contact": 1, "factorization": 1}
+    for r in rows:
+        assert "loads" in r["stages"] and "preload" in r["stages"]
+        assert not {"model", "contact", "factorization"} & set(r["stages"])
     lines = (out / "sweep.csv").read_text().splitlines()
     assert len(lines) == 4 and lines[0].startswith("variant,status,seconds,")
 
@@ -268,16 +271,72 @@ class _Recorder:
         return self[key] if key in self._obj else default
 
 
-@pytest.mark.parametrize("case, more", [(PAD, SMALL), (ROOT / "cases" / "drilled_cube.toml", [])])
+def _outside(reads, stage):
+    from transient.stages import READS
+    allowed = READS[stage] + ("path", "directory")
+    # a table's own path is its names looked up (what a field of each of them reads too)
+    return sorted(r for r in reads if not any(r == a or r.startswith(a + ".")
+                                              or a.startswith(r + ".") for a in allowed))
+
+
+CASES = [(PAD, SMALL), (ROOT / "cases" / "drilled_cube.toml", [])]
+
+
+@pytest.mark.parametrize("case, more", CASES)
 def test_the_model_reads_only_what_its_key_holds(case, more):
-    """build_model through a case that records its reads: every field it reads is under
-    stages.READS['model'] (or names the case's file), so variants equal there may share it."""
+    """build_model through a case that records its reads: every field its structure reads is
+    under stages.READS['model'] (or names the case's file), so variants equal there may share
+    it; the loads and sensors it reads are applied to a shared structure again."""
     from transient.case.loading import load
     from transient.model import build_model
-    from transient.stages import READS
     reads = set()
-    build_model(_Recorder(load(case, more), "", reads))
-    allowed = READS["model"] + ("path", "directory")
-    outside = sorted(r for r in reads if not any(r == a or r.startswith(a + ".")
-                                                 for a in allowed))
-    assert not outside and any(r.startswith("parts") for r in reads)
+    model = build_model(_Recorder(load(case, more), "", reads))
+    assert {r.split(".")[0] for r in _outside(reads, "model")} == {"loads", "sensors"}
+    assert any(r.startswith("parts") for r in reads)
+    # the structure shared: only the loads and sensors read again, the same arrays made
+    reads.clear()
+    again = build_model(_Recorder(load(case, more), "", reads), model)
+    assert not any(r.startswith(("materials", "constraints", "solver")) for r in reads)
+    for name in model.load_patterns:
+        assert np.array_equal(again.load_patterns[name], model.load_patterns[name])
+    assert (again.sensors != model.sensors).nnz == 0 and again.K is model.K
+
+
+@pytest.mark.parametrize("case, more", CASES)
+def test_the_contact_and_the_factorization_read_only_what_their_keys_hold(case, more):
+    """The pairs' geometry and the factorization through a recording case read only the fields
+    of stages.READS['contact'] and ['factorization'] (the law and the friction are each
+    variant's own)."""
+    from transient.case.loading import load
+    from transient.contact.contactset import stack
+    from transient.contact.pair import build_geometry
+    from transient.model import build_model
+    from transient.stages import factorization
+    loaded = load(case, more + ["contact.{}.friction.mu=0.3".format(
+        next(iter(load(case, more).contact)))] if case == PAD else more)
+    model = build_model(loaded)
+    reads = set()
+    for name in loaded.contact:
+        build_geometry(_Recorder(loaded, "", reads), model, name)
+    assert not _outside(reads, "contact") and any(r.startswith("contact.") for r in reads)
+    contacts = stack([build_geometry(loaded, model, name) for name in loaded.contact],
+                     model.ndof)
+    reads.clear()
+    factorization(_Recorder(loaded, "", reads), model, contacts)
+    assert not _outside(reads, "factorization") and "solver.linear_solver" in reads
+
+
+def test_a_pressure_sweep_shares_every_first_stage(tmp_path, capsys):
+    """The piston's pressure is a load: two pressures share the model's structure, the
+    contact's geometry and the factorization; each variant's preload is its own (the contact
+    force follows the pressure)."""
+    out = tmp_path / "p"
+    args = ["sweep", str(PAD), "--param", "loads.piston.value=[5e5,1e6]", "--kind", "cea",
+            "--workers", "1", "--out", str(out), "--json"]
+    for o in SMALL:
+        args += ["--set", o]
+    assert main(args) == 0
+    capsys.readouterr()
+    saved = json.loads((out / "sweep.json").read_text())
+    assert saved["shared"] == {"model": 1, "contact": 1, "factorization": 1}
+    assert all(r["status"] == "complete" for r in saved["rows"])

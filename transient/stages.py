@@ -12,7 +12,7 @@ import scipy.sparse as sp
 from .case.signals import compile_signals
 from .case.sizes import check_steps, peak_rss_gb
 from .contact.contactset import stack
-from .contact.pair import build_contact, contact_stiffness
+from .contact.pair import GEOMETRY, build_contact, build_geometry, contact_stiffness
 from .dynamics import schemes
 from .dynamics.chunks import buffer
 from .dynamics.critical import CONTACT_OMEGA_DT, REMAINDER_OMEGA_DT, critical_tangent
@@ -21,29 +21,68 @@ from .dynamics.system import full_system, reduced_system
 from .errors import CaseError
 from .kernels.codes import ENERGY_TERMS, NO_CONVERGENCE, NOT_FINITE, OK
 from .model import build_model, constant_load
-from .model.dofs import free_block, restrict
 from .reduce.stage import reduce
 from .solve import blas
 from .solve.linsolve import why
-from .solve.lowrank import ContactSolver
+from .solve.lowrank import contact_solver
 from .solve.preload import PreloadError, solve_preload
 
 
-# The spec fields each shareable stage reads (tests/test_sweep.py records build_model's reads
-# and holds it to these): variants equal on them share the stage's result.
-READS = {"model": ("parts", "materials", "constraints", "loads", "sensors", "solver.quadrature",
-                   "limits")}
+# The spec fields each shareable stage reads, with those of the stages before it
+# (tests/test_sweep.py records each stage's reads and holds it to these): variants equal on
+# them share the stage's result. A path through a table of named specs ("contact.k") reads
+# that field of every one of them. The loads and sensors are each variant's own, applied to
+# the shared model's structure (model.build_model): a pressure sweep shares every stage here.
+_MODEL = ("parts", "materials", "constraints", "solver.quadrature", "limits")
+_CONTACT = _MODEL + tuple(f"contact.{name}" for name in GEOMETRY)
+READS = {"model": _MODEL, "contact": _CONTACT,
+         "factorization": _CONTACT + ("solver.shift_hz", "solver.linear_solver")}
+SHARED = tuple(READS)       # the stages in order
 
 
 def stage_key(case, stage):
     """What a stage's result depends on: the case's directory (its mesh files) and the reprs
     of the fields it reads (frozen specs: equal reprs, equal inputs)."""
-    def field(path):
-        x = case
-        for name in path.split("."):
-            x = getattr(x, name)
-        return repr(x)
-    return (str(case.directory),) + tuple(field(path) for path in READS[stage])
+    def field(x, names):
+        if isinstance(x, dict):
+            return tuple((k, field(v, names)) for k, v in x.items())
+        return field(getattr(x, names[0]), names[1:]) if names else repr(x)
+    return (str(case.directory),) + tuple(field(case, path.split("."))
+                                          for path in READS[stage])
+
+
+@dataclass(frozen=True)
+class Built:
+    """What the first stages built once give each of the variants that share them (a
+    campaign's: stage_key): the Model, the contact pairs' geometry, the factorization of
+    K - sigma M with the contact's low-rank update, as far as they go."""
+    model: object
+    geometry: list = None        # contact.pair.build_geometry of each pair
+    solver: object = None        # solve.lowrank.ContactSolver
+
+    @property
+    def stages(self):
+        return SHARED[:1 + (self.geometry is not None) + (self.solver is not None)]
+
+
+def build_shared(case, depth, built=None):
+    """The Built of a case's first stages to `depth` (one of SHARED), going on from `built`
+    (a Built of a shallower depth, for cases equal on its stages' READS)."""
+    model = built.model if built is not None else build_model(case)
+    geometry = built.geometry if built is not None else None
+    if depth == "model" or not case.contact:
+        return Built(model)
+    if geometry is None:
+        geometry = [build_geometry(case, model, name) for name in case.contact]
+    if depth == "contact":
+        return Built(model, geometry)
+    return Built(model, geometry, factorization(case, model, stack(geometry, model.ndof)))
+
+
+def factorization(case, model, contacts):
+    """K - sigma M factorized on the model's free dofs, with the contacts' low-rank update."""
+    return contact_solver(model, contacts, -(2 * np.pi * case.solver.shift_hz) ** 2,
+                          case.solver.linear_solver)
 
 
 @dataclass(frozen=True)
@@ -81,7 +120,7 @@ class _Stages(dict):
         return out
 
 
-def prepare(case, check=None, model=None):
+def prepare(case, check=None, built=None):
     """Model, contact, preload, linearization and (optionally) reduction of a case.
 
     The setup's dense algebra runs on one OpenBLAS thread: its calls are many and mid-sized
@@ -90,15 +129,20 @@ def prepare(case, check=None, model=None):
     one thread, 22-26 s on two, though 2.8 -> 1.7 s alone: the slowdown is contention with
     PARDISO's and Numba's threads). PARDISO (MKL) keeps its threads, which pay for its solves.
     The large products of sections that solve nothing run on every core (solve.blas).
-    model: the case's Model when the caller built it already (cea bounds its size first)."""
+    built: the first stages' results when built already (a Built: cea bounds the model's size
+    first, a campaign's variants share them)."""
     with blas.one_thread():
-        return _prepare(case, _Stages(check), model)
+        return _prepare(case, _Stages(check), built or Built(None))
 
 
-def _prepare(case, stages, model=None):
+def _prepare(case, stages, built):
     solver = case.solver
-    model = model or stages.timed("model", build_model, case)
-    pairs = stages.timed("contact", build_contact, case, model) if case.contact else []
+    model = (stages.timed("loads", build_model, case, built.model) if built.model is not None
+             else stages.timed("model", build_model, case))
+    if built.geometry is not None:
+        pairs = build_contact(case, model, geometry=built.geometry)
+    else:
+        pairs = stages.timed("contact", build_contact, case, model) if case.contact else []
     contacts = stack(pairs, model.ndof)
     if solver.scheme == "implicit" and not solver.reduction.enabled:
         # Newmark on the full model keeps S^-1 C^T dense: refused now, not after the setup
@@ -111,12 +155,7 @@ def _prepare(case, stages, model=None):
     # (with initial velocities), in equilibrium or not
     cs = None
     if np.any(constant) or solver.reduction.enabled:
-        factors = (None if contacts.factors is None
-                   else (contacts.factors[0], contacts.factors[1][free]))
-        cs = stages.timed("factorization", ContactSolver, free_block(model.K, free),
-                          free_block(model.M, free),
-                          None if contacts.rows is None else restrict(contacts.C, cols=free),
-                          -(2 * np.pi * solver.shift_hz) ** 2, solver.linear_solver, factors)
+        cs = built.solver or stages.timed("factorization", factorization, case, model, contacts)
     try:
         preload = stages.timed("preload", solve_preload, model.K, model.fixed, constant,
                                contacts, cs, solver.newton.tolerance, solver.newton.max_iter)

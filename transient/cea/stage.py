@@ -51,21 +51,21 @@ def fmax_of(case):
         solver.modes.fmax or solver.reduction.fmax)
 
 
-def analyse(case, check=None, model=None):
-    """Complex modes of a case at its steady sliding state (Analysis); model: its Model when
-    built already (a campaign's variants share it)."""
+def analyse(case, check=None, built=None):
+    """Complex modes of a case at its steady sliding state (Analysis); built: its first
+    stages' results when built already (stages.Built: a campaign's variants share them)."""
     from ..model import build_model
-    from ..stages import prepare
+    from ..stages import Built, prepare
     stages = {}
-    if model is not None and not case.solver.reduction.enabled:
-        _bounded(case, int((~model.fixed).sum()))
+    if built is not None and not case.solver.reduction.enabled:
+        _bounded(case, int((~built.model.fixed).sum()))
     elif not case.solver.reduction.enabled:
         # the model first (seconds), its size bounded before the setup's stages
         t0 = time.perf_counter()
-        model = build_model(case)
+        built = Built(build_model(case))
         stages["model"] = time.perf_counter() - t0
-        _bounded(case, int((~model.fixed).sum()))
-    setup = prepare(analysed_case(case), check, model)
+        _bounded(case, int((~built.model.fixed).sum()))
+    setup = prepare(analysed_case(case), check, built)
     stages.update(setup.stages)
     system = setup.system
     fmax = fmax_of(case)

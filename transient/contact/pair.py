@@ -65,7 +65,29 @@ def _surface(case, model, ref, key):
     return part, faces
 
 
+# The spec fields the pair's geometry reads (interface, compatibility, regularization, rule):
+# variants equal on them share it (stages.READS); the law and the friction are the variant's
+GEOMETRY = ("surface1", "surface2", "wall", "wall_point", "wall_normal", "order", "k", "rule",
+            "candidates", "points", "tolerance", "weights", "master", "regularized", "eps",
+            "formulation", "project", "norm")
+
+
 def build_pair(case, model, name, need_compatibility=False):
+    """The contact pair `name` of a case: its geometry, with the case's sliding."""
+    return attach(case, build_geometry(case, model, name, need_compatibility))
+
+
+def attach(case, pair):
+    """The pair as a case has it from a geometry built for it or for another case equal on
+    GEOMETRY: the case's own spec (law, friction) and, with friction, its sliding."""
+    spec = case.contact[pair.name]
+    pair = replace(pair, spec=spec)
+    return replace(pair, sliding=pair_sliding(case, pair)) if spec.friction.active else pair
+
+
+def build_geometry(case, model, name, need_compatibility=False):
+    """A pair's interface, compatibility, regularization and rule (no sliding): what its
+    spec's GEOMETRY fields and the model give."""
     spec = case.contact[name]
     key = f"contact.{name}"
     timings = {}
@@ -134,15 +156,15 @@ def build_pair(case, model, name, need_compatibility=False):
             raise CaseError(case.path, f"{key}.weights", str(exc)) from None
         rule = coarse.rule
         timings["coarse_rule"] = time.perf_counter() - t0
-    pair = ContactPair(name, spec, interface, comp, eps, eps_source, rule, primal, coarse,
+    return ContactPair(name, spec, interface, comp, eps, eps_source, rule, primal, coarse,
                        timings, factors=factors, projections=projections)
-    if spec.friction.active:
-        pair = replace(pair, sliding=pair_sliding(case, pair))
-    return pair
 
 
-def build_contact(case, model, need_compatibility=False):
-    """Every contact pair of the case, in file order."""
+def build_contact(case, model, need_compatibility=False, geometry=None):
+    """Every contact pair of the case, in file order; geometry: the pairs' geometry built
+    already (build_geometry, for a case equal on GEOMETRY: a campaign's variants)."""
+    if geometry is not None:
+        return [attach(case, pair) for pair in geometry]
     return [build_pair(case, model, name, need_compatibility) for name in case.contact]
 
 

@@ -246,8 +246,14 @@ def _sensors(case, parts, ndof):
     return tuple(names), sp.csr_matrix((vals, (rows, cols)), shape=(len(names), ndof))
 
 
-def build_model(case):
-    """Mesh every part, assemble K and M, and apply constraints, loads and sensors."""
+def build_model(case, structure=None):
+    """Mesh every part, assemble K and M, and apply constraints (the structure), then loads and
+    sensors. structure: a Model built for a case equal on the structure's fields (those of
+    stages.READS['model']), whose meshes, K, M and constraints are taken as they are: only the
+    loads and sensors are this case's (a campaign's pressure sweep shares the rest)."""
+    if structure is not None:
+        s = structure
+        return _loaded(case, s.points, s.parts, s.K, s.M, s.lumped_mass, s.fixed, {})
     timings = {}
     t0 = time.perf_counter()
     parts, offset = {}, 0
@@ -275,11 +281,16 @@ def build_model(case):
     timings["assembly"] = time.perf_counter() - t0
 
     fixed = _fixed(case, parts, 3 * len(points))
-    patterns = _loads(case, parts, points, ops.M)
+    return _loaded(case, points, parts, ops.K, ops.M, ops.lumped_mass, fixed, timings)
+
+
+def _loaded(case, points, parts, K, M, lumped_mass, fixed, timings):
+    """The Model of a structure with the case's loads and sensors."""
+    patterns = _loads(case, parts, points, M)
     load = sum(patterns.values(), np.zeros(3 * len(points)))
     names, sensors = _sensors(case, parts, 3 * len(points))
-    return Model(points, parts, ops.K, ops.M, ops.lumped_mass, fixed, load, patterns, names,
-                 sensors, timings)
+    return Model(points, parts, K, M, lumped_mass, fixed, load, patterns, names, sensors,
+                 timings)
 
 
 def constant_load(case, model):

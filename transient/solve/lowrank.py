@@ -16,6 +16,7 @@ import scipy.sparse as sp
 
 from ..contact.regularize import factored_rows
 from ..kernels.sparse import csr_dot
+from ..model.dofs import free_block, restrict
 from . import blas
 from .linsolve import factorize
 
@@ -162,6 +163,18 @@ class ContactSolver:
             # the largest array of a regularized fine rule at scale) is not held
             self.C = None
 
+    def __getstate__(self):
+        # a factorization does not travel between processes (PARDISO's handle is its own):
+        # the receiver factorizes A0 again, the same factors in the same thread setting
+        # (PARDISO's conditional numerical reproducibility), and keeps the rest (Z, G, V)
+        state = dict(self.__dict__)
+        del state["solve0"]
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self.solve0 = factorize(self.A0, self.backend, definite=self.sigma <= 0)
+
     def _loads(self, Y):
         """B Y (n, k), F-ordered: B = E V by columns, C^T otherwise; Y (rank, k), or a slice
         of B's columns (taken, not multiplied)."""
@@ -277,6 +290,17 @@ class ContactSolver:
             y = solve0(b)
             return y - Z(sla.cho_solve(cho, V.T @ y[cols]))
         return TangentSolve(solve, backend + "+tied"), V.shape[1]
+
+
+def contact_solver(model, contacts, sigma, backend="auto"):
+    """The ContactSolver of a model's free dofs under a contact set's rows (the explicit
+    rows, or their factors)."""
+    free = model.free
+    factors = (None if contacts.factors is None
+               else (contacts.factors[0], contacts.factors[1][free]))
+    return ContactSolver(free_block(model.K, free), free_block(model.M, free),
+                         None if contacts.rows is None else restrict(contacts.C, cols=free),
+                         sigma, backend, factors)
 
 
 def factored_row_space(L, B, cols, tol=ROW_SPACE_TOL):

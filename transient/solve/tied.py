@@ -22,8 +22,7 @@ from ..contact.contactset import stack
 from ..contact.pair import contact_stiffness
 from ..errors import CaseError
 from ..model import constant_load
-from ..model.dofs import free_block, restrict
-from .lowrank import ContactSolver
+from .lowrank import contact_solver
 from .modes import normal_modes
 from .preload import PreloadError, solve_preload
 
@@ -53,16 +52,11 @@ def contact_modes(case, model, pairs):
         K = model.K + contact_stiffness(pairs, model.ndof) if pairs else model.K
         return normal_modes(K, *args), Tie(kind, {})
     t0 = time.perf_counter()
-    free = model.free
     contacts = stack(pairs, model.ndof)
-    factors = (None if contacts.factors is None
-               else (contacts.factors[0], contacts.factors[1][free]))
     # the shift of normal_modes (negative: -(2 pi shift)^2), so that its Lanczos and the
     # contact solver's factorization are of the same K - sigma M
     sigma = np.sign(settings.shift) * (2 * np.pi * settings.shift) ** 2
-    cs = ContactSolver(free_block(model.K, free), free_block(model.M, free),
-                       None if contacts.rows is None else restrict(contacts.C, cols=free),
-                       sigma, case.solver.linear_solver, factors)
+    cs = contact_solver(model, contacts, sigma, case.solver.linear_solver)
     timings = {"contact_factorization": time.perf_counter() - t0}
     if kind == "exact":
         solve, held = cs.tied()

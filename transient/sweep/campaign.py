@@ -5,11 +5,13 @@ each, with BLAS, MKL, OpenMP and Numba at one thread set in their environment be
 start (so that a worker is the one-thread `transient run` it stands for, and N of them share
 the cores); the Numba cache is shared, its first compile serialized by transient.jit's lock.
 --scheduler ADDRESS runs the same tasks on an existing cluster instead (dask-jobqueue on
-SLURM: the README). Variants equal on the fields the model stage reads (stages.READS) share
-one Model, built once by a task of its own and sent to each worker once; the later stages are
-not shared yet. A task whose worker dies is rerun on another by the scheduler; a variant
-that is refused or aborts is a row with its reason. --resume skips the variants whose outputs
-are complete (their rows are read back from them) and reruns the others.
+SLURM: the README). Variants equal on the fields a first stage reads (stages.READS: the
+model's structure, the contact pairs' geometry, the factorization with the contact's low-rank
+update) share its result, built once by a task of its own and sent to each worker once (a
+factorization is made again where it lands: PARDISO's handle does not travel). A task whose
+worker dies is rerun on another by the scheduler; a variant that is refused or aborts is a row
+with its reason. --resume skips the variants whose outputs are complete (their rows are read
+back from them) and reruns the others.
 """
 import csv
 import json
@@ -17,8 +19,8 @@ import time
 from pathlib import Path
 
 from ..errors import CaseError
-from .tasks import (KINDS, build_shared_model, cea_summary, complete, output_path,
-                    run_variant, summary)
+from .tasks import (KINDS, build_shared, cea_summary, complete, output_path, run_variant,
+                    summary)
 from .variants import WHERE
 
 THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
@@ -28,11 +30,11 @@ FIRST = ("variant", "status", "seconds")
 
 def check_variants(case_path, overrides, variants, kind):
     """Load every variant (and, for runs, check what the transient refuses) before anything
-    runs: the first bad one is a CaseError naming it. Returns each variant's model key
-    (stages.stage_key): variants with equal keys share one Model."""
+    runs: the first bad one is a CaseError naming it. Returns each variant's keys of the
+    shareable stages (stages.stage_key, by stage): variants with equal keys share them."""
     from ..case.checks import check_transient
     from ..case.loading import load
-    from ..stages import stage_key
+    from ..stages import SHARED, stage_key
     keys = {}
     for v in variants:
         try:
@@ -42,7 +44,7 @@ def check_variants(case_path, overrides, variants, kind):
         except CaseError as exc:
             raise CaseError(exc.path, exc.key, f"variant {v.name} ({v.label()}): "
                             f"{exc.message}") from None
-        keys[v.name] = stage_key(case, "model")
+        keys[v.name] = {stage: stage_key(case, stage) for stage in SHARED}
     return keys
 
 
@@ -89,14 +91,14 @@ def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, schedul
             todo.append(v)
     if progress:
         progress(len(rows), len(variants), 0)
-    shared = {"model": 0}
+    shared = {}
     if todo:
         client, cluster = client_for(scheduler, workers)
         try:
             if announce:
                 announce(f"dask dashboard: {client.dashboard_link}")
-            shared["model"] = _gather(client, case_path, overrides, todo, out, kind, rows,
-                                      len(variants), progress, keys)
+            shared = _gather(client, case_path, overrides, todo, out, kind, rows,
+                             len(variants), progress, keys)
         finally:
             client.close()
             if cluster is not None:
@@ -107,22 +109,32 @@ def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, schedul
 
 
 def _gather(client, case_path, overrides, todo, out, kind, rows, total, progress, keys):
-    """Submit the variants and collect their rows; returns the Models built to be shared.
-    The variants of one model key (two or more) take one Model, built by a task of its own:
-    its future is an argument of theirs, so it is built once and travels to each worker
-    once (the scheduler keeps it where it is needed)."""
+    """Submit the variants and collect their rows; returns how many results of each stage were
+    built to be shared. Variants equal on a stage's key (two or more) take its result from a
+    task of its own, which goes on from the shallower stage's shared result: a future that is
+    an argument of theirs, so it is built once and travels to each worker once (the
+    scheduler keeps it where it is needed)."""
     from dask.distributed import as_completed
-    groups = {}
-    for v in todo:
-        groups.setdefault(keys[v.name], []).append(v)
-    models = {key: client.submit(build_shared_model, str(case_path),
-                                 list(overrides) + members[0].overrides(),
-                                 key=f"model-{i}-{time.time_ns()}", pure=False)
-              for i, (key, members) in enumerate(groups.items()) if len(members) > 1}
+    from ..stages import SHARED
+    built, counts, before = {}, {}, {v.name: None for v in todo}
+    for depth in SHARED:
+        groups = {}
+        for v in todo:
+            groups.setdefault(keys[v.name][depth], []).append(v)
+        counts[depth] = 0
+        for key, members in groups.items():
+            if len(members) < 2:
+                continue
+            future = client.submit(build_shared, str(case_path),
+                                   list(overrides) + members[0].overrides(), depth,
+                                   before[members[0].name],
+                                   key=f"{depth}-{counts[depth]}-{time.time_ns()}", pure=False)
+            counts[depth] += 1
+            for v in members:
+                built[v.name] = before[v.name] = future
     futures = {client.submit(run_variant, str(case_path), list(overrides) + v.overrides(),
-                             str(output_path(out, v.name, kind)), kind,
-                             models.get(keys[v.name]), key=f"{v.name}-{time.time_ns()}",
-                             pure=False): v for v in todo}
+                             str(output_path(out, v.name, kind)), kind, built.get(v.name),
+                             key=f"{v.name}-{time.time_ns()}", pure=False): v for v in todo}
     failed = 0
     for future in as_completed(futures):
         v = futures[future]
@@ -134,7 +146,7 @@ def _gather(client, case_path, overrides, todo, out, kind, rows, total, progress
         failed += row["status"] != "complete"
         if progress:
             progress(len(rows), total, failed)
-    return len(models)
+    return counts
 
 
 def _restored(path, kind):

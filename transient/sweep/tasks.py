@@ -36,33 +36,35 @@ def output_path(out, name, kind):
     return Path(out) / (f"{name}.json" if kind == "cea" else f"{name}.h5")
 
 
-def run_variant(case_path, overrides, out, kind, model=None):
+def run_variant(case_path, overrides, out, kind, built=None):
     """The row of one variant: status, seconds, the stages it ran and the summary numbers of
-    its kind. model: the variant's Model, shared with others, or None to build it."""
+    its kind. built: the first stages' results it shares with others (stages.Built), or
+    None to build them."""
     t0 = time.perf_counter()
     try:
         from ..case.loading import load
         case = load(case_path, overrides)
-        row = _cea(case, out, model) if kind == "cea" else _run(case, out, model)
+        row = _cea(case, out, built) if kind == "cea" else _run(case, out, built)
     except CaseError as exc:
         row = {"status": f"refused: {exc.key}: {exc.message}"}
     row["seconds"] = time.perf_counter() - t0
     return row
 
 
-def build_shared_model(case_path, overrides):
-    """The Model of a group of variants that share it (stages.stage_key), built once."""
+def build_shared(case_path, overrides, depth, built=None):
+    """The first stages, to `depth`, of a group of variants that share them (stages.stage_key),
+    built once, going on from a shallower group's `built`."""
     from ..case.loading import load
-    from ..model import build_model
-    return build_model(load(case_path, overrides))
+    from ..stages import build_shared
+    return build_shared(load(case_path, overrides), depth, built)
 
 
-def _run(case, out, model):
+def _run(case, out, built):
     from ..run import run
     # the campaign runs this variant afresh: what a worker killed mid-run left is dropped (a
     # history cut off in a write may not open as one)
     Path(out).unlink(missing_ok=True)
-    result = run(case, Path(out), progress=False, key="--out", model=model)
+    result = run(case, Path(out), progress=False, key="--out", built=built)
     return {"status": result.status, "steps": result.steps, "dt": result.dt,
             "kernel_s": result.timings.get("kernel"), "energy_drift": result.energy_drift,
             "stages": sorted(result.stages), **summary(out)}
@@ -82,9 +84,9 @@ def summary(path):
     return {k: (None if v != v else v) for k, v in numbers.items()}        # NaN: None
 
 
-def _cea(case, out, model):
+def _cea(case, out, built):
     from ..cea.stage import analyse
-    result = analyse(case, model=model)
+    result = analyse(case, built=built)
     modes = result.modes.table()
     Path(out).write_text(json.dumps({"status": "complete", "modes": modes,
                                      "ndof": result.ndof, "reduced": result.reduced}))
