@@ -340,3 +340,18 @@ def test_a_pressure_sweep_shares_every_first_stage(tmp_path, capsys):
     saved = json.loads((out / "sweep.json").read_text())
     assert saved["shared"] == {"model": 1, "contact": 1, "factorization": 1}
     assert all(r["status"] == "complete" for r in saved["rows"])
+
+
+def test_progress_counts_the_variants_done_and_the_failed(tmp_path):
+    """The campaign's bar is told each variant done, and how many failed so far: a step above
+    the explicit scheme's critical one is refused at the variant's setup, a row with its
+    reason, and the campaign goes on."""
+    from transient.sweep.campaign import sweep
+    calls = []
+    rows = sweep(PAD, make_variants([parse_parameter("solver.dt=[0.0,1e-3]")], "grid"),
+                 tmp_path / "out", "run", SMALL + ['solver.scheme="explicit"'], workers=1,
+                 progress=lambda *a: calls.append(a), announce=None)
+    assert calls[0] == (0, 2, 0) and calls[-1] == (2, 2, 1)
+    assert sorted(c[0] for c in calls) == [0, 1, 2]
+    assert rows[0]["status"] == "complete"
+    assert rows[1]["status"].startswith("refused: solver.dt: 1.000e-03 s is above")
