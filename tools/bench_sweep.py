@@ -1,7 +1,7 @@
 """A friction-coefficient campaign by `transient sweep` against the same variants run one by
 one: `transient cea` and a short `transient run` for each mu, back to back, then the two sweeps
 (kind cea, kind run) on the embedded cluster; wall times, their ratio, and the marginal cost of
-a variant (its own seconds in sweep.json) against the setup's.
+a variant (its own seconds in sweep.json) against the shared stages' (their build's seconds).
 
     python tools/bench_sweep.py [--case cases/pad_disc.toml] [--count 20] [--t-end 1e-3]
         [--workers 2] [--out /tmp/bench_sweep] [--json]
@@ -58,17 +58,22 @@ def main():
                     str(out / "run"), "--json"])
     rows = [r for kind in ("cea", "run")
             for r in json.loads((out / kind / "sweep.json").read_text())["rows"]]
+    # the shared stages' builds, once per sweep (each row carries what its shared ones took)
+    shared = sum(max((sum(r.get("shared_s", {}).values()) for r in json.loads(
+        (out / kind / "sweep.json").read_text())["rows"]), default=0.0)
+        for kind in ("cea", "run"))
     result = {"variants": args.count, "workers": args.workers, "alone_s": alone,
               "sweep_s": swept, "ratio": alone / swept,
               "variant_s_median": float(np.median([r["seconds"] for r in rows])),
-              "load": [load0, os.getloadavg()[0]]}
+              "shared_setup_s": shared, "load": [load0, os.getloadavg()[0]]}
     if args.json:
         print(json.dumps(result))
     else:
         print(f"{args.count} mu on {Path(args.case).name}, cea + a {args.t_end:g} s run each: "
               f"one by one {alone:.1f} s, two sweeps on {args.workers} workers {swept:.1f} s: "
               f"{result['ratio']:.2f}x; a variant's own median {result['variant_s_median']:.1f}"
-              f" s; load {load0:.2f} -> {result['load'][1]:.2f}")
+              f" s (the marginal cost), the shared stages {shared:.1f} s (both sweeps); load "
+              f"{load0:.2f} -> {result['load'][1]:.2f}")
 
 
 if __name__ == "__main__":

@@ -59,6 +59,7 @@ class Built:
     model: object
     geometry: list = None        # contact.pair.build_geometry of each pair
     solver: object = None        # solve.lowrank.ContactSolver
+    seconds: dict = None         # stage -> seconds it took to build
 
     @property
     def stages(self):
@@ -68,15 +69,18 @@ class Built:
 def build_shared(case, depth, built=None):
     """The Built of a case's first stages to `depth` (one of SHARED), going on from `built`
     (a Built of a shallower depth, for cases equal on its stages' READS)."""
-    model = built.model if built is not None else build_model(case)
-    geometry = built.geometry if built is not None else None
-    if depth == "model" or not case.contact:
-        return Built(model)
-    if geometry is None:
-        geometry = [build_geometry(case, model, name) for name in case.contact]
-    if depth == "contact":
-        return Built(model, geometry)
-    return Built(model, geometry, factorization(case, model, stack(geometry, model.ndof)))
+    stages = _Stages()
+    with blas.one_thread():
+        model = built.model if built is not None else stages.timed("model", build_model, case)
+        geometry = built.geometry if built is not None else None
+        if depth != "model" and case.contact and geometry is None:
+            geometry = stages.timed("contact", lambda: [build_geometry(case, model, name)
+                                                        for name in case.contact])
+        solver = (stages.timed("factorization", factorization, case, model,
+                               stack(geometry, model.ndof))
+                  if depth == "factorization" and case.contact else None)
+    seconds = {**(built.seconds if built is not None else {}), **stages}
+    return Built(model, geometry, solver, seconds)
 
 
 def factorization(case, model, contacts):

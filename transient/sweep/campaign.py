@@ -170,7 +170,8 @@ def write(table, out, parameters, kind, shared=None):
                                                indent=1))
     columns = list(FIRST)
     for row in table:
-        columns += [k for k, x in row.items() if k not in columns and not isinstance(x, list)]
+        columns += [k for k, x in row.items()
+                    if k not in columns and not isinstance(x, (list, dict))]
     with open(out / "sweep.csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=columns, extrasaction="ignore")
         w.writeheader()

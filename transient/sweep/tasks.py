@@ -48,6 +48,8 @@ def run_variant(case_path, overrides, out, kind, built=None):
     except CaseError as exc:
         row = {"status": f"refused: {exc.key}: {exc.message}"}
     row["seconds"] = time.perf_counter() - t0
+    # what its shared stages took to build, once for all the variants that share them
+    row["shared_s"] = dict(built.seconds) if built is not None else {}
     return row
 
 
