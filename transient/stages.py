@@ -61,10 +61,6 @@ class Built:
     solver: object = None        # solve.lowrank.ContactSolver
     seconds: dict = None         # stage -> seconds it took to build
 
-    @property
-    def stages(self):
-        return SHARED[:1 + (self.geometry is not None) + (self.solver is not None)]
-
 
 def build_shared(case, depth, built=None):
     """The Built of a case's first stages to `depth` (one of SHARED), going on from `built`
