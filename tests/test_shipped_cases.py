@@ -44,7 +44,8 @@ def test_pad_disc_tet10_locks_tied_exactly_with_the_rich_rule_only():
     exactly (the gap held at zero on the rule's rows), the fine rule raises the first 50
     frequencies of the (1-eps) regularized centre rule by up to 16.4% (mean 3.0%, paired by
     MAC); tied by springs at the exponential law's tangent at 1 MPa (k = lambda p = 5e11),
-    by under 0.4%: the nearly compatible shapes stay soft under any finite k."""
+    by 0.36% at most: the nearly compatible shapes stay soft under any finite k
+    (tools/study_locking.py)."""
     path = CASES / "pad_disc_tet10.toml"
     rich = ["contact.pad_disc.rule=fine", "contact.pad_disc.regularized=false"]
     exact = compare(load(path), load(path, rich), "disc_rim", "pad_back", 0.01)
