@@ -201,22 +201,42 @@ def test_the_run_sweeps_pictures(campaign, capsys):
     assert "--x" in capsys.readouterr().err
 
 
-def test_a_cea_sweep_and_its_stability_map(tmp_path, capsys):
-    """mu 0 and 0.4 on the small pad and disc: no unstable mode, then its flutter pair's
-    growing member (11-12.5 kHz); the map of every mode against mu."""
-    out = tmp_path / "cea"
+def _mu_sweep(out, kind, capsys):
     args = ["sweep", str(PAD), "--param", "contact.pad_disc.friction.mu=[0.0,0.4]", "--kind",
-            "cea", "--workers", "1", "--out", str(out), "--json"]
+            kind, "--workers", "1", "--out", str(out), "--json"]
     for o in SMALL:
         args += ["--set", o]
     assert main(args) == 0
-    rows = json.loads(capsys.readouterr().out.splitlines()[-1])["rows"]
+    return json.loads(capsys.readouterr().out.splitlines()[-1])["rows"]
+
+
+def test_a_cea_sweep_and_its_stability_map(campaign, tmp_path, capsys):
+    """mu 0 and 0.4 on the small pad and disc: no unstable mode, then its flutter pair's
+    growing member (11-12.5 kHz); the map of every mode against mu."""
+    out = tmp_path / "cea"
+    rows = _mu_sweep(out, "cea", capsys)
     assert [r["unstable"] for r in rows][0] == 0 and rows[1]["unstable"] >= 1
     assert 11e3 < rows[1]["frequency_hz"] < 12.5e3 and rows[1]["max_real"] > 500
     modes = json.loads((out / "v001.json").read_text())["modes"]
     assert len(modes) > 10 and sum(m["unstable"] for m in modes) == rows[1]["unstable"]
     assert main(["plot", "sweep", str(out), "-o", str(tmp_path / "map.png")]) == 0
     assert (tmp_path / "map.png").stat().st_size > 10_000
+    # both kinds from one setup: the complex modes of the run's stages before its sampling
+    # are the cea's, and the history the run's alone, bit for bit
+    both = _mu_sweep(tmp_path / "both", "both", capsys)
+    alone = campaign[2][0], campaign[2][2]              # mu 0 and 0.4 by transient run
+    for row, cea_row, path in zip(both, rows, alone):
+        got, ref = _arrays(tmp_path / "both" / row["output"]), _arrays(path)
+        assert set(got) == set(ref) and all(np.array_equal(got[k], ref[k]) for k in ref)
+        assert row["status"] == "complete" and row["output"].endswith(".h5")
+        got = json.loads((tmp_path / "both" / row["modes_output"]).read_text())
+        assert got == json.loads((out / cea_row["output"]).read_text())
+        assert row["max_real"] == cea_row["max_real"] and "growth_rate" in row
+        assert "sampling" in row["stages"]
+    assert both[1]["growth_rate"] > 500          # the flutter pair's growth at mu = 0.4
+    picture = tmp_path / "both.png"
+    assert main(["plot", "sweep", str(tmp_path / "both"), "-o", str(picture)]) == 0
+    assert all((tmp_path / f"both_{k}.png").stat().st_size > 10_000 for k in ("cea", "run"))
 
 
 def test_plot_sweep_needs_a_sweep(tmp_path, capsys):

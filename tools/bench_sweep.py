@@ -1,7 +1,8 @@
 """A friction-coefficient campaign by `transient sweep` against the same variants run one by
 one: `transient cea` and a short `transient run` for each mu, back to back, then the two sweeps
-(kind cea, kind run) on the embedded cluster; wall times, their ratio, and the marginal cost of
-a variant (its own seconds in sweep.json) against the shared stages' (their build's seconds).
+(kind cea, kind run) and the one sweep of both kinds on the embedded cluster; wall times, their
+ratios, and the marginal cost of a variant (its own seconds in sweep.json) against the shared
+stages' (their build's seconds).
 
     python tools/bench_sweep.py [--case cases/pad_disc.toml] [--count 20] [--t-end 1e-3]
         [--workers 2] [--out /tmp/bench_sweep] [--json]
@@ -51,29 +52,38 @@ def main():
         alone += timed(["run", args.case, "-o", str(out / f"alone_{mu}.h5"), "--quiet",
                         "--set", f"solver.t_end={args.t_end}"] + s)
     grid = f"{KEY}=0:0.6:{args.count}"
-    swept = timed(["sweep", args.case, "--param", grid, "--kind", "cea", "--workers",
-                   str(args.workers), "--out", str(out / "cea"), "--json"])
-    swept += timed(["sweep", args.case, "--param", grid, "--kind", "run", "--workers",
-                    str(args.workers), "--set", f"solver.t_end={args.t_end}", "--out",
-                    str(out / "run"), "--json"])
-    rows = [r for kind in ("cea", "run")
-            for r in json.loads((out / kind / "sweep.json").read_text())["rows"]]
-    # the shared stages' builds, once per sweep (each row carries what its shared ones took)
-    shared = sum(max((sum(r.get("shared_s", {}).values()) for r in json.loads(
-        (out / kind / "sweep.json").read_text())["rows"]), default=0.0)
-        for kind in ("cea", "run"))
+    run_end = ["--set", f"solver.t_end={args.t_end}"]
+
+    def swept(kind, more=()):
+        return timed(["sweep", args.case, "--param", grid, "--kind", kind, "--workers",
+                      str(args.workers), "--out", str(out / kind), "--json", *more])
+    two = swept("cea") + swept("run", run_end)
+    one = swept("both", run_end)
+
+    def rows(kind):
+        return json.loads((out / kind / "sweep.json").read_text())["rows"]
+
+    def shared(kind):
+        # the shared stages' builds, once per sweep (each row carries what they took)
+        return max((sum(r.get("shared_s", {}).values()) for r in rows(kind)), default=0.0)
     result = {"variants": args.count, "workers": args.workers, "alone_s": alone,
-              "sweep_s": swept, "ratio": alone / swept,
-              "variant_s_median": float(np.median([r["seconds"] for r in rows])),
-              "shared_setup_s": shared, "load": [load0, os.getloadavg()[0]]}
+              "two_sweeps_s": two, "ratio_two": alone / two, "both_sweep_s": one,
+              "ratio_both": alone / one,
+              "variant_s_median": {k: float(np.median([r["seconds"] for r in rows(k)]))
+                                   for k in ("cea", "run", "both")},
+              "shared_setup_s": {k: shared(k) for k in ("cea", "run", "both")},
+              "load": [load0, os.getloadavg()[0]]}
     if args.json:
         print(json.dumps(result))
     else:
+        med, sh = result["variant_s_median"], result["shared_setup_s"]
         print(f"{args.count} mu on {Path(args.case).name}, cea + a {args.t_end:g} s run each: "
-              f"one by one {alone:.1f} s, two sweeps on {args.workers} workers {swept:.1f} s: "
-              f"{result['ratio']:.2f}x; a variant's own median {result['variant_s_median']:.1f}"
-              f" s (the marginal cost), the shared stages {shared:.1f} s (both sweeps); load "
-              f"{load0:.2f} -> {result['load'][1]:.2f}")
+              f"one by one {alone:.1f} s; on {args.workers} workers two sweeps (cea, run) "
+              f"{two:.1f} s, {result['ratio_two']:.2f}x; one sweep of both kinds {one:.1f} s, "
+              f"{result['ratio_both']:.2f}x. A variant's own median (the marginal cost): cea "
+              f"{med['cea']:.1f} s, run {med['run']:.1f} s, both {med['both']:.1f} s; the "
+              f"shared stages {sh['both']:.1f} s a sweep; load {load0:.2f} -> "
+              f"{result['load'][1]:.2f}")
 
 
 if __name__ == "__main__":

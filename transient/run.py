@@ -56,27 +56,29 @@ class _Start:
     meta: dict
 
 
-def run(case, path, resume=False, progress=None, key="output.file", built=None):
+def run(case, path, resume=False, progress=None, key="output.file", built=None,
+        on_setup=None):
     """Integrate a case to solver.t_end, streaming to the HDF5 file at path (named by key in
-    errors: '-o' or output.file).
-
-    The output is checked and held (io.lock) before the first stage; a resumed run continues
+    errors: '-o' or output.file). The output is checked and held (io.lock) before the first stage; a resumed run continues
     the system stored in the history. Returns a RunResult; a run that stops early (NaN,
     energy drift, Ctrl-C) keeps every chunk in the file, marked `aborted: <reason>`. built:
     the first stages' results when built already (a campaign's variants share them:
-    stages.Built).
+    stages.Built). on_setup(setup): called with a new run's setup (with Setup.unsampled)
+    before the time integration: a campaign's variant analyses its complex modes there.
     """
     check_transient(case)
     t_start = time.perf_counter()
     # the stop requests are held from here: over the setup a Ctrl-C ends the run at once, or
     # at the next stage if it landed where it was swallowed, and leaves no file
     with stop_requests(at_once=True) as stop, writing(path, key, resume):
-        start = _resume(case, path, stop) if resume else _new(case, path, stop, built)
+        start = _resume(case, path, stop) if resume else _new(case, path, stop, built, on_setup)
         return _loop(case, path, start, progress, t_start, stop)
 
 
-def _new(case, path, stop, built=None):
-    setup = prepare(case, stop.check, built)
+def _new(case, path, stop, built=None, on_setup=None):
+    setup = prepare(case, stop.check, built, unsampled=on_setup is not None)
+    if on_setup is not None:
+        on_setup(setup)
     system, output = setup.system, case.output
     dt = choose_dt(case, setup)
     n_total = int(round(case.solver.t_end / dt))

@@ -97,6 +97,8 @@ class Setup:
     model: object = None     # the Model (parts, dofs) the system was built from
     basis: tuple = None      # a reduced system's (X, AW): its coordinates on the model's dofs
     #                          are X AW q (the product formed only for field output)
+    unsampled: object = None  # asked of prepare: a sampled rule's Setup on its candidates,
+    #                           before the sampling (what the cea analyses; no rows0)
 
 
 class _Stages(dict):
@@ -120,7 +122,7 @@ class _Stages(dict):
         return out
 
 
-def prepare(case, check=None, built=None):
+def prepare(case, check=None, built=None, unsampled=False):
     """Model, contact, preload, linearization and (optionally) reduction of a case.
 
     The setup's dense algebra runs on one OpenBLAS thread: its calls are many and mid-sized
@@ -130,12 +132,13 @@ def prepare(case, check=None, built=None):
     PARDISO's and Numba's threads). PARDISO (MKL) keeps its threads, which pay for its solves.
     The large products of sections that solve nothing run on every core (solve.blas).
     built: the first stages' results when built already (a Built: cea bounds the model's size
-    first, a campaign's variants share them)."""
+    first, a campaign's variants share them). unsampled: also the Setup of a sampled rule's
+    candidates (Setup.unsampled), the cea's, from the same stages."""
     with blas.one_thread():
-        return _prepare(case, _Stages(check), built or Built(None))
+        return _prepare(case, _Stages(check), built or Built(None), unsampled)
 
 
-def _prepare(case, stages, built):
+def _prepare(case, stages, built, want_unsampled=False):
     solver = case.solver
     model = (stages.timed("loads", build_model, case, built.model) if built.model is not None
              else stages.timed("model", build_model, case))
@@ -153,7 +156,7 @@ def _prepare(case, stages, built):
     free = model.free
     # without constant loads there is no preload: the run starts from the undeformed state
     # (with initial velocities), in equilibrium or not
-    cs = None
+    cs, unsampled = None, None
     if np.any(constant) or solver.reduction.enabled:
         cs = built.solver or stages.timed("factorization", factorization, case, model, contacts)
     try:
@@ -183,11 +186,11 @@ def _prepare(case, stages, built):
         red = reduce(case, model, M, pairs, contacts, preload, patterns, v0, tangent,
                      critical_tangent(contacts, preload.tangent), stages, cs.C)
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
-        system = reduced_system(red.X, red.AW, red.omega2, solver.reduction.fmax,
-                                solver.damping, contacts, preload.tangent, patterns, signals,
-                                sensors, names, case.output.field, preload.pressure)
-        state = State.zeros(system.n, contacts.n_points)
-        state.q[:], state.v[:] = red.q0, red.v0
+        system, state = _reduced(case, red, patterns, signals, sensors, names)
+        if want_unsampled and red.unsampled is not None:
+            u = red.unsampled
+            unsampled = Setup(*_reduced(case, u, patterns, signals, sensors, names), None, {},
+                              dict(u.meta), {}, model, (u.X, u.AW))
     else:
         system = stages.timed("time_step", full_system, K_lin, model.lumped_mass,
                         None if solver.lumped else model.M, solver.damping, contacts,
@@ -208,7 +211,19 @@ def _prepare(case, stages, built):
                                                    solver.linear_solver)}
     stages.check()
     return Setup(system, state, rows0, dict(stages), meta, _geometry(case, system, pairs),
-                 model, (red.X, red.AW) if system.reduced else None)
+                 model, (red.X, red.AW) if system.reduced else None, unsampled)
+
+
+def _reduced(case, red, patterns, signals, sensors, names):
+    """(system, initial state) of a ReducedModel."""
+    solver = case.solver
+    system = reduced_system(red.X, red.AW, red.omega2, solver.reduction.fmax, solver.damping,
+                            red.contacts, red.preload.tangent, patterns, signals, sensors,
+                            names, case.output.field, red.preload.pressure)
+    state = State.zeros(system.n, red.contacts.n_points)
+    state.q[:], state.v[:] = red.q0, red.v0
+    state.gmin[:] = red.preload.gap
+    return system, state
 
 
 def _contact_meta(pairs, contacts, preload):

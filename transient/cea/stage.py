@@ -67,7 +67,18 @@ def analyse(case, check=None, built=None):
         _bounded(case, int((~built.model.fixed).sum()))
     setup = prepare(analysed_case(case), check, built)
     stages.update(setup.stages)
+    return analysis_of(case, setup, stages)
+
+
+def analysis_of(case, setup, stages=None):
+    """The Analysis of a case from its setup (prepare's: of analysed_case(case), or a sampled
+    rule's Setup.unsampled, the same arithmetic before the sampling); stages: the setup's
+    seconds, which the analysis's own join."""
+    stages = dict(stages or {})
     system = setup.system
+    if not system.reduced:
+        # (analyse bounds it before its setup; a setup made for a run is bounded here)
+        _bounded(case, len(system.free))
     fmax = fmax_of(case)
     t0 = time.perf_counter()
     M, D, K = linearized(system, setup.state)

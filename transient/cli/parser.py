@@ -73,8 +73,8 @@ def build_parser():
                       help="every combination of the values (the default)")
     mode.add_argument("--zip", dest="mode", action="store_const", const="zip",
                       help="the lists paired, value by value")
-    p.add_argument("--kind", default="run", help="run (a history per variant, the default) "
-                   "or cea (its complex modes)")
+    p.add_argument("--kind", default="run", help="run (a history per variant, the default), "
+                   "cea (its complex modes) or both (the two from one setup)")
     p.add_argument("--workers", type=int, default=2, help="worker processes of the embedded "
                    "Dask cluster, one thread each (default 2)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler "

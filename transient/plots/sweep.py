@@ -1,5 +1,5 @@
 """Pictures of a sweep (transient sweep's DIR): the stability map of a cea sweep, a run
-sweep's summaries against a parameter.
+sweep's summaries against a parameter, both for a sweep of both kinds.
 
 The other parameters of a grid split the variants into groups: one map per group (cea), one
 line per group (run).
@@ -42,10 +42,6 @@ def groups(rows, parameters, x):
 def sweep_figures(directory, x=None, png=None):
     """The sweep's pictures, written next to sweep.json (or at png, suffixed per group);
     returns their paths."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from .cea import map_figure
     directory = Path(directory)
     kind, parameters, rows = read_sweep(directory)
     x = x or parameters[0]
@@ -56,20 +52,37 @@ def sweep_figures(directory, x=None, png=None):
     if not parts:
         raise CaseError(directory / "sweep.json", "", "no complete variant to draw")
     base = Path(png) if png else directory / f"sweep_{kind}.png"
-    paths = []
+    if kind == "both":
+        return (_maps(directory, parts, x, base.with_name(f"{base.stem}_cea{base.suffix}"))
+                + _summaries(parts, x, base.with_name(f"{base.stem}_run{base.suffix}")))
     if kind == "cea":
-        for k, (label, members) in enumerate(parts.items()):
-            modes = []
-            for row in members:
-                table = json.loads((directory / row["output"]).read_text())["modes"]
-                modes.append(SimpleNamespace(**{key: np.array([m[key] for m in table])
-                                                for key in ("frequency_hz", "real",
-                                                            "unstable")}))
-            path = base if len(parts) == 1 else base.with_name(f"{base.stem}_{k}{base.suffix}")
-            map_figure([r[x] for r in members], modes, path,
-                       "complex modes" + (f" ({label})" if label else ""), x)
-            paths.append(path)
-        return paths
+        return _maps(directory, parts, x, base)
+    return _summaries(parts, x, base)
+
+
+def _maps(directory, parts, x, base):
+    """One stability map per group of the other parameters' values."""
+    from .cea import map_figure
+    paths = []
+    for k, (label, members) in enumerate(parts.items()):
+        modes = []
+        for row in members:
+            table = json.loads((directory / row.get("modes_output", row["output"]))
+                               .read_text())["modes"]
+            modes.append(SimpleNamespace(**{key: np.array([m[key] for m in table])
+                                            for key in ("frequency_hz", "real", "unstable")}))
+        path = base if len(parts) == 1 else base.with_name(f"{base.stem}_{k}{base.suffix}")
+        map_figure([r[x] for r in members], modes, path,
+                   "complex modes" + (f" ({label})" if label else ""), x)
+        paths.append(path)
+    return paths
+
+
+def _summaries(parts, x, base):
+    """The run's summaries against x, one line per group of the other parameters' values."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, len(SUMMARIES), figsize=(5 * len(SUMMARIES), 4.2))
     for ax, (key, name) in zip(axes, SUMMARIES):
         for label, members in parts.items():

@@ -25,6 +25,8 @@ class ReducedModel:
     pairs: list              # ContactPairs with the rules of the points kept
     preload: Preload         # the preload those points hold
     meta: dict               # basis sizes and timings, sampling figures
+    unsampled: object = None  # a sampled rule's: the ReducedModel of its candidates, before
+    #                           the sampling (what the cea analyses)
 
 
 def candidates(case, pairs, contacts):
@@ -75,9 +77,10 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
                                             / max(np.linalg.norm(preload.u), 1e-300)),
             "free_dofs": int((~model.fixed).sum())}
     mask = candidates(case, pairs, contacts)
+    unsampled = ReducedModel(basis.X, basis.A, basis.omega2, q0, v, contacts, pairs, preload,
+                             dict(meta))
     if mask is None:
-        return ReducedModel(basis.X, basis.A, basis.omega2, q0, v, contacts, pairs, preload,
-                            meta)
+        return unsampled
     stages.check()
     t0 = perf_counter()
     with blas.every_core():      # dense algebra on the reduced coordinates, no solve
@@ -96,7 +99,7 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
     return ReducedModel(basis.X, AW, sampled.omega2, sampled.q, sampled.W.T @ v,
                         sampled.contacts,
                         _sampled_pairs(pairs, contacts, sampled.keep, sampled.contacts), held,
-                        meta)
+                        meta, unsampled)
 
 
 def _friction_loads(contacts, preload, free):

@@ -19,8 +19,8 @@ import time
 from pathlib import Path
 
 from ..errors import CaseError
-from .tasks import (KINDS, build_shared, cea_summary, complete, output_path, run_variant,
-                    summary)
+from .tasks import (KINDS, build_shared, cea_summary, complete, output_path, outputs,
+                    run_variant, summary)
 from .variants import WHERE
 
 THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
@@ -39,7 +39,7 @@ def check_variants(case_path, overrides, variants, kind):
     for v in variants:
         try:
             case = load(case_path, list(overrides) + v.overrides())
-            if kind == "run":
+            if kind in ("run", "both"):
                 check_transient(case)
         except CaseError as exc:
             raise CaseError(exc.path, exc.key, f"variant {v.name} ({v.label()}): "
@@ -83,11 +83,12 @@ def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, schedul
     rows = {}
     todo = []
     for v in variants:
-        path = output_path(out, v.name, kind)
-        if resume and complete(path):
-            rows[v.name] = _restored(path, kind)
+        paths = outputs(out, v.name, kind)
+        if resume and all(complete(p) for p in paths):
+            rows[v.name] = _restored(paths)
         else:
-            path.unlink(missing_ok=True)        # a partial output from an interrupted sweep
+            for path in paths:
+                path.unlink(missing_ok=True)    # a partial output from an interrupted sweep
             todo.append(v)
     if progress:
         progress(len(rows), len(variants), 0)
@@ -149,16 +150,20 @@ def _gather(client, case_path, overrides, todo, out, kind, rows, total, progress
     return counts
 
 
-def _restored(path, kind):
-    if kind == "cea":
-        return {"status": "complete", "resumed": True,
-                **cea_summary(json.loads(Path(path).read_text())["modes"])}
-    return {"status": "complete", "resumed": True, **summary(path)}
+def _restored(paths):
+    """The row of a variant whose outputs are complete, read back from them."""
+    row = {"status": "complete", "resumed": True}
+    for path in paths:
+        row.update(cea_summary(json.loads(Path(path).read_text())["modes"])
+                   if path.suffix == ".json" else summary(path))
+    return row
 
 
 def _row(v, row, kind, out):
+    paths = outputs(out, v.name, kind)
     return {"variant": v.name, **v.values, **{k: row.get(k) for k in row if k != "resumed"},
-            "resumed": bool(row.get("resumed")), "output": output_path(out, v.name, kind).name}
+            "resumed": bool(row.get("resumed")), "output": paths[0].name,
+            **({"modes_output": paths[1].name} if len(paths) > 1 else {})}
 
 
 def write(table, out, parameters, kind, shared=None):

@@ -4,8 +4,9 @@ Kinds: 'run' integrates the variant to its own history (the ordinary file `trans
 writes, readable by `transient info`), then sums up its oscillation from the sensors (the
 growth rate, the limit cycle's RMS and dominant frequency: studies.bench.oscillation);
 'cea' computes its complex modes, written as JSON next to the histories, and sums up the
-unstable ones. A variant refused, or a run that aborts, is a row with its reason: the
-campaign goes on.
+unstable ones; 'both' does the two from one setup (the complex modes from the run's stages
+before its sampling: what `transient cea` analyses). A variant refused, or a run that
+aborts, is a row with its reason: the campaign goes on.
 """
 import json
 import time
@@ -13,7 +14,7 @@ from pathlib import Path
 
 from ..errors import CaseError
 
-KINDS = ("run", "cea")
+KINDS = ("run", "cea", "both")
 
 
 def complete(path):
@@ -32,8 +33,14 @@ def complete(path):
         return False
 
 
+def outputs(out, name, kind):
+    """A variant's files: its history (run), its complex modes (cea), or both, history first."""
+    history, modes = Path(out) / f"{name}.h5", Path(out) / f"{name}.json"
+    return {"run": [history], "cea": [modes], "both": [history, modes]}[kind]
+
+
 def output_path(out, name, kind):
-    return Path(out) / (f"{name}.json" if kind == "cea" else f"{name}.h5")
+    return outputs(out, name, kind)[0]
 
 
 def run_variant(case_path, overrides, out, kind, built=None):
@@ -44,7 +51,7 @@ def run_variant(case_path, overrides, out, kind, built=None):
     try:
         from ..case.loading import load
         case = load(case_path, overrides)
-        row = _cea(case, out, built) if kind == "cea" else _run(case, out, built)
+        row = {"run": _run, "cea": _cea, "both": _both}[kind](case, out, built)
     except CaseError as exc:
         row = {"status": f"refused: {exc.key}: {exc.message}"}
     row["seconds"] = time.perf_counter() - t0
@@ -61,12 +68,13 @@ def build_shared(case_path, overrides, depth, built=None):
     return build_shared(load(case_path, overrides), depth, built)
 
 
-def _run(case, out, built):
+def _run(case, out, built, on_setup=None):
     from ..run import run
     # the campaign runs this variant afresh: what a worker killed mid-run left is dropped (a
     # history cut off in a write may not open as one)
     Path(out).unlink(missing_ok=True)
-    result = run(case, Path(out), progress=False, key="--out", built=built)
+    result = run(case, Path(out), progress=False, key="--out", built=built,
+                 on_setup=on_setup)
     return {"status": result.status, "steps": result.steps, "dt": result.dt,
             "kernel_s": result.timings.get("kernel"), "energy_drift": result.energy_drift,
             "stages": sorted(result.stages), **summary(out)}
@@ -89,10 +97,28 @@ def summary(path):
 def _cea(case, out, built):
     from ..cea.stage import analyse
     result = analyse(case, built=built)
-    modes = result.modes.table()
-    Path(out).write_text(json.dumps({"status": "complete", "modes": modes,
-                                     "ndof": result.ndof, "reduced": result.reduced}))
-    return {"status": "complete", "stages": sorted(result.stages), **cea_summary(modes)}
+    return {"status": "complete", "stages": sorted(result.stages),
+            **_modes_written(result, out)}
+
+
+def _both(case, out, built):
+    """The run, and the complex modes from its setup before the time integration."""
+    from ..cea.stage import analysis_of
+    modes = Path(out).with_suffix(".json")
+    modes.unlink(missing_ok=True)
+    found = {}
+
+    def analyse(setup):
+        found.update(_modes_written(analysis_of(case, setup.unsampled or setup), modes))
+    return {**_run(case, out, built, analyse), **found}
+
+
+def _modes_written(analysis, path):
+    """The complex modes of an Analysis written as JSON at path; their summary."""
+    modes = analysis.modes.table()
+    Path(path).write_text(json.dumps({"status": "complete", "modes": modes,
+                                      "ndof": analysis.ndof, "reduced": analysis.reduced}))
+    return cea_summary(modes)
 
 
 def cea_summary(modes):
