@@ -131,7 +131,11 @@ def _plot_cea(args):
     except OSError as exc:
         raise CaseError(case.path, "--out", f"cannot create: {exc}") from None
     stem = Path(case.path).stem
-    result = analyse(case)
+    # the values of mu share the model, the contact's geometry and the factorization (the
+    # full model, a small case's reference, is bounded by analyse before its setup)
+    from ..stages import build_shared
+    built = build_shared(case, "factorization") if case.solver.reduction.enabled else None
+    result = analyse(case, built=built)
     mu = case.contact[pair].friction.mu
     paths = [out / f"{stem}_stability.png"]
     stability_figure(result, paths[0], f"{stem}: complex modes at mu = {mu:g}")
@@ -147,7 +151,7 @@ def _plot_cea(args):
         print(f"error: {exc}", file=sys.stderr)
         return 1
     if mus:
-        analyses = [analyse(v) for v in variants]
+        analyses = [analyse(v, built=built) for v in variants]
         path = out / f"{stem}_mu_map.png"
         mu_map_figure(mus, analyses, path, f"{stem}: complex modes against mu ({pair})")
         paths.append(path)
