@@ -16,54 +16,14 @@ from transient.model.model import build_model
 from transient.solve.modes import frequencies_hz
 from transient.solve.tied import contact_modes
 
-P, LAMBDA = 1.0e6, 5.0e5
+from test_contact_static import P, PATCH
 
-BLOCKS = f"""
-[materials.steel]
-E = 2.1e11
-nu = 0.3
-rho = 7800.0
+LAMBDA = 5.0e5
 
-[parts.lower]
-material = "steel"
-[parts.lower.mesh]
-kind = "box"
-size = [1.0, 1.0, 0.25]
-divisions = [4, 4, 1]
-element = "hex20"
-
-[parts.upper]
-material = "steel"
-[parts.upper.mesh]
-kind = "box"
-size = [1.0, 1.0, 0.25]
-origin = [0.0, 0.0, 0.25]
-divisions = [3, 3, 1]
-element = "tet10"
-
-# rollers: under the pressure the stress is uniform, -P e_z e_z, and so is the contact pressure;
-# the upper block is held along z by the contact alone
-[constraints.base]
-set = "lower.zmin"
-dofs = ["z"]
-[constraints.lower_x]
-set = "lower.xmin"
-dofs = ["x"]
-[constraints.lower_y]
-set = "lower.ymin"
-dofs = ["y"]
-[constraints.upper_x]
-set = "upper.xmin"
-dofs = ["x"]
-[constraints.upper_y]
-set = "upper.ymin"
-dofs = ["y"]
-
-[loads.top]
-kind = "pressure"
-set = "upper.zmax"
-value = {P}
-
+# the contact patch test's blocks (rollers: under the pressure the stress is uniform, and so
+# is the contact pressure; the upper block is held along z by the contact alone), 0.25 m
+# thick, meshed hex20 below and tet10 above, with two sensors and twelve modes
+BLOCKS = PATCH + """
 [sensors.below]
 part = "lower"
 point = [1.0, 1.0, 0.25]
@@ -76,25 +36,24 @@ direction = [0.0, 0.0, 1.0]
 
 [solver.modes]
 count = 12
-
-[contact.c]
-surface1 = "upper.zmin"
-surface2 = "lower.zmax"
-k = 1.0e13
 """
+MESHES = ["parts.lower.mesh.size=[1.0,1.0,0.25]", "parts.lower.mesh.divisions=[4,4,1]",
+          "parts.lower.mesh.element=hex20", "parts.upper.mesh.size=[1.0,1.0,0.25]",
+          "parts.upper.mesh.origin=[0.0,0.0,0.25]", "parts.upper.mesh.divisions=[3,3,1]",
+          "parts.upper.mesh.element=tet10"]
 
 
 @pytest.fixture(scope="module")
 def blocks(tmp_path_factory):
     path = tmp_path_factory.mktemp("blocks") / "blocks.toml"
     path.write_text(BLOCKS)
-    model = build_model(load(path))
+    model = build_model(load(path, MESHES))
     return path, model
 
 
 def modes_of(blocks, *overrides):
     path, model = blocks
-    case = load(path, list(overrides))
+    case = load(path, MESHES + list(overrides))
     pairs = build_contact(case, model)
     return contact_modes(case, model, pairs), pairs
 
@@ -170,10 +129,10 @@ def test_preload_tie_is_the_exponential_laws_tangent_at_the_pressure(blocks):
 
 
 def test_modes_command_says_how_the_contact_is_tied(blocks, capsys):
-    path = str(blocks[0])
-    assert main(["modes", path, "--set", "solver.modes.tie=exact"]) == 0
+    path, meshes = str(blocks[0]), [a for m in MESHES for a in ("--set", m)]
+    assert main(["modes", path, "--set", "solver.modes.tie=exact"] + meshes) == 0
     assert "tied exactly (the gap held at zero on" in capsys.readouterr().out
-    assert main(["modes", path, "--json", "--set", "solver.modes.tie=preload"]) == 0
+    assert main(["modes", path, "--json", "--set", "solver.modes.tie=preload"] + meshes) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["tie"] == "preload" and len(out["frequencies_hz"]) == 12
 
@@ -184,7 +143,7 @@ def test_plot_modal_frf_draws_both_models_and_prints_the_shifts(blocks, tmp_path
             "--set", "solver.modes.tie=exact", "--set", "contact.c.rule=centre",
             "--set", "contact.c.regularized=true", "--set", "contact.c.eps=1e-3",
             "--against", "contact.c.rule=fine", "--against", "contact.c.regularized=false",
-            "-o", str(png)]
+            "-o", str(png)] + [a for m in MESHES for a in ("--set", m)]
     assert main(args) == 0
     out = capsys.readouterr().out
     assert png.stat().st_size > 10_000
