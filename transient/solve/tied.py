@@ -26,7 +26,6 @@ from .lowrank import contact_solver
 from .modes import normal_modes
 from .preload import PreloadError, solve_preload
 
-TIES = ("penalty", "preload", "exact")
 # The tied solve is a difference of two solves (y - Z G^-1 B^T y), exact to some 1e-10 of its
 # norm: a residual of 1e-12 stalls the Lanczos (tet10 pad and disc: 43 of 55 pairs), 1e-9 (the
 # reduced basis' own tolerance, reduce.basis.MODES_TOL) converges.
@@ -35,7 +34,7 @@ TIED_TOL = 1e-9
 
 @dataclass(frozen=True)
 class Tie:
-    kind: str                # one of TIES
+    kind: str                # solver.modes.tie: penalty, preload or exact
     timings: dict            # the contact solver's factorization and the preload [s]
     held: int = 0            # exact: directions of the rows held at zero
     dofs: int = 0            # exact: the dofs the rows touch
@@ -59,7 +58,10 @@ def contact_modes(case, model, pairs):
     cs = contact_solver(model, contacts, sigma, case.solver.linear_solver)
     timings = {"contact_factorization": time.perf_counter() - t0}
     if kind == "exact":
-        solve, held = cs.tied()
+        try:
+            solve, held = cs.tied()
+        except ValueError as exc:
+            raise CaseError(case.path, "solver.modes.tie", f"exact: {exc}") from None
         modes = normal_modes(None, *args, solve=solve, tol=TIED_TOL)
         return modes, Tie(kind, timings, held, len(cs.cols))
     t0 = time.perf_counter()
