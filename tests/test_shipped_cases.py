@@ -42,20 +42,23 @@ def test_every_case_is_tested():
 def test_pad_disc_tet10_locks_tied_exactly_with_the_rich_rule_only():
     """The paper's figure 11 on the pad and disc meshed in tet10, each part on its own: tied
     exactly (the gap held at zero on the rule's rows), the fine rule raises the first 50
-    frequencies of the (1-eps) regularized centre rule by up to 16.4% (mean 3.0%, paired by
-    MAC); tied by springs at the exponential law's tangent at 1 MPa (k = lambda p = 5e11),
-    by 0.36% at most: the nearly compatible shapes stay soft under any finite k
+    frequencies of the (1-eps) regularized centre rule by up to 10.9% mode by mode (mean
+    3.0%; 10.9% as well over the MAC partners alike, MAC >= 0.5); tied by springs at the
+    exponential law's tangent at 1 MPa (k = lambda p = 5e11), by 0.36% at most: the nearly
+    compatible shapes stay soft under any stiffness short of some 1e21 Pa/m
     (tools/study_locking.py)."""
     path = CASES / "pad_disc_tet10.toml"
     rich = ["contact.pad_disc.rule=fine", "contact.pad_disc.regularized=false"]
     exact = compare(load(path), load(path, rich), "disc_rim", "pad_back", 0.01)
-    shifts = exact.shifts[:50]
-    assert len(exact.frequencies[0]) >= 50 and exact.ties[0].held == 371
-    assert 14 < shifts.max() < 19 and 2.5 < shifts.mean() < 3.5 and shifts.min() > -1.5
+    order = exact.by_order[:50]
+    alike = exact.shifts[:50][exact.mac[:50] >= 0.5]
+    assert len(order) == 50 and exact.ties[0].held == 371 and exact.ties[1].held == 1653
+    assert 9 < order.max() < 13 and 2.5 < order.mean() < 3.5 and order.min() > -1.0
+    assert len(alike) >= 40 and 9 < alike.max() < 13 and alike.min() > -1.0
     penalty = ["solver.modes.tie=penalty"]
     soft = compare(load(path, penalty), load(path, penalty + rich), "disc_rim", "pad_back",
                    0.01)
-    assert np.abs(soft.shifts[:50]).max() < 0.5
+    assert np.abs(soft.by_order[:50]).max() < 0.5 and np.abs(soft.shifts[:50]).max() < 0.5
 
 
 def test_drilled_cube_mass_and_modes(capsys):

@@ -192,10 +192,15 @@ def _plot_modal_frf(args):
         print(f"{i + 1:>5} {f:12.6g} " + (f"{fb[j]:13.6g} {result.shifts[i]:10.3f} "
                                           f"{result.mac[i]:6.3f}" if j >= 0 else
                                           f"{'-':>13} {'-':>10} {'-':>6}"))
-    s = result.shifts[paired]
+    s, order = result.shifts[paired], result.by_order
     if len(s):
+        # a locked mode may change its shape too: a partner of low MAC is another mode
+        alike = paired & (np.nan_to_num(result.mac) >= 0.5)
         print(f"shift of {labels[1]} over {labels[0]}: max {s.max():.3g}%, min {s.min():.3g}%, "
-              f"mean {s.mean():.3g}% over {len(s)} paired modes")
+              f"mean {s.mean():.3g}% over {len(s)} paired modes"
+              + (f" (max {result.shifts[alike].max():.3g}% over the {int(alike.sum())} of MAC "
+                 ">= 0.5)" if alike.any() else "")
+              + f"; mode by mode, max {order.max():.3g}%, mean {order.mean():.3g}%")
     _save(lambda: modal_frf_figure(result.f, result.transfer, labels, result.shifts, path,
                                    f"{Path(case.path).stem}: {args.input} -> {args.output}, "
                                    f"modal damping {args.damping:g}"), path)

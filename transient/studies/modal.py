@@ -24,6 +24,8 @@ class ModalComparison:
     partner: np.ndarray    # (len(fa),) index of each mode's partner in fb (-1: none)
     mac: np.ndarray        # (len(fa),) MAC of the pair (nan when paired by order)
     shifts: np.ndarray     # (len(fa),) 100 (fb[partner] / fa - 1) [%]
+    by_order: np.ndarray   # (min(len(fa), len(fb)),) 100 (fb / fa - 1) mode by mode [%], as
+    #                        the paper plots them
     f: np.ndarray          # (POINTS,) frequencies of the transfer functions [Hz]
     transfer: tuple        # (Ha, Hb) [m/N]
     ties: tuple            # each model's solve.tied.Tie
@@ -60,8 +62,10 @@ def compare(case_a, case_b, sensor_in, sensor_out, damping, fmax=None):
         partner = np.where(np.arange(len(fa)) < len(fb), np.arange(len(fa)), -1)
         mac = np.full(len(fa), np.nan)
     shifts = np.where(partner >= 0, 100 * (fb[partner] / fa - 1), np.nan)
+    n = min(len(fa), len(fb))
+    by_order = 100 * (fb[:n] / fa[:n] - 1)
     top = fmax or 1.05 * max(fa.max(initial=0.0), fb.max(initial=0.0))
     f = np.linspace(0.0, top, POINTS)
     transfer = tuple(receptance(m, a, b, f, damping) for m, (a, b) in zip((ma, mb), rows))
-    return ModalComparison((fa, fb), partner, mac, shifts, f, transfer, (tie_a, tie_b),
-                           (pairs_a, pairs_b))
+    return ModalComparison((fa, fb), partner, mac, shifts, by_order, f, transfer,
+                           (tie_a, tie_b), (pairs_a, pairs_b))
