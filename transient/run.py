@@ -59,12 +59,12 @@ class _Start:
 def run(case, path, resume=False, progress=None, key="output.file", built=None,
         on_setup=None):
     """Integrate a case to solver.t_end, streaming to the HDF5 file at path (named by key in
-    errors: '-o' or output.file). The output is checked and held (io.lock) before the first stage; a resumed run continues
-    the system stored in the history. Returns a RunResult; a run that stops early (NaN,
-    energy drift, Ctrl-C) keeps every chunk in the file, marked `aborted: <reason>`. built:
-    the first stages' results when built already (a campaign's variants share them:
-    stages.Built). on_setup(setup): called with a new run's setup (with Setup.unsampled)
-    before the time integration: a campaign's variant analyses its complex modes there.
+    errors: '-o' or output.file). The output is checked and held (io.lock) before the first
+    stage; a resumed run continues the system stored in the history. Returns a RunResult; a
+    run that stops early (NaN, energy drift, Ctrl-C) keeps every chunk in the file, marked
+    `aborted: <reason>`. built: the first stages' results when built already (a campaign's
+    variants share them: stages.Built). on_setup(setup): called with a new run's setup (with
+    Setup.unsampled) before the integration: a campaign's variant analyses its modes there.
     """
     check_transient(case)
     t_start = time.perf_counter()

@@ -173,11 +173,11 @@ CONTACT = Table("a contact pair: two face sets of two parts, gap observed on the
     "rule": Value("choice", "contact points: fine (the exact rule on Gamma), centre (one "
                   "point per face of the master surface), gauss (the Gauss points of each "
                   "master face, of degree order: the paper's rich rule), greedy (a coarse rule "
-                  "selected on the regularized observation) or sampled (the fewest fine points whose "
-                  "weights reproduce the contact stiffness that the reduced model's modes below "
-                  "fmax see, and the preload: ECSW on the contact-linearized dynamics; needs "
-                  "solver.reduction)", "fine", choices=("fine", "centre", "gauss", "greedy",
-                                                        "sampled")),
+                  "selected on the regularized observation) or sampled (the fewest fine points "
+                  "whose weights reproduce the contact stiffness that the reduced model's modes "
+                  "below fmax see, and the preload: ECSW on the contact-linearized dynamics; "
+                  "needs solver.reduction)", "fine",
+                  choices=("fine", "centre", "gauss", "greedy", "sampled")),
     "candidates": Value("choice", "greedy: candidate points, the fine points or the face "
                         "centres of a surface", "fine", choices=("fine", "surface1", "surface2")),
     "points": Value("int", "greedy: number of points m (0: the rank of the kept shapes; more "
