@@ -165,3 +165,15 @@ def test_plot_modal_frf_refuses_bad_options_in_one_line(blocks, tmp_path, capsys
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and key in err[0]
     assert not (tmp_path / "x.png").exists()
+
+
+def test_the_compared_model_keeps_its_own_loads(blocks):
+    """Two cases of one structure share its meshes and matrices, each with its own loads: the
+    second's preload holds its own pressure."""
+    from transient.studies.modal import compare
+    path = blocks[0]
+    tie = MESHES + ["solver.modes.tie=preload", "contact.c.law.kind=exponential"]
+    result = compare(load(path, tie), load(path, tie + [f"loads.top.value={2 * P}"]),
+                     "below", "above", 0.01)
+    np.testing.assert_allclose(result.ties[0].preload.pressure, P, rtol=1e-8)
+    np.testing.assert_allclose(result.ties[1].preload.pressure, 2 * P, rtol=1e-8)

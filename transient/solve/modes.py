@@ -24,6 +24,11 @@ class Modes:
     timings: dict             # factorization, eigensolver [s]
 
 
+def shift_sigma(shift):
+    """The eigenvalue shift of a shift frequency [Hz]: -(2 pi shift)^2 for a negative one."""
+    return np.sign(shift) * (2 * np.pi * shift) ** 2
+
+
 def frequencies_hz(eigenvalues):
     return np.sign(eigenvalues) * np.sqrt(np.abs(eigenvalues)) / (2 * np.pi)
 
@@ -48,7 +53,7 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
     Kf = free_block(K, free) if sp.issparse(K) else K
     Mf = free_block(M, free)
     n = len(free)
-    sigma = np.sign(shift) * (2 * np.pi * shift) ** 2
+    sigma = shift_sigma(shift)
     timings = {}
     if n <= DENSE_LIMIT and K is not None:
         t0 = time.perf_counter()
@@ -119,9 +124,10 @@ def mac_pairs(shapes_a, shapes_b, M):
     the mass (one to one, the assignment that maximizes the summed MAC), and the MAC:
     (partner index or -1, MAC) arrays of len(a). Shapes mass-normalized on the same dofs."""
     from scipy.optimize import linear_sum_assignment
-    cross = shapes_a.T @ (M @ shapes_b)
+    Mb = M @ shapes_b
+    cross = shapes_a.T @ Mb
     norm_a = np.einsum("ij,ij->j", shapes_a, M @ shapes_a)
-    norm_b = np.einsum("ij,ij->j", shapes_b, M @ shapes_b)
+    norm_b = np.einsum("ij,ij->j", shapes_b, Mb)
     mac = cross ** 2 / np.outer(norm_a, norm_b)
     rows, cols = linear_sum_assignment(-mac)
     partner = np.full(shapes_a.shape[1], -1)

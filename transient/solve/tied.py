@@ -16,14 +16,12 @@ low-rank update (lowrank.ContactSolver), the penalty through the factorization o
 import time
 from dataclasses import dataclass
 
-import numpy as np
-
 from ..contact.contactset import stack
 from ..contact.pair import contact_stiffness
 from ..errors import CaseError
 from ..model import constant_load
 from .lowrank import contact_solver
-from .modes import normal_modes
+from .modes import normal_modes, shift_sigma
 from .preload import PreloadError, solve_preload
 
 # The tied solve is a difference of two solves (y - Z G^-1 B^T y), exact to some 1e-10 of its
@@ -54,8 +52,7 @@ def contact_modes(case, model, pairs):
     contacts = stack(pairs, model.ndof)
     # the shift of normal_modes (negative: -(2 pi shift)^2), so that its Lanczos and the
     # contact solver's factorization are of the same K - sigma M
-    sigma = np.sign(settings.shift) * (2 * np.pi * settings.shift) ** 2
-    cs = contact_solver(model, contacts, sigma, case.solver.linear_solver)
+    cs = contact_solver(model, contacts, shift_sigma(settings.shift), case.solver.linear_solver)
     timings = {"contact_factorization": time.perf_counter() - t0}
     if kind == "exact":
         try:

@@ -45,8 +45,9 @@ def compare(case_a, case_b, sensor_in, sensor_out, damping, fmax=None):
     """The ModalComparison of two cases of one structure: modes by their solver.modes (tie
     included), pairs by MAC when both share a model (stages.stage_key), else by order."""
     model_a = build_model(case_a)
+    # one structure: the second model is the first's with its own loads and sensors
     shared = stage_key(case_a, "model") == stage_key(case_b, "model")
-    model_b = model_a if shared else build_model(case_b)
+    model_b = build_model(case_b, model_a if shared else None)
     rows = [(sensor_row(c, m, sensor_in, "--input"), sensor_row(c, m, sensor_out, "--output"))
             for c, m in ((case_a, model_a), (case_b, model_b))]
     results = []
