@@ -5,6 +5,7 @@ the pypardiso wheel: what a plain pip install brings) and SuperLU (scipy, the fa
 slower and hungrier on 3D solids). `factorize(A)` returns a callable x = solve(b).
 """
 import ctypes
+import functools
 
 import numpy as np
 import scipy.sparse as sp
@@ -85,6 +86,14 @@ def _superlu(A):
     return solve
 
 
+@functools.cache
+def _mkl():
+    """The MKL runtime pypardiso locates, once a process: without mkl_rt on the loader's path
+    it globs the environment's whole lib tree for it (0.16 s a factorization here)."""
+    import pypardiso
+    return pypardiso.PyPardisoSolver().libmkl
+
+
 class _Pardiso:
     """MKL PARDISO on the upper triangle of a symmetric matrix, factorized once.
 
@@ -94,8 +103,7 @@ class _Pardiso:
     backend = "pardiso"
 
     def __init__(self, A, mtype, phase=12):
-        import pypardiso
-        self._lib = pypardiso.PyPardisoSolver().libmkl
+        self._lib = _mkl()
         fn = self._lib.pardiso
         i32 = ctypes.POINTER(ctypes.c_int32)
         fn.argtypes = [ctypes.POINTER(ctypes.c_int64), i32, i32, i32, i32, i32, ctypes.c_void_p,
