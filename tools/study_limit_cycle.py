@@ -421,7 +421,8 @@ def main(argv=None):
     parser.add_argument("--sensor", default="pad_back", help="the sensor whose up-crossings "
                         "cut the cycles, and whose envelope shows the saturation")
     parser.add_argument("--drift-tolerance", type=float, help="solver.drift_tolerance of the "
-                        "runs (the case's by default: 0.05 of the peak mechanical energy)")
+                        "runs (the case's by default: 0.05 of the largest energy held or "
+                        "exchanged)")
     parser.add_argument("--every", type=int, default=1, help="steps per stored row (1: the "
                         "row sums are the kernel's; more makes the damping approximate)")
     parser.add_argument("--out", default="/tmp/limit_cycle", help="directory of the histories")

@@ -176,9 +176,9 @@ def _check(case, system, state, dt, balance, status):
                              f"t = {state.time:.6g} s")
     if balance.drift > solver.drift_tolerance:
         hint = system.critical.drift_hint(dt) if solver.scheme == "explicit" else ""
-        raise RunAborted(f"energy balance drifted by {balance.drift:.2e} of the peak "
-                         f"mechanical energy (tolerance {solver.drift_tolerance:g}) at "
-                         f"t = {state.time:.6g} s{hint}")
+        raise RunAborted(f"energy balance drifted by {balance.drift:.2e} of the largest "
+                         f"energy held or exchanged (tolerance {solver.drift_tolerance:g}) "
+                         f"at t = {state.time:.6g} s{hint}")
 
 
 def _timings(stages, t_kernel, t_start):

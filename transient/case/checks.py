@@ -12,6 +12,7 @@ def check(case):
     _friction(case)
     _signals(case)
     _directions(case)
+    _mass_scaling(case)
     check_generated(case)
 
 
@@ -153,6 +154,18 @@ def _friction(case):
             _fail(case, f"{key}.mu", f"friction needs sliding: no [motion] moves "
                   f"{' or '.join(sorted(parts))} (a rotation of the disc, a translation of "
                   "a belt)")
+
+
+def _mass_scaling(case):
+    reduction = case.solver.reduction
+    cap = reduction.mass_scaling_hz
+    if cap and not reduction.enabled:
+        _fail(case, "solver.reduction.mass_scaling_hz", "mass scaling acts on the reduced "
+              "model's statics: set solver.reduction.enabled = true")
+    if cap and cap < 2 * reduction.fmax:
+        _fail(case, "solver.reduction.mass_scaling_hz", f"{cap:g} Hz is below 2 fmax "
+              f"({2 * reduction.fmax:g} Hz): the statics must stay quasi-static in the band "
+              "of the modes (0: no mass scaling)")
 
 
 def _sampled(case):

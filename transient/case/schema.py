@@ -301,7 +301,8 @@ SOLVER = Table("solution settings", {
                    "at least 20 times a run; the results do not depend on it)", 2000,
                    minimum=1),
     "drift_tolerance": Value("float", "stop when the energy balance drifts by more than this "
-                             "fraction of the peak total energy", 0.05, open_min=0.0),
+                             "fraction of the largest energy the run holds (mechanical) or "
+                             "has exchanged (work in, dissipated)", 0.05, open_min=0.0),
     "damping": Table("damping", {
         "modal": Value("float", "modal damping ratio of every mode (reduced model)", 0.0,
                        minimum=0.0),
@@ -324,6 +325,13 @@ SOLVER = Table("solution settings", {
                                    "flexibility beyond the modes is at least this fraction of "
                                    "the contact law's at the preload (0: keep one per point)",
                                    1e-3, minimum=0.0),
+        "mass_scaling_hz": Value("float", "give the basis' vectors above this frequency (the "
+                                 "contact and load statics, up to MHz) the mass that brings "
+                                 "them down to it, their static response unchanged: the step "
+                                 "of the explicit correctors and central differences grows "
+                                 "where the contact stiffens, at an error on the modes below "
+                                 "fmax that `transient cea` measures (0: none; at least 2 "
+                                 "fmax)", 0.0, "Hz", minimum=0.0),
     }, optional=True),
     "newton": Table("Newton iterations of the preload and of the implicit scheme", {
         "tolerance": Value("float", "relative residual of the Newton iterations", 1e-10,

@@ -148,6 +148,7 @@ class ReductionSpec:
     fmax: float
     statics: bool
     statics_tolerance: float
+    mass_scaling_hz: float = 0.0
 
 
 @dataclass(frozen=True)

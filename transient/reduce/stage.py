@@ -77,8 +77,9 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
                                             / max(np.linalg.norm(preload.u), 1e-300)),
             "free_dofs": int((~model.fixed).sum())}
     mask = candidates(case, pairs, contacts)
-    unsampled = ReducedModel(basis.X, basis.A, basis.omega2, q0, v, contacts, pairs, preload,
-                             dict(meta))
+    cap = reduction.mass_scaling_hz
+    unsampled = mass_scaled(ReducedModel(basis.X, basis.A, basis.omega2, q0, v, contacts,
+                                         pairs, preload, dict(meta)), cap)
     if mask is None:
         return unsampled
     stages.check()
@@ -96,10 +97,34 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
                         "residual": sampled.sample.residual,
                         "band_modes": sampled.sample.band,
                         "preload_iterations": sampled.iterations}
-    return ReducedModel(basis.X, AW, sampled.omega2, sampled.q, sampled.W.T @ v,
-                        sampled.contacts,
-                        _sampled_pairs(pairs, contacts, sampled.keep, sampled.contacts), held,
-                        meta, unsampled)
+    return mass_scaled(ReducedModel(basis.X, AW, sampled.omega2, sampled.q, sampled.W.T @ v,
+                                    sampled.contacts,
+                                    _sampled_pairs(pairs, contacts, sampled.keep,
+                                                   sampled.contacts), held, meta, unsampled),
+                       cap)
+
+
+def mass_scaled(red, cap_hz):
+    """red with its vectors above cap_hz given the mass that brings them to it
+    (solver.reduction.mass_scaling_hz; red itself when 0).
+
+    A vector of eigenvalue omega^2 > omega_c^2 gets the mass alpha = omega^2 / omega_c^2: the
+    coordinates q' = alpha^1/2 q keep M = I, with the eigenvalue omega^2 / alpha = omega_c^2 and
+    the basis column T / alpha^1/2, so the stiffness, the static response to any load and the
+    state's displacement T q are unchanged, and the kernels integrate the scaled system as
+    any other. Only the vectors' inertia changes: those above 2 fmax are the statics (contact
+    and loads), whose dynamics the basis does not resolve anyway; in the band of the modes
+    their response lags by (f / f_c)^2, the error the complex modes of the scaled model
+    measure against the unscaled one's."""
+    if not cap_hz:
+        return red
+    alpha = np.maximum(red.omega2 / (2 * np.pi * cap_hz) ** 2, 1.0)
+    root = np.sqrt(alpha)
+    meta = dict(red.meta, mass_scaling={"vectors": int(np.sum(alpha > 1.0)),
+                                        "largest": float(alpha.max())})
+    # (a sampled model's unsampled one is scaled where it is made, on its own eigenvalues)
+    return replace(red, AW=red.AW / root, omega2=red.omega2 / alpha, q0=red.q0 * root,
+                   v0=red.v0 * root, meta=meta)
 
 
 def _friction_loads(contacts, preload, free):
