@@ -20,7 +20,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 import naive as nv
-from transient.kernels import codes, exponential, laws, newmark, stepping
+from transient.kernels import codes, contact, exponential, laws, newmark, stepping
 
 LAM = 1e5                    # 1/lambda = 10 um: the exponential laws' decay length
 N_MODES, N_POINTS, N_DOFS = 12, 30, 40
@@ -467,16 +467,31 @@ def test_exponential_coefficients_match_the_closed_form():
     assert error.max() <= 1e-12
 
 
-def contact_pass(fn, args, qs, blocks):
-    """fn (a remainder kernel or twin, args up to params) at each q of qs: the arrays it
-    fills and its returns, stacked."""
+def passes(fn, args, qs, blocks, fr=None, vs=None):
+    """fn (a contact pass or its twin, args up to params) at each q of qs (and velocity of vs
+    with friction fr): the arrays it fills and its returns, stacked."""
     m, n = N_POINTS, qs.shape[1]
     f, gap, press, fbuf = np.zeros(n), np.zeros(m), np.zeros(m), np.zeros((len(blocks) - 1, n))
-    tail = (blocks, fbuf) if fn in (stepping.remainder_dense, nv.remainder_dense) else ()
-    out = {"f": [], "gap": [], "press": [], "fbuf": [], "energies": []}
-    for q in qs:
-        out["energies"].append(fn(*args, q, f, gap, press, *tail))
-        for name, x in (("f", f), ("gap", gap), ("press", press), ("fbuf", fbuf)):
+    ff, slip, ffbuf = np.zeros(n), np.zeros((2, m)), np.zeros((len(blocks) - 1, n))
+    out = {"f": [], "gap": [], "press": [], "ff": [], "slip": [], "energies": []}
+    for k, q in enumerate(qs):
+        if fn is contact.contact_pass:
+            fr_k = fr if fr is not None else nv.no_friction(n)
+            v = vs[k] if vs is not None else np.zeros(n)
+            out["energies"].append(fn(*args, q, fr_k, v, f, ff, gap, press, slip, blocks, fbuf,
+                                      ffbuf))
+        elif fn is nv.remainder_dense:
+            energies = fn(*args, q, f, gap, press, blocks, fbuf)
+            p_in = 0.0
+            if fr is not None:
+                force, p_in = nv.friction_force(fr, args[2], press, vs[k])
+                ff[:] = force
+                slip[:] = nv.slips(fr, vs[k])
+                f += ff
+            out["energies"].append((*energies, p_in))
+        else:
+            out["energies"].append(fn(*args, q, f, gap, press))
+        for name, x in (("f", f), ("gap", gap), ("press", press), ("ff", ff), ("slip", slip)):
             out[name].append(x.copy())
     return {name: np.array(x).reshape(len(qs), -1) for name, x in out.items()}
 
@@ -488,12 +503,12 @@ def perturbed(q, seed):
 
 
 @pytest.mark.parametrize("blocks", [ONE_BLOCK, TWO_BLOCKS], ids=["one-block", "two-blocks"])
-def test_remainder_dense(systems, blocks):
+def test_contact_pass(systems, blocks):
     r = systems[(False, False)]
     qs = perturbed(r.state[0], 4)
     args = (r.C, r.g0, r.w, r.kt0, r.code, r.params)
-    ref = contact_pass(nv.remainder_dense, args, qs, blocks)
-    errors = relative_errors(contact_pass(stepping.remainder_dense, args, qs, blocks), ref)
+    ref = passes(nv.remainder_dense, args, qs, blocks)
+    errors = relative_errors(passes(contact.contact_pass, args, qs, blocks), ref)
     assert max(errors.values()) <= 1e-13, errors
     exp = r.code == nv.EXPONENTIAL
     assert np.any(ref["gap"][:, exp] < r.params[exp, 2])         # linear continuation
@@ -501,12 +516,32 @@ def test_remainder_dense(systems, blocks):
     assert np.any(ref["press"][:, r.code == nv.LINEAR] == 0.0)
 
 
+@pytest.mark.parametrize("blocks", [ONE_BLOCK, TWO_BLOCKS], ids=["one-block", "two-blocks"])
+def test_contact_pass_with_friction(systems, blocks):
+    """The fused pass: the normal remainder and the friction of each point in one sweep over
+    the rows, against the twin's two passes (remainder, then friction at the same pressures),
+    with points sliding, slipping back, open and frictionless."""
+    r = with_friction(systems[(False, False)])
+    qs = perturbed(r.state[0], 7)
+    rng = np.random.default_rng(8)
+    vs = r.state[1] + np.abs(r.state[1]).max() * rng.standard_normal(qs.shape)
+    args = (r.C, r.g0, r.w, r.kt0, r.code, r.params)
+    ref = passes(nv.remainder_dense, args, qs, blocks, r.fr, vs)
+    got = passes(contact.contact_pass, args, qs, blocks, r.fr, vs)
+    errors = relative_errors(got, ref)
+    assert max(errors.values()) <= 1e-13, errors
+    assert np.abs(ref["ff"]).max() > 0 and np.any(ref["press"] <= 0.0)
+    assert np.any(r.fr[3] == nv.NONE)
+    along = ref["slip"][:, :N_POINTS]
+    assert np.any(along < 0) and np.any(along > 0)          # slipping both ways
+
+
 def test_remainder_sparse(systems):
     f = systems[(True, False)]
     qs = perturbed(f.state[0], 5)
     args = (*f.C, f.g0, f.w, f.kt0, f.code, f.params)
-    ref = contact_pass(nv.remainder_sparse, args, qs, ONE_BLOCK)
-    errors = relative_errors(contact_pass(stepping.remainder_sparse, args, qs, ONE_BLOCK), ref)
+    ref = passes(nv.remainder_sparse, args, qs, ONE_BLOCK)
+    errors = relative_errors(passes(stepping.remainder_sparse, args, qs, ONE_BLOCK), ref)
     assert max(errors.values()) <= 1e-13, errors
 
 

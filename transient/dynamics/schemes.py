@@ -57,7 +57,7 @@ def _contact(system):
 
 
 def friction_arrays(system):
-    """The friction's arrays for the reduced kernels (kernels.friction.friction_pass): Ct, Cc,
+    """The friction's arrays for the reduced kernels (kernels.contact.contact_pass): Ct, Cc,
     V, law code, v_eps, table, and the tables; Ct with no rows when the system has none."""
     f = system.contacts.friction
     if f is None:

@@ -7,8 +7,9 @@ import numpy as np
 
 from ..jit import njit_fast
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
-from .friction import friction_energy, friction_pass
-from .stepping import _external, _finite, _store, modal_step_energies, remainder_dense
+from .contact import contact_pass
+from .friction import friction_energy
+from .stepping import _external, _finite, _store, modal_step_energies
 from .woodbury import coupled_rows, coupled_solve, friction_move, newton_update
 
 IMPLICIT_TOL = 1e-3     # the implicit corrector's residual, relative to the step's motion
@@ -56,7 +57,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     With propagate, the gaps, pressures and contact energy stored are those of the last
     evaluation, a local error away from the final state. state, acc and outputs as in
     explicit_reduced; the acceleration left in the state is that of the forces carried.
-    fr: the friction's arrays (friction.friction_pass), its tractions part of the remainder,
+    fr: the friction's arrays (contact.contact_pass), its tractions part of the remainder,
     at each evaluation's velocity; state[6] and acc[3] carry its force and input power."""
     q, v = state[0], state[1]
     t = state[3, 0]
@@ -72,6 +73,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     gap = np.empty(m)
     press = np.empty(m)
     fbuf = np.empty((blocks.shape[0] - 1, n))
+    ffbuf = np.empty((blocks.shape[0] - 1, n))
     energy = np.empty(5)
     fext0 = np.empty(n)
     ff = np.empty(n)
@@ -94,9 +96,8 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
         p_in = 0.0
         for it in range(corrections + 1):
             _propagate(coef, q0, v0, f0, f1, q, v)
-            phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
-                                       fbuf)
-            p_in = friction_pass(fr, w, press, v, ff, rem, slip)
+            phi, lin, p_in = contact_pass(C, g0, w, kt0, code, params, q, fr, v, rem, ff, gap,
+                                               press, slip, blocks, fbuf, ffbuf)
             for k in range(n):
                 f1[k] = fext[k] + rem[k]
         if propagate:
@@ -177,6 +178,7 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
     size = np.empty(stride * m)
     active = np.empty(stride * m, np.int64)
     fbuf = np.empty((blocks.shape[0] - 1, n))
+    ffbuf = np.empty((blocks.shape[0] - 1, n))
     energy = np.empty(5)
     ff = np.empty(n)
     slip = np.empty((2, fr[0].shape[0]))
@@ -203,9 +205,8 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
         alpha = 1.0
         newton = not friction
         for it in range(max_iter):
-            phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
-                                       fbuf)
-            p_in = friction_pass(fr, w, press, v, ff, rem, slip)
+            phi, lin, p_in = contact_pass(C, g0, w, kt0, code, params, q, fr, v, rem, ff, gap,
+                                               press, slip, blocks, fbuf, ffbuf)
             rf = 0.0
             rq = 0.0
             rv = 0.0

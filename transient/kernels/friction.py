@@ -90,44 +90,11 @@ def slip_tangent(code, v_eps, t, tab_v, tab_mu, tab_n, st, sc):
 
 
 @njit_fast
-def friction_dense(Ct, Cc, w, press, V, code, v_eps, table, tab_v, tab_mu, tab_n, v, f, slip):
-    """f += Ct^T tau_t + Cc^T tau_c at velocity v (n,), pressures press (m,) of the normal
-    pass; slip (2, m) gets each point's sliding velocity (along, across), open or not.
-    Returns (input power tau_t . V, dissipated power tau . s) [W]."""
-    m, n = Ct.shape
-    p_in = 0.0
-    p_diss = 0.0
-    for i in range(m):
-        if code[i] == FRICTIONLESS:
-            slip[0, i] = V[i]
-            slip[1, i] = 0.0
-            continue
-        rt = Ct[i]
-        rc = Cc[i]
-        st = V[i]
-        sc = 0.0
-        for j in range(n):
-            st -= rt[j] * v[j]
-            sc -= rc[j] * v[j]
-        slip[0, i] = st
-        slip[1, i] = sc
-        if press[i] <= 0.0:          # open, or a bilateral tie in tension: no friction
-            continue
-        s = np.sqrt(st * st + sc * sc)
-        mu = friction_coefficient(table[i], s, tab_v, tab_mu, tab_n)
-        c = w[i] * press[i] * mu * sign_over_speed(code[i], s, v_eps[i])
-        tt = c * st
-        tc = c * sc
-        for j in range(n):
-            f[j] += tt * rt[j] + tc * rc[j]
-        p_in += tt * V[i]
-        p_diss += tt * st + tc * sc
-    return p_in, p_diss
-
-
-@njit_fast
 def friction_sparse(Ct, Cc, w, press, V, code, v_eps, table, tab_v, tab_mu, tab_n, v, f, slip):
-    """friction_dense for CSR triplets Ct, Cc (m rows) on the full model's dofs."""
+    """f += Ct^T tau_t + Cc^T tau_c at velocity v (n,) on the full model's dofs, Ct, Cc CSR
+    triplets (m rows), pressures press (m,) of the normal pass; slip (2, m) gets each point's
+    sliding velocity (along, across), open or not (the reduced kernels' is contact.contact_pass,
+    fused with the normal pass). Returns (input power tau_t . V, dissipated power tau . s)."""
     Tp, Ti, Td = Ct
     Up, Ui, Ud = Cc
     m = Tp.shape[0] - 1
@@ -163,26 +130,11 @@ def friction_sparse(Ct, Cc, w, press, V, code, v_eps, table, tab_v, tab_mu, tab_
 
 
 @njit_fast
-def friction_pass(fr, w, press, v, ff, f, slip):
-    """The friction force ff at velocity v (kernels.friction), added into f too, and the
-    points' slip velocities (2, m), when the system has friction: fr = (Ct, Cc, V, code,
-    v_eps, table, speeds, values, counts), Ct (0, n) without. Returns the sliding's input
-    power [W]."""
-    if fr[0].shape[0] == 0:
-        return 0.0
-    for j in range(ff.shape[0]):
-        ff[j] = 0.0
-    p_in, _ = friction_dense(fr[0], fr[1], w, press, fr[2], fr[3], fr[4], fr[5], fr[6],
-                             fr[7], fr[8], v, ff, slip)
-    for j in range(ff.shape[0]):
-        f[j] += ff[j]
-    return p_in
-
-
-@njit_fast
 def friction_pass_sparse(fr, w, press, v, ff, f, slip):
-    """friction_pass on the full model: fr = (Ct, Cc, V, code, v_eps, table, speeds, values,
-    counts) with Ct, Cc CSR triplets (Ct's indptr of one entry without friction)."""
+    """The friction force ff at velocity v, added into f too, and the points' slip velocities
+    (2, m), when the system has friction: fr = (Ct, Cc, V, code, v_eps, table, speeds, values,
+    counts) with Ct, Cc CSR triplets (Ct's indptr of one entry without friction). Returns the
+    sliding's input power [W]."""
     if fr[0][0].shape[0] <= 1:
         return 0.0
     for j in range(ff.shape[0]):

@@ -17,9 +17,10 @@ import numpy as np
 from ..jit import njit_fast
 from .sparse import csr_abs_matvec, csr_matvec, factor_solve
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
-from .friction import friction_energy, friction_pass, friction_pass_sparse, friction_work
+from .contact import contact_pass
+from .friction import friction_energy, friction_pass_sparse, friction_work
 from .stepping import (_energies, _external, _finite, _store, _store_sparse, modal_step_energies,
-                       remainder_dense, remainder_sparse)
+                       remainder_sparse)
 from .woodbury import (active_rows, coupled_rows, coupled_solve, coupled_solve_sparse,
                        friction_move, newton_update, woodbury)
 
@@ -72,6 +73,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
     size = np.empty(stride * m)
     active = np.empty(stride * m, np.int64)
     fbuf = np.empty((blocks.shape[0] - 1, n))
+    ffbuf = np.empty((blocks.shape[0] - 1, n))
     energy = np.empty(5)
     ff = np.empty(n)
     slip = np.empty((2, fr[0].shape[0]))
@@ -102,9 +104,8 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
         newton = not friction
         for it in range(max_iter):
             _corrected(qp, vp, a, dt, q, v)
-            phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, rem, gap, press, blocks,
-                                       fbuf)
-            p_in = friction_pass(fr, w, press, v, ff, rem, slip)
+            phi, lin, p_in = contact_pass(C, g0, w, kt0, code, params, q, fr, v, rem, ff, gap,
+                                               press, slip, blocks, fbuf, ffbuf)
             rnorm = 0.0
             fnorm = 0.0
             for k in range(n):

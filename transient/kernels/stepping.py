@@ -16,77 +16,16 @@ different laws share one set of rows.
 Status codes returned: OK, NOT_FINITE (NaN/Inf in the state), NO_CONVERGENCE (implicit).
 The exponential kernels are in exponential.py, the implicit Newmark ones in newmark.py.
 """
-import numba
 import numpy as np
 
-from ..jit import njit, njit_fast, njit_parallel
+from ..jit import njit, njit_fast
 from .codes import CONTACT, DISSIPATED, KINETIC, NOT_FINITE, OK, STRAIN, WORK
-from .friction import friction_energy, friction_pass, friction_pass_sparse, friction_work
+from .contact import contact_pass
+from .friction import friction_energy, friction_pass_sparse, friction_work
 from .laws import pressure_potential
 from .signals import signal_values
 from .sparse import csr_matvec
 
-
-
-@njit_fast
-def _remainder_rows(C, g0, w, kt0, code, params, q, fb, gap, press, start, stop):
-    """Rows start..stop of the one-pass contact force, added into fb; returns (contact
-    potential, 1/2 sum w k_t* (g - g0)^2) of those rows."""
-    n = C.shape[1]
-    phi = 0.0
-    lin = 0.0
-    for i in range(start, stop):
-        row = C[i]
-        s = 0.0
-        for j in range(n):
-            s += row[j] * q[j]
-        g = g0[i] + s
-        p, _, potential_i = pressure_potential(code[i], params[i], g)
-        r = w[i] * (p + kt0[i] * s)
-        for j in range(n):
-            fb[j] += r * row[j]
-        gap[i] = g
-        press[i] = p
-        phi += w[i] * potential_i
-        lin += 0.5 * w[i] * kt0[i] * s * s
-    return phi, lin
-
-
-@njit_parallel
-def remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf):
-    """f = C^T [w (p(g) + k_t* (g - g0))] in one pass over the rows of C (m, n).
-
-    Rows are split in blocks, each adding into its own row of fbuf, then summed in block
-    order: the arithmetic is set by the blocks alone, whether the blocks run on one thread or
-    several (Numba's thread count at the call), so that choice may be taken from a timing. A
-    single block runs serially, off the thread pool, and nothing outside the block loop is an
-    array expression (Numba would make it a parallel loop that wakes the pool on every pass).
-    Also fills gap and press (m,). Returns (contact potential, 1/2 sum w k_t* (g - g0)^2).
-    """
-    m, n = C.shape
-    nb = blocks.shape[0] - 1
-    if nb == 1:
-        for j in range(n):
-            f[j] = 0.0
-        return _remainder_rows(C, g0, w, kt0, code, params, q, f, gap, press, 0, m)
-    parts = np.empty((nb, 2))
-    for b in numba.prange(nb):
-        fb = fbuf[b]
-        for j in range(n):
-            fb[j] = 0.0
-        parts[b, 0], parts[b, 1] = _remainder_rows(C, g0, w, kt0, code, params, q, fb, gap,
-                                                   press, blocks[b], blocks[b + 1])
-    phi = 0.0
-    lin = 0.0
-    for b in range(nb):
-        phi += parts[b, 0]
-        lin += parts[b, 1]
-    for j in range(n):
-        acc = 0.0
-        for b in range(nb):
-            acc += fbuf[b, j]
-        f[j] = acc
-    return phi, lin
 
 
 @njit_fast
@@ -162,7 +101,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
     the exponential kernels carry (dynamics.state). acc (3,): external work and dissipated
     energy so far, and a damping power explicit_full carries; gmin (m,): smallest gap of each
     point so far (the critical step is rechecked against it). fr: the friction's arrays
-    (friction_pass), taken at the half-step velocity; state[6] and acc[3] then carry its
+    (contact.contact_pass), taken at the half-step velocity; state[6] and acc[3] then carry its
     force and input power (friction_energy). Returns (status, steps done)."""
     q, v, a = state[0], state[1], state[2]
     t = state[3, 0]
@@ -175,6 +114,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
     gap = np.empty(m)
     press = np.empty(m)
     fbuf = np.empty((blocks.shape[0] - 1, n))
+    ffbuf = np.empty((blocks.shape[0] - 1, n))
     energy = np.empty(5)
     dq = np.empty(n)
     ff = np.empty(n)
@@ -194,8 +134,8 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
             v[k] = vh
         t += dt
         _external(t, patterns, sig, svals, fext)
-        phi, lin = remainder_dense(C, g0, w, kt0, code, params, q, f, gap, press, blocks, fbuf)
-        p_in = friction_pass(fr, w, press, v, ff, f, slip)
+        phi, lin, p_in = contact_pass(C, g0, w, kt0, code, params, q, fr, v, f, ff, gap,
+                                           press, slip, blocks, fbuf, ffbuf)
         _track_min(gap, gmin)
         kin = 0.0
         strain = -lin
