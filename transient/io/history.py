@@ -357,7 +357,7 @@ def format_summary(d):
     timings = ", ".join(f"{k} {v:.3g} s" if isinstance(v, (int, float)) else f"{k} {v}"
                         for k, v in d["timings"].items())
     lines = [("file", f"{d['path']} ({_size(d['file_size'])})"), ("status", d["status"]),
-             ("steps", str(d["steps"])), ("t_end", t_end), ("energy drift", drift),
+             ("rows", str(d["steps"])), ("t_end", t_end), ("energy drift", drift),
              ("timings", timings or "n/a")]
     lines += [("series" if i == 0 else "", f"{name} {tuple(shape)}")
               for i, (name, shape) in enumerate(d["series"].items())]
