@@ -414,7 +414,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("case", nargs="?", default=str(ROOT / "cases" / "pad_disc_squeal.toml"))
     parser.add_argument("--t-end", type=float, default=0.02)
-    parser.add_argument("--dt", type=float, nargs="+", default=[3.125e-6, 1.5625e-6])
+    parser.add_argument("--dt", type=float, nargs="+", default=[1.5625e-6, 7.8125e-7])
     parser.add_argument("--cycle-from", type=float, default=0.010,
                         help="start of the limit-cycle window [s]")
     parser.add_argument("--sub", type=float, default=0.002, help="sub-window length [s]")
