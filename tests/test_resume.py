@@ -155,11 +155,12 @@ def test_resume_with_a_case_that_changes_results_is_refused_by_name(tmp_path, ca
 
 def test_thread_choice_follows_the_last_chunks_and_retries_the_other():
     """One or all threads, whichever ran its last chunk faster per step; the other one is
-    retried every PROBE-th chunk; a run without row blocks keeps the stepper's setting."""
+    retried every PROBE-th chunk, on a short one; a run without row blocks keeps the
+    stepper's setting."""
     import numba
     import numpy as np
 
-    from transient.dynamics.chunks import PROBE, ThreadChoice
+    from transient.dynamics.chunks import PROBE, PROBE_SHARE, ThreadChoice
     from transient.dynamics.schemes import Stepper
     many = numba.get_num_threads()
     full = ThreadChoice(Stepper("explicit", 1e-6, None))
@@ -183,3 +184,8 @@ def test_thread_choice_follows_the_last_chunks_and_retries_the_other():
     summary = choice.summary()
     assert set(summary) == {str(many), "1"} and sum(s for s, _ in summary.values()) == \
         1000 * (2 + 2 * PROBE)
+    # a retry of the slower count is a short chunk, of whole rows; the faster runs whole ones
+    assert choice.steps_of(many, 2000, 4) == 2000
+    assert choice.steps_of(1, 2000, 4) == 2000 // PROBE_SHARE // 4 * 4
+    assert choice.steps_of(1, 2000, 3) % 3 == 0 and choice.steps_of(1, 5, 4) == 4
+    assert full.steps_of(0, 2000, 4) == 2000

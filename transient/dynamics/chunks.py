@@ -40,8 +40,9 @@ def chunks(stepper, state, n_total, chunk, every, out, step=0, threads=None):
     stepper's). A chunk that went non-finite keeps only the rows before the first with
     anything not finite, and the state's time is that of its last row kept."""
     while step < n_total:
-        n = min(chunk, n_total - step)
         count = threads.next() if threads is not None else stepper.threads
+        n = min(threads.steps_of(count, chunk, every) if threads is not None else chunk,
+                n_total - step)
         call = replace(stepper, threads=count) if count != stepper.threads else stepper
         t0 = time.perf_counter()
         try:
@@ -76,6 +77,9 @@ def threaded_blocks(m):
 
 
 PROBE = 8     # chunks between two retries of the thread count not in use
+PROBE_SHARE = 8   # a retry runs this fraction of a chunk: pad_disc_squeal's second spent 13%
+#                   of its steps on one thread at 1.75x the step of two (10 s of 120) with
+#                   retries of whole chunks
 
 
 class ThreadChoice:
@@ -85,7 +89,9 @@ class ThreadChoice:
     away stalls every step's parallel contact pass (pad_disc_long's stepper on two threads ran
     28-32 or 51-71 us per step in alternate 200-step trials, on one 33-49). Both counts run
     the same blocks, so the choice changes the speed only, never the numbers. The chunks'
-    timings choose: no trial steps are spent before the run."""
+    timings choose: no trial steps are spent before the run. A count tried or retried while
+    the other is the faster runs a short chunk (PROBE_SHARE), where the results do not depend
+    on the chunks either."""
 
     def __init__(self, stepper):
         many = numba.get_num_threads()
@@ -107,6 +113,15 @@ class ThreadChoice:
         if self.calls % PROBE == 0:
             return next((c for c in self.counts if c != best), best)
         return best
+
+    def steps_of(self, count, chunk, every):
+        """The steps of a chunk on `count` threads: a whole chunk on the count in use, a
+        PROBE_SHARE of it (whole rows of `every` steps) on the other."""
+        tried = [c for c in self.counts if self.seconds[c]]
+        best = min(tried, key=lambda c: self.seconds[c][-1]) if tried else count
+        if count == best or len(self.counts) == 1:
+            return chunk
+        return max(every, chunk // PROBE_SHARE // every * every)
 
     def record(self, threads, seconds, steps):
         if steps:
