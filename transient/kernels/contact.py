@@ -73,6 +73,16 @@ def _contact_rows(C, g0, w, kt0, code, params, q, fr, v, fb, ffb, gap, press, sl
     return phi, lin, p_in
 
 
+@njit_fast
+def _sum_blocks(buf, out):
+    """out = the rows of buf summed in block order."""
+    for j in range(out.shape[0]):
+        acc = 0.0
+        for b in range(buf.shape[0]):
+            acc += buf[b, j]
+        out[j] = acc
+
+
 @njit_parallel
 def contact_pass(C, g0, w, kt0, code, params, q, fr, v, f, ff, gap, press, slip, blocks, fbuf,
                  ffbuf):
@@ -111,17 +121,9 @@ def contact_pass(C, g0, w, kt0, code, params, q, fr, v, f, ff, gap, press, slip,
             phi += parts[b, 0]
             lin += parts[b, 1]
             p_in += parts[b, 2]
-        for j in range(n):
-            acc = 0.0
-            for b in range(nb):
-                acc += fbuf[b, j]
-            f[j] = acc
+        _sum_blocks(fbuf, f)
         if friction:
-            for j in range(n):
-                acc = 0.0
-                for b in range(nb):
-                    acc += ffbuf[b, j]
-                ff[j] = acc
+            _sum_blocks(ffbuf, ff)
     if friction:
         for j in range(n):
             f[j] += ff[j]
