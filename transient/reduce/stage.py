@@ -17,7 +17,8 @@ from .sampling import ReducedPreloadError, sample_contact
 @dataclass(frozen=True)
 class ReducedModel:
     X: np.ndarray            # (ndof, m) and
-    AW: np.ndarray           # (m, n): the basis T = X AW, T^T M T = I (T formed only if needed)
+    AW: np.ndarray           # (m, n): the basis T = X AW, T^T M T = I (T formed only if needed;
+    #                          mass-scaled statics: I is the mass with theirs added, mass_scaled)
     omega2: np.ndarray       # (n,) eigenvalues of T^T K_lin T (contact at the preload included)
     q0: np.ndarray           # (n,) the preload in reduced coordinates
     v0: np.ndarray           # (n,) the initial velocity there
