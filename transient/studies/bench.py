@@ -335,14 +335,20 @@ def _plot(rows, path):
     import matplotlib.ticker
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+    # with friction a third panel: the limit cycle's RMS error, which a phase drift over a
+    # long run leaves meaningful where error_rms saturates near 1 (a squeal's 20 ms)
+    panels = [("error_rms", "kernel_s", "kernel"), ("error_rms", "total_s", "setup + kernel")]
+    if any(np.isfinite(r.get("cycle_rms_error") or np.nan) for r in rows[1:]):
+        panels.append(("cycle_rms_error", "kernel_s", "kernel"))
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.5 * len(panels), 4.5))
     floor = 1e-6     # the reference's own error is 0: drawn at the floor
     markers = {"fine": "o", "centre": "s", "greedy": "^", "sampled": "D", "case": "*"}
-    for ax, key, name in zip(axes, ("kernel_s", "total_s"), ("kernel", "setup + kernel")):
+    for ax, (metric, key, name) in zip(axes, panels):
         for row in rows:
-            if row["error_rms"] is None or not np.isfinite(row["error_rms"]):
+            value = row.get(metric)
+            if value is None or not np.isfinite(value):
                 continue           # refused, or no motion to compare
-            err = max(row["error_rms"], floor)
+            err = max(value, floor)
             filled = "none" if not row["regularized"] else None
             ax.loglog(row[key], err, markers[row["rule"]], ms=8,
                       mfc=filled, label=row["label"])
@@ -354,9 +360,11 @@ def _plot(rows, path):
         ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda x, _: f"{x:g}"))
         ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.set_xlabel(f"{name} time [s]")
+        ax.set_ylabel(f"{metric} vs {rows[0]['label']}")
         ax.grid(True, which="both", alpha=0.3)
     ref = rows[0]["label"]
     axes[0].set_ylabel(f"error_rms of the sensor histories vs {ref}")
+    axes[1].set_ylim(axes[0].get_ylim())
     fig.suptitle("Contact rules: error against run time (open markers: not regularized; "
                  f"{ref} drawn at 1e-6)", fontsize=10)
     fig.tight_layout()
