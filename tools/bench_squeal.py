@@ -173,17 +173,20 @@ def main(argv=None):
             step_us = per_thread[best][1]
             result["us_per_step"] = step_us
             result["us_per_pass"] = step_us / k
-            result["roofline_ratio"] = step_us / k / roof["read_once"][int(best)]
+            # thread count 0: the stepper's own setting, a single row block, run serially
+            result["roofline_ratio"] = step_us / k / roof["read_once"][int(best) or 1]
         if args.compare:
             result["compare"] = compare(args.case, args.set, args.compare, windows, directory)
     if args.json:
         print(json.dumps(result))
         return
+    wall_text = "a history's" if args.history else f"{wall:.1f} s wall"
     print(f"{result['case']}: {result['steps']} steps to {result['t_end']:g} s in "
-          f"{wall:.1f} s wall (setup {result['setup_s']:.1f} s, kernel "
+          f"{wall_text} (setup {result['setup_s']:.1f} s, kernel "
           f"{result['kernel_s']:.1f} s); {m} points, {n} dofs, {k} contact passes a step")
     for threads, (steps, us) in sorted(per_thread.items()):
-        print(f"  {threads} Numba thread(s): {steps} steps at {us:.1f} us a step")
+        who = "one row block, serial" if threads == "0" else f"{threads} Numba thread(s)"
+        print(f"  {who}: {steps} steps at {us:.1f} us a step")
     for name, what in (("read_once", "every row read once"),
                        ("numpy_pass", "NumPy's pass, rows read twice")):
         print(f"  {what}: " + ", ".join(f"{t} BLAS thread(s) {us:.1f} us"
