@@ -180,8 +180,8 @@ def main(argv=None):
     if args.json:
         print(json.dumps(result))
         return
-    wall_text = "a history's" if args.history else f"{wall:.1f} s wall"
-    print(f"{result['case']}: {result['steps']} steps to {result['t_end']:g} s in "
+    wall_text = "as its history says" if args.history else f"in {wall:.1f} s wall"
+    print(f"{result['case']}: {result['steps']} steps to {result['t_end']:g} s "
           f"{wall_text} (setup {result['setup_s']:.1f} s, kernel "
           f"{result['kernel_s']:.1f} s); {m} points, {n} dofs, {k} contact passes a step")
     for threads, (steps, us) in sorted(per_thread.items()):
