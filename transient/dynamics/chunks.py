@@ -107,9 +107,7 @@ class ThreadChoice:
         untried = [c for c in self.counts if not self.seconds[c]]
         if untried:
             return untried[0]
-        # the last chunk of each: on a shared machine the past says little (the first chunk
-        # on two threads pays for the team's start)
-        best = min(self.counts, key=lambda c: self.seconds[c][-1])
+        best = self._fastest()
         if self.calls % PROBE == 0:
             return next((c for c in self.counts if c != best), best)
         return best
@@ -117,11 +115,17 @@ class ThreadChoice:
     def steps_of(self, count, chunk, every):
         """The steps of a chunk on `count` threads: a whole chunk on the count in use, a
         PROBE_SHARE of it (whole rows of `every` steps) on the other."""
-        tried = [c for c in self.counts if self.seconds[c]]
-        best = min(tried, key=lambda c: self.seconds[c][-1]) if tried else count
-        if count == best or len(self.counts) == 1:
+        fastest = self._fastest()
+        if fastest is None or count == fastest or len(self.counts) == 1:
             return chunk
         return max(every, chunk // PROBE_SHARE // every * every)
+
+    def _fastest(self):
+        """The count whose last chunk ran fastest per step, of those tried (None yet): the
+        last only, since on a shared machine the past says little (the first chunk on two
+        threads pays for the team's start)."""
+        tried = [c for c in self.counts if self.seconds[c]]
+        return min(tried, key=lambda c: self.seconds[c][-1]) if tried else None
 
     def record(self, threads, seconds, steps):
         if steps:

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..jit import njit_fast, njit_parallel
 from .codes import FRICTIONLESS
-from .friction import friction_coefficient, sign_over_speed
+from .friction import stiffness
 from .laws import pressure_potential
 
 
@@ -62,9 +62,7 @@ def _contact_rows(C, g0, w, kt0, code, params, q, fr, v, fb, ffb, gap, press, sl
         slip[1, i] = sc
         if p <= 0.0:             # open, or a bilateral tie in tension: no friction
             continue
-        sn = np.sqrt(st * st + sc * sc)
-        mu = friction_coefficient(table[i], sn, tab_v, tab_mu, tab_n)
-        c = w[i] * p * mu * sign_over_speed(fcode[i], sn, v_eps[i])
+        c = stiffness(fcode[i], v_eps[i], table[i], tab_v, tab_mu, tab_n, w[i] * p, st, sc)
         tt = c * st
         tc = c * sc
         for j in range(n):
@@ -87,10 +85,9 @@ def _sum_blocks(buf, out):
 def contact_pass(C, g0, w, kt0, code, params, q, fr, v, f, ff, gap, press, slip, blocks, fbuf,
                  ffbuf):
     """f = C^T [w (p(g) + k_t* (g - g0))] + ff, ff the friction force at velocity v (fr:
-    Ct, Cc, V, code, v_eps, table, speeds, values, counts; with no rows: none, ff untouched), in
-    one pass over the
-    points in row blocks (module docstring). Fills gap, press (m,) and with friction slip
-    (2, m). Returns (contact potential, 1/2 sum w k_t* (g - g0)^2, the sliding's input
+    Ct, Cc, V, code, v_eps, table, speeds, values, counts; with no rows: none, ff untouched),
+    in one pass over the points in row blocks (module docstring). Fills gap, press (m,) and
+    with friction slip (2, m). Returns (contact potential, 1/2 sum w k_t* (g - g0)^2, the sliding's input
     power [W])."""
     n = C.shape[1]
     nb = blocks.shape[0] - 1

@@ -90,6 +90,15 @@ def slip_tangent(code, v_eps, t, tab_v, tab_mu, tab_n, st, sc):
 
 
 @njit_fast
+def stiffness(code, v_eps, t, tab_v, tab_mu, tab_n, wp, st, sc):
+    """c = |tau| / |s| of a point sliding at (st, sc) under the pressure's share wp = w p:
+    its traction is c (st, sc) (module docstring)."""
+    s = np.sqrt(st * st + sc * sc)
+    return wp * friction_coefficient(t, s, tab_v, tab_mu, tab_n) * sign_over_speed(code, s,
+                                                                                   v_eps)
+
+
+@njit_fast
 def friction_sparse(Ct, Cc, w, press, V, code, v_eps, table, tab_v, tab_mu, tab_n, v, f, slip):
     """f += Ct^T tau_t + Cc^T tau_c at velocity v (n,) on the full model's dofs, Ct, Cc CSR
     triplets (m rows), pressures press (m,) of the normal pass; slip (2, m) gets each point's
@@ -115,9 +124,8 @@ def friction_sparse(Ct, Cc, w, press, V, code, v_eps, table, tab_v, tab_mu, tab_
         slip[1, i] = sc
         if press[i] <= 0.0:
             continue
-        s = np.sqrt(st * st + sc * sc)
-        mu = friction_coefficient(table[i], s, tab_v, tab_mu, tab_n)
-        c = w[i] * press[i] * mu * sign_over_speed(code[i], s, v_eps[i])
+        c = stiffness(code[i], v_eps[i], table[i], tab_v, tab_mu, tab_n, w[i] * press[i], st,
+                      sc)
         tt = c * st
         tc = c * sc
         for k in range(Tp[i], Tp[i + 1]):

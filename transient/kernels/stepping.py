@@ -135,7 +135,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
         t += dt
         _external(t, patterns, sig, svals, fext)
         phi, lin, p_in = contact_pass(C, g0, w, kt0, code, params, q, fr, v, f, ff, gap,
-                                           press, slip, blocks, fbuf, ffbuf)
+                                      press, slip, blocks, fbuf, ffbuf)
         _track_min(gap, gmin)
         kin = 0.0
         strain = -lin
