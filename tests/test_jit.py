@@ -85,3 +85,28 @@ def test_spinning_sets_mkls_blocktime_for_the_block_only():
     out = subprocess.run([sys.executable, "-c", SPIN_CHILD], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == [str(jit.SPIN_MS), "7", "7"]
+
+
+
+HUGE_CHILD = """
+import os
+{imports}
+core = getattr(numpy, "_core", None) or numpy.core
+print(core.multiarray._get_madvise_hugepage(), os.environ["NUMPY_MADVISE_HUGEPAGE"])
+"""
+
+
+def test_numpy_arrays_on_small_pages_unless_the_user_says():
+    """transient turns NumPy's huge-page advice off (its arrays' huge pages are zeroed through
+    the host on a ballooned VM), whether NumPy was imported before it or after, and passes the
+    setting to the processes it starts; a NUMPY_MADVISE_HUGEPAGE of the user's is kept."""
+    def child(imports, value=None):
+        env = {k: v for k, v in os.environ.items() if k != "NUMPY_MADVISE_HUGEPAGE"}
+        if value is not None:
+            env["NUMPY_MADVISE_HUGEPAGE"] = value
+        out = subprocess.run([sys.executable, "-c", HUGE_CHILD.format(imports=imports)],
+                             capture_output=True, text=True, env=env, check=True)
+        return out.stdout.split()
+    assert child("import transient, numpy") == ["False", "0"]
+    assert child("import numpy, transient") == ["False", "0"]
+    assert child("import numpy, transient", "1") == ["True", "1"]
