@@ -34,12 +34,18 @@ def nodal_diameter(model, motion, u):
     return int(n[0]), float(share[0])
 
 
-def part_shares(model, M, u):
-    """{part: share of the mode's kinetic energy u^H M u}."""
-    Mu = M @ u
-    total = float(np.real(np.vdot(u, Mu)))
-    return {name: float(np.real(np.vdot(u[d], Mu[d]))) / max(total, 1e-300)
-            for name in model.parts for d in [model.part_dofs(name)]}
+def part_shares(model, M, U):
+    """[{part: share of the mode's kinetic energy u^H M u}] for each column u of U (ndof, k)."""
+    energy = np.real(U.conj() * real_times(M, U))
+    total = np.maximum(energy.sum(axis=0), 1e-300)
+    parts = {name: energy[model.part_dofs(name)].sum(axis=0) / total for name in model.parts}
+    return [{name: float(share[k]) for name, share in parts.items()} for k in range(U.shape[1])]
+
+
+def real_times(R, Z):
+    """R Z for a real R (dense or sparse) and a complex Z, as two real products: NumPy and
+    SciPy make a complex copy of R otherwise (X of pad_disc's basis: 0.43 GB)."""
+    return R @ Z.real + 1j * (R @ Z.imag)
 
 
 def describe(case, model, basis, modes, which):
@@ -47,7 +53,7 @@ def describe(case, model, basis, modes, which):
     diameter and the parts' energy shares. basis: (X, A), the modes' coordinates z are
     X (A z) on the model's dofs."""
     X, A = basis
-    U = X @ (A @ modes.vectors[:, which])
+    U = real_times(X, A @ modes.vectors[:, which])
     rotations = {m.part: nodal_diameters(model, m, U)
                  for m in case.motion.values() if m.kind == "rotation"}
     # the parts that do not turn (the pad): which of their own modes the motion resembles
@@ -55,9 +61,10 @@ def describe(case, model, basis, modes, which):
     matched = matched_part_modes(model, U, still, modes.frequency_hz.max()) if len(
         which) else {}
     out = []
+    shares = part_shares(model, model.M, U)
     for k, j in enumerate(which):
         row = {"mode": int(j + 1), "frequency_hz": float(modes.frequency_hz[j]),
-               "real": float(modes.real[j]), "shares": part_shares(model, model.M, U[:, k])}
+               "real": float(modes.real[j]), "shares": shares[k]}
         if rotations:
             row["nodal_diameters"] = {part: {"order": int(n[k]), "share": float(share[k])}
                                       for part, (n, share) in rotations.items()}
@@ -97,9 +104,10 @@ def matched_part_modes(model, U, parts, fmax):
         if Phi.shape[1] == 0:
             continue
         Up = U[dofs]
-        cross = np.abs(Phi.T @ (M @ Up)) ** 2
+        MUp = real_times(M, Up)
+        cross = np.abs(real_times(Phi.T, MUp)) ** 2
         norms = np.einsum("ij,ij->j", Phi, M @ Phi)[:, None] * np.real(
-            np.einsum("ij,ij->j", Up.conj(), M @ Up))[None, :]
+            np.einsum("ij,ij->j", Up.conj(), MUp))[None, :]
         mac = cross / np.maximum(norms, 1e-300)
         best = np.argmax(mac, axis=0)
         out[part] = (best, f[best], mac[best, np.arange(U.shape[1])])
