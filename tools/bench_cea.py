@@ -10,6 +10,7 @@ of pad_disc (setup included) within 1.5x of `transient modes`, the complex modes
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import time
@@ -22,12 +23,17 @@ def timed(command, case, overrides):
     args = [sys.executable, "-m", "transient", command, str(case), "--json"]
     for o in overrides:
         args += ["--set", o]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     done = subprocess.run(args, cwd=ROOT, capture_output=True, text=True)
     wall = time.perf_counter() - t0
     if done.returncode != 0:
         sys.exit(f"transient {command} failed ({done.returncode}): {done.stderr.strip()}")
-    return wall, json.loads(done.stdout)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    # the system's CPU seconds are mostly page faults (tools/bench_long.py: run_timed)
+    cpu = {"user_s": after.ru_utime - before.ru_utime,
+           "system_s": after.ru_stime - before.ru_stime}
+    return wall, dict(json.loads(done.stdout), cpu=cpu)
 
 
 def main(argv=None):
@@ -49,7 +55,8 @@ def main(argv=None):
                      "complex_modes_s": cea["stages"]["complex_modes"],
                      "cea_stages": cea["stages"], "reduced_dofs": cea["reduced"],
                      "unstable": [m for m in cea["modes"] if m["unstable"]],
-                     "modes_count": len(modes["frequencies_hz"])})
+                     "modes_count": len(modes["frequencies_hz"]),
+                     "modes_cpu": modes["cpu"], "cea_cpu": cea["cpu"]})
     load = os.getloadavg()[0]
     if args.json:
         print(json.dumps({"case": Path(args.case).name, "mu": args.mu, "load": load,
@@ -58,7 +65,9 @@ def main(argv=None):
     for r in rows:
         print(f"modes {r['modes_s']:.1f} s, cea {r['cea_s']:.1f} s: ratio {r['ratio']:.2f}; "
               f"complex modes {r['complex_modes_s']:.2f} s on {r['reduced_dofs']} dofs; "
-              f"{len(r['unstable'])} unstable")
+              f"{len(r['unstable'])} unstable; CPU user/system: modes "
+              f"{r['modes_cpu']['user_s']:.1f}/{r['modes_cpu']['system_s']:.1f} s, cea "
+              f"{r['cea_cpu']['user_s']:.1f}/{r['cea_cpu']['system_s']:.1f} s")
     print(f"load {load:.1f}")
     for m in rows[-1]["unstable"]:
         print(f"  unstable {m['frequency_hz']:.1f} Hz, real {m['real']:.4g} 1/s, "
