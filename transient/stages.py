@@ -186,11 +186,14 @@ def _prepare(case, stages, built, want_unsampled=False):
         red = reduce(case, model, M, pairs, contacts, preload, patterns, v0, tangent,
                      critical_tangent(contacts, preload.tangent), stages, cs.C)
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
-        system, state = _reduced(case, red, patterns, signals, sensors, names)
+        # the rows and operators on the reduced coordinates (0.8 s for the cea's 7734 points)
+        system, state = stages.timed("reduced_system", _reduced, case, red, patterns, signals,
+                                     sensors, names)
         if want_unsampled and red.unsampled is not None:
-            u = red.unsampled
+            u, t0 = red.unsampled, time.perf_counter()
             unsampled = Setup(*_reduced(case, u, patterns, signals, sensors, names), None, {},
                               dict(u.meta), {}, model, (u.X, u.AW))
+            stages["reduced_system"] += time.perf_counter() - t0
     else:
         system = stages.timed("time_step", full_system, K_lin, model.lumped_mass,
                         None if solver.lumped else model.M, solver.damping, contacts,
