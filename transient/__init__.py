@@ -12,8 +12,8 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 # transparent huge pages on arrays of 4 MB and more). On a VM whose balloon hands freed memory
 # back to the host (this machine's: virtio-balloon free page reporting), each huge page an
 # array faults in is zeroed through the host at 0.1-0.2 GB/s: 35% of the setup's CPU samples
-# sat in the kernel's clear_page, and `transient cea` on pad_disc took 32 s (17 s of it in the
-# kernel) against 17.7 s (3.4 s) on small pages, `transient modes` 22 s against 9.4 s. On bare
+# sat in the kernel's clear_page, and `transient cea` on pad_disc took 32 s (17 s of system
+# time) against 17.7 s (3.4 s) on small pages, `transient modes` 22 s against 9.4 s. On bare
 # metal small pages cost a page fault per 4 KB, some 0.1-0.3 s per GB an array first touches.
 # NumPy reads the variable at its import; when it came first, its switch does the same.
 _HUGE = "NUMPY_MADVISE_HUGEPAGE"
