@@ -127,3 +127,29 @@ def test_a_free_body_keeps_its_contact_statics_and_lands_as_the_full_model(tmp_p
     (duration, peak), (duration_r, peak_r) = stats[False], stats[True]
     assert duration_r == pytest.approx(duration, rel=1e-2)
     assert peak_r == pytest.approx(peak, rel=1e-2)
+
+
+def test_free_rows_moved_to_their_dofs_in_place_and_grams_by_blocks():
+    """The basis is built in the free rows at the top of X and moved to the dofs in place,
+    from the last row up, by pieces: against NumPy's scatter, for runs shorter and longer than
+    a piece, a fixed first and last dof, and shifts smaller than a piece (overlapping copies).
+    The Grams S^T Op S by column blocks equal the whole products."""
+    from transient.reduce.basis import COLUMN_BLOCK, _gram, _to_dofs
+    rng = np.random.default_rng(5)
+    ndof, k = 200, 7
+    fixed = np.zeros(ndof, bool)
+    fixed[[0, 3, 4, 50, 51, 52, 120, 199]] = True
+    free = np.flatnonzero(~fixed)
+    rows = rng.normal(size=(len(free), k))
+    for piece in (1, 5, 4096):
+        X = np.full((ndof, k), np.nan)
+        X[:len(free)] = rows
+        _to_dofs(X, free, rows=piece)
+        expected = np.zeros((ndof, k))
+        expected[free] = rows
+        assert np.array_equal(X, expected)
+    n, s = 60, COLUMN_BLOCK + 9
+    S = rng.normal(size=(n, s + 3))[:, 3:]          # a strided view, as in the basis
+    A = sp.random(n, n, density=0.1, random_state=1)
+    A = (A + A.T).tocsr()
+    assert np.allclose(_gram(A, S), S.T @ (A @ S), rtol=1e-13, atol=1e-13)

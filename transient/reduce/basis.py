@@ -104,11 +104,14 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
         columns.append(np.atleast_2d(solve(np.asfortranarray(statics[free])).T).T)
     t_static = time.perf_counter() - t0 - t_modes
     peaks["statics"] = peak_rss_gb()
-    # the static responses without what the modes already hold (twice, for round-off): on a
-    # part free to move they are dominated by its rigid motion, 1e10 times their elastic part,
-    # which the independence test below would otherwise take for round-off and drop with them
-    # (each n x a few hundred array is the setup's largest at scale: at most three at once)
-    S = np.empty((len(free), sum(c.shape[1] for c in columns)))
+    # X in the making: its first n rows hold the free rows [Phi, S] (S a strided view, which
+    # BLAS takes as is) until they are scattered to their dofs at the end, so that S and X are
+    # one array, and M S and K S are never whole: an n x s array is the setup's largest at
+    # scale (4x pad_disc: 1.2 GB; its peak was S with M S, or S with X)
+    n, m = len(free), Phi.shape[1]
+    X = np.empty((len(fixed), m + sum(c.shape[1] for c in columns)))
+    X[:n, :m] = Phi
+    S = X[:n, m:]
     start, c = 0, None
     while columns:
         c = columns.pop(0)
@@ -117,52 +120,78 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     shapes = c = None        # the pieces go as they are copied
     # no solve from here on: the products and eighs of a few hundred columns on every core
     with blas.every_core():
-        # M S formed once (the costliest sparse product, on both cores) and carried through the
-        # projections with M Phi, which has only the modes' columns
-        MS, MPhi = csr_dot(Mf, S), csr_dot(Mf, Phi)
-        # by column blocks through one buffer: Phi P whole would be a third n x s array (the
-        # setup's peak at 500k dofs), and a new n x 128 array per block is fresh memory each
-        # time (0.7-0.9 s of page faults here); each entry's sum over the modes is the same
-        buf = np.empty((len(free), min(COLUMN_BLOCK, S.shape[1])))
+        # the static responses without what the modes already hold (twice, for round-off): on
+        # a part free to move they are dominated by its rigid motion, 1e10 times their elastic
+        # part, which the independence test below would otherwise take for round-off and drop
+        # with them. By column blocks through one buffer: Phi P whole would be another n x s
+        # array, and a new n x 128 array per block fresh memory each time.
+        MPhi = csr_dot(Mf, Phi)
+        buf = np.empty((n, min(COLUMN_BLOCK, S.shape[1])))
         for _ in range(2):
-            P = Phi.T @ MS
+            P = MPhi.T @ S
             for start in range(0, P.shape[1], COLUMN_BLOCK):
                 block = slice(start, start + COLUMN_BLOCK)
-                part = buf[:, :P[:, block].shape[1]]
-                S[:, block] -= np.matmul(Phi, P[:, block], out=part)
-                MS[:, block] -= np.matmul(MPhi, P[:, block], out=part)
+                S[:, block] -= np.matmul(Phi, P[:, block], out=buf[:, :P[:, block].shape[1]])
         del buf
         # unit M-norm columns, then drop directions the others already span, then diagonalize
-        norms = np.sqrt(np.einsum("ij,ij->j", S, MS))
+        G = _gram(Mf, S)
+        norms = np.sqrt(np.maximum(np.diag(G), 0.0))
         scale = norms.max() if len(norms) else 0.0
         big = norms > 1e-12 * scale
         if not np.all(big):
-            S, MS, norms = S[:, big], MS[:, big], norms[big]
+            kept = np.flatnonzero(big)
+            for to, col in enumerate(kept):       # in place, left to right: to <= col
+                if to != col:
+                    S[:, to] = S[:, col]
+            X = X[:, :m + len(kept)]
+            S, G, norms = X[:n, m:], G[np.ix_(kept, kept)], norms[kept]
         S /= norms
-        MS /= norms
-        lam, V = np.linalg.eigh(S.T @ MS)
-        del MS
+        lam, V = np.linalg.eigh(G / np.outer(norms, norms))
         keep = lam > 1e-12 * max(lam.max(), 1.0) if len(lam) else np.zeros(0, bool)
         Vs = V[:, keep] / np.sqrt(lam[keep])          # S Vs: M-orthonormal, M-orthogonal to Phi
         n_static_kept = int(keep.sum())
         # X^T K X in blocks, with X = [Phi, S Vs] never formed: S^T K S is the one big product
-        KPhi, KS = Kf @ Phi, Kf @ S
-        KPS = (Phi.T @ KS) @ Vs
-        SKS = S.T @ KS
-        del KS
-        Kr = np.block([[Phi.T @ KPhi, KPS], [KPS.T, Vs.T @ SKS @ Vs]])
+        KPhi = Kf @ Phi
+        KPS = (KPhi.T @ S) @ Vs
+        Kr = np.block([[Phi.T @ KPhi, KPS], [KPS.T, Vs.T @ _gram(Kf, S) @ Vs]])
         omega2, W = sla.eigh(0.5 * (Kr + Kr.T))
-        m = Phi.shape[1]
-        X = np.zeros((len(fixed), m + S.shape[1]))
-        X[free, :m] = Phi
-        X[free, m:] = S
-        del S
+        _to_dofs(X, free)
         A = np.vstack([W[:m], Vs @ W[m:]])
     timings = {"modes": t_modes, "statics": t_static,
                "orthonormalization": time.perf_counter() - t0 - t_modes - t_static}
     peaks["orthonormalization"] = peak_rss_gb()
     return Basis(X, A, np.maximum(omega2, 0.0), len(modes.frequencies), statics.shape[1],
                  timings, n_shapes, mu, n_static_kept, peaks)
+
+
+def _gram(Op, S):
+    """S^T Op S for a symmetric Op (sparse, or lowrank.TangentStiffness) by column blocks of
+    Op S: never an n x s product whole."""
+    G = np.empty((S.shape[1], S.shape[1]))
+    for start in range(0, S.shape[1], COLUMN_BLOCK):
+        block = slice(start, start + COLUMN_BLOCK)
+        part = np.ascontiguousarray(S[:, block])
+        G[:, block] = S.T @ (csr_dot(Op, part) if sp.issparse(Op) else Op @ part)
+    return G
+
+
+def _to_dofs(X, free, rows=4096):
+    """X's first len(free) rows moved to the rows `free` (ascending), the others zeroed, in
+    place: from the last row up, each to a row at or below its own (free[i] >= i), by pieces
+    of at most `rows` rows so that NumPy's copy of an overlapping piece stays small."""
+    n = len(free)
+    shift = free - np.arange(n)
+    ends = np.r_[np.flatnonzero(np.diff(shift)) + 1, n]
+    for stop, start in zip(ends[::-1], np.r_[0, ends[:-1]][::-1]):
+        d = int(shift[start])
+        if d == 0:
+            continue
+        for top in range(stop, start, -rows):
+            low = max(start, top - rows)
+            X[low + d:top + d] = X[low:top]
+    fixed = np.ones(X.shape[0], bool)
+    fixed[free] = False
+    X[fixed] = 0.0
 
 
 def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):
