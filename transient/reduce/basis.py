@@ -87,14 +87,22 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     t_modes = time.perf_counter() - t0
     peaks = {"modes": peak_rss_gb()}
     Phi = modes.shapes
-    columns, shapes = [], None
+    n, m = len(free), Phi.shape[1]
+    columns, shapes, held = [], None, []
+    width = (m if coupling is not None else 0) + statics.shape[1]
+
+    def into_basis(r):
+        """X, allocated once the r contact shapes kept are known: they are solved into it."""
+        held.append(np.empty((len(fixed), m + r + width)))
+        return held[0][:n, m:m + r]
     mu = np.zeros(0)
     n_shapes = 0
     if contact is not None and len(contact[1]):
         C, stiffness = contact
         Cf = C if C is None or C.shape[1] == len(free) else restrict(C, cols=free)
         omega2_modes = (2 * np.pi * modes.frequencies) ** 2
-        shapes, mu = contact_shapes(Cf, stiffness, solve, Phi, omega2_modes, tol)
+        shapes, mu = contact_shapes(Cf, stiffness, solve, Phi, omega2_modes, tol,
+                                    out=into_basis)
         C = Cf = contact = None          # a dense copy at scale: not held through the basis
         columns.append(shapes)
         n_shapes = shapes.shape[1]
@@ -106,16 +114,17 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     peaks["statics"] = peak_rss_gb()
     # X in the making: its first n rows hold the free rows [Phi, S] (S a strided view, which
     # BLAS takes as is) until they are scattered to their dofs at the end, so that S and X are
-    # one array, and M S and K S are never whole: an n x s array is the setup's largest at
-    # scale (4x pad_disc: 1.2 GB; its peak was S with M S, or S with X)
-    n, m = len(free), Phi.shape[1]
-    X = np.empty((len(fixed), m + sum(c.shape[1] for c in columns)))
+    # one array, the contact shapes are solved into it, and M S and K S are never whole: an
+    # n x s array is the setup's largest at scale (4x pad_disc, 1.2 GB: its peak was 8.02 GB
+    # with S and M S, 7.64 GB with X and the shapes beside it, 7.14 GB now)
+    X = held[0] if held else np.empty((len(fixed), m + sum(c.shape[1] for c in columns)))
     X[:n, :m] = Phi
     S = X[:n, m:]
     start, c = 0, None
     while columns:
         c = columns.pop(0)
-        S[:, start:start + c.shape[1]] = c
+        if c.base is not X:            # the shapes solved into X are in place already
+            S[:, start:start + c.shape[1]] = c
         start += c.shape[1]
     shapes = c = None        # the pieces go as they are copied
     # no solve from here on: the products and eighs of a few hundred columns on every core
@@ -194,7 +203,7 @@ def _to_dofs(X, free, rows=4096):
     X[fixed] = 0.0
 
 
-def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):
+def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256, out=None):
     """The responses to the contact point loads that change the contact stiffness by tol or more.
 
     S = K^-1 C^T (n, m) are the responses to the m contact point loads; beyond the modes Phi
@@ -209,13 +218,16 @@ def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):
     thousands of points).
 
     C None: the solver's own rows, which its row space (solve.row_space) stands for.
+    out: out(r) gives the (n, r) array the r shapes kept are solved into, on the paths by
+    columns (the basis' own columns: no second n x r array), or None.
 
     Returns (shapes (n, r), mu (m,) descending).
     """
     known = getattr(solve, "row_space", None)
     if C is None:
         # the solver's own rows (lowrank.ContactSolver), held as their space: Rm V^T on cols
-        return _contact_shapes_by_columns(None, stiffness, solve, Phi, omega2, tol, known.cols)
+        return _contact_shapes_by_columns(None, stiffness, solve, Phi, omega2, tol, known.cols,
+                                          out)
     m = C.shape[0]
     CT = C.T.tocsc()
     if tol <= 0:
@@ -224,7 +236,7 @@ def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):
     # by columns needs K^-1 E (n x k) unless the solver holds the rows' space already
     held = known is not None and np.array_equal(known.cols, cols) and len(known.Rm) == m
     if len(cols) < m and (held or 8.0 * C.shape[1] * len(cols) <= BY_COLUMNS_BYTES):
-        return _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols)
+        return _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols, out)
     F = np.empty((m, m))
     for start in range(0, m, block):
         cols = slice(start, min(start + block, m))
@@ -241,7 +253,7 @@ def contact_shapes(C, stiffness, solve, Phi, omega2, tol, block=256):
     return np.atleast_2d(solve(np.asfortranarray(CT @ (d[:, None] * U[:, kept]))).T).T, mu
 
 
-def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
+def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols, out=None):
     """contact_shapes when the m points touch only k < m dofs (a fine rule): with E the
     selection of those dofs, C = Cc E^T and F = Cc H Cc^T, H = E^T K^-1 E minus the modes'
     part (k x k, from k solves). With X = D^1/2 Cc and H = H^1/2 H^1/2, D^1/2 F D^1/2 = Y Y^T,
@@ -260,7 +272,7 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
         H = known.G @ R
 
         def response(Y):
-            return known.responses(R @ Y)
+            return known.responses(R @ Y, None if out is None else out(Y.shape[1]))
     else:
         V = None
         Cc = sp.csr_matrix(C)[:, cols].toarray()
@@ -270,7 +282,7 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols):
         H = KE[cols]
 
         def response(Y):
-            return KE @ Y
+            return KE @ Y if out is None else np.matmul(KE, Y, out=out(Y.shape[1]))
     PhiE = Phi[cols] if V is None else V.T @ Phi[cols]
     H = H - (PhiE / np.maximum(omega2, 1e-300)) @ PhiE.T
     lam, W = np.linalg.eigh(0.5 * (H + H.T))

@@ -192,14 +192,15 @@ class ContactSolver:
         """B^T Zb in the update's coordinates: V^T E^T Zb by columns, C Zb otherwise."""
         return self.V.T @ Zb[self.cols] if self.by_columns else np.asarray(self.C @ Zb)
 
-    def responses(self, Y):
-        """Z Y = A0^-1 B Y for Y (rank,) or (rank, k): from Z when held, else one solve."""
+    def responses(self, Y, out=None):
+        """Z Y = A0^-1 B Y for Y (rank,) or (rank, k): from Z when held, else one solve.
+        out: an (n, k) array to write them into (a view of the reduced basis), for a 2-D Y."""
         if self.Z is not None:
-            return self.Z @ Y
+            return self.Z @ Y if out is None else np.matmul(self.Z, Y, out=out)
         Y2 = Y[:, None] if Y.ndim == 1 else Y
         # BLOCK columns at a time: the loads and the solver's own copies are n x BLOCK, not
         # n x k (the kept contact shapes: 515 at 500k dofs, 2 GB each, three at once)
-        x = np.empty((self.A0.shape[0], Y2.shape[1]))
+        x = np.empty((self.A0.shape[0], Y2.shape[1])) if out is None else out
         for start in range(0, Y2.shape[1], BLOCK):
             block = slice(start, min(start + BLOCK, Y2.shape[1]))
             x[:, block] = np.atleast_2d(self.solve0(self._loads(Y2[:, block])).T).T
