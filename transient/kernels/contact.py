@@ -87,8 +87,8 @@ def contact_pass(C, g0, w, kt0, code, params, q, fr, v, f, ff, gap, press, slip,
     """f = C^T [w (p(g) + k_t* (g - g0))] + ff, ff the friction force at velocity v (fr:
     Ct, Cc, V, code, v_eps, table, speeds, values, counts; with no rows: none, ff untouched),
     in one pass over the points in row blocks (module docstring). Fills gap, press (m,) and
-    with friction slip (2, m). Returns (contact potential, 1/2 sum w k_t* (g - g0)^2, the sliding's input
-    power [W])."""
+    with friction slip (2, m). Returns (contact potential, 1/2 sum w k_t* (g - g0)^2, the
+    sliding's input power [W])."""
     n = C.shape[1]
     nb = blocks.shape[0] - 1
     friction = fr[0].shape[0] > 0
