@@ -108,3 +108,18 @@ def test_fmax_returns_every_mode_below_it():
     some = normal_modes(ops.K, ops.M, fixed, count=5, fmax=fmax)
     assert len(some.frequencies) == 41
     np.testing.assert_allclose(some.frequencies, all_modes.frequencies[:41], rtol=1e-9)
+
+
+def test_pardiso_is_found_without_importing_pypardiso():
+    """The MKL runtime is loaded from where the wheel puts it: importing pypardiso builds a
+    solver that globs the environment's lib tree (0.6 s a process), so it is not imported
+    when the runtime is there."""
+    import subprocess
+    import sys
+    code = ("import sys; from transient.solve.linsolve import available; "
+            "print('pardiso' in available(), 'pypardiso' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    if out[0] != "True":
+        pytest.skip("PARDISO is not installed")
+    assert out[1] == "False"

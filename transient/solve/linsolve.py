@@ -6,6 +6,10 @@ slower and hungrier on 3D solids). `factorize(A)` returns a callable x = solve(b
 """
 import ctypes
 import functools
+import os
+import sys
+from ctypes.util import find_library
+from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
@@ -23,9 +27,9 @@ def available():
     except ImportError:
         pass
     try:
-        import pypardiso  # noqa: F401
+        _mkl()
         names.append("pardiso")
-    except ImportError:
+    except (ImportError, OSError):
         pass
     return names + ["superlu"]
 
@@ -88,10 +92,24 @@ def _superlu(A):
 
 @functools.cache
 def _mkl():
-    """The MKL runtime pypardiso locates, once a process: without mkl_rt on the loader's path
-    it globs the environment's whole lib tree for it (0.16 s a factorization here)."""
-    import pypardiso
-    return pypardiso.PyPardisoSolver().libmkl
+    """The MKL runtime (mkl_rt, which the pypardiso wheel brings), loaded once a process.
+
+    Looked for where pypardiso looks, without its cost: importing pypardiso builds a solver
+    at import, and each solver it builds globs the environment's whole lib tree for mkl_rt
+    when the loader's path lacks it (0.19 s each, 0.6 s a process here). The wheel puts it in
+    the environment's lib directory, read here first; pypardiso's own search is the fallback
+    (another layout, Windows)."""
+    path = os.environ.get("PYPARDISO_MKL_RT") or find_library("mkl_rt")
+    if path is None:
+        import site
+        found = [p for root in (sys.prefix, site.USER_BASE)
+                 for p in sorted(Path(root, "lib").glob("libmkl_rt.so*"), key=lambda p:
+                                 len(p.name))]
+        path = str(found[0]) if found else None
+    if path is None:
+        from pypardiso import PyPardisoSolver
+        return PyPardisoSolver().libmkl
+    return ctypes.CDLL(path)
 
 
 class _Pardiso:
