@@ -175,12 +175,16 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
 
 def _gram(Op, S):
     """S^T Op S for a symmetric Op (sparse, or lowrank.TangentStiffness) by column blocks of
-    Op S: never an n x s product whole."""
-    G = np.empty((S.shape[1], S.shape[1]))
-    for start in range(0, S.shape[1], COLUMN_BLOCK):
-        block = slice(start, start + COLUMN_BLOCK)
-        part = np.ascontiguousarray(S[:, block])
-        G[:, block] = S.T @ (csr_dot(Op, part) if sp.issparse(Op) else Op @ part)
+    Op S: never an n x s product whole. Each block's column is taken down to its diagonal
+    block and mirrored (half the n s^2 flops: the Grams were 1.5 s of pad_disc's cea)."""
+    s = S.shape[1]
+    G = np.empty((s, s))
+    for start in range(0, s, COLUMN_BLOCK):
+        stop = min(start + COLUMN_BLOCK, s)
+        part = np.ascontiguousarray(S[:, start:stop])
+        OpS = csr_dot(Op, part) if sp.issparse(Op) else Op @ part
+        G[:stop, start:stop] = S[:, :stop].T @ OpS
+        G[start:stop, :start] = G[:start, start:stop].T
     return G
 
 
