@@ -11,7 +11,7 @@ import scipy.sparse as sp
 
 from .case.signals import compile_signals
 from .case.sizes import check_steps, peak_rss_gb
-from .contact.contactset import stack
+from .contact.contactset import first_tangent, stack
 from .contact.pair import GEOMETRY, build_contact, build_geometry, contact_stiffness
 from .dynamics import schemes
 from .dynamics.chunks import buffer
@@ -161,7 +161,8 @@ def _prepare(case, stages, built, want_unsampled=False):
         cs = built.solver or stages.timed("factorization", factorization, case, model, contacts)
     try:
         preload = stages.timed("preload", solve_preload, model.K, model.fixed, constant,
-                               contacts, cs, solver.newton.tolerance, solver.newton.max_iter)
+                               contacts, cs, solver.newton.tolerance, solver.newton.max_iter,
+                               first_tangent(pairs, contacts))
     except PreloadError as exc:
         raise CaseError(case.path, "loads", str(exc)) from None
     if preload.iterations == 0:

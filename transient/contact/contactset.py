@@ -6,7 +6,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from ..kernels.codes import FRICTIONLESS
+from ..kernels.codes import EXPONENTIAL, FRICTIONLESS
 from ..kernels.laws import evaluate
 from .friction import CODES, steady, tangential_rows
 from .laws import law_params
@@ -154,6 +154,18 @@ def stack(pairs, ndof):
     friction = _friction(pairs, ndof, factored)
     return ContactSet(C, np.concatenate(gap0), np.concatenate(w), np.concatenate(code),
                       np.vstack(params), slices, factors, friction)
+
+
+def first_tangent(pairs, contacts):
+    """(P,) the tangent a preload's first Newton step takes at least (solve_preload's start):
+    the pair's stiffness density k on the points of exponential laws (the tangent of its
+    operating pressure, as the case states it), 0 on the others, whose tangent at the initial
+    gaps is their own (a penalty law's k, or 0 where open)."""
+    out = np.zeros(contacts.n_points)
+    for pair in pairs:
+        s = contacts.slices[pair.name]
+        out[s] = np.where(contacts.code[s] == EXPONENTIAL, pair.k, 0.0)
+    return out
 
 
 def _friction(pairs, ndof, factored):

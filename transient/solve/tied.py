@@ -16,7 +16,7 @@ low-rank update (lowrank.ContactSolver), the penalty through the factorization o
 import time
 from dataclasses import dataclass
 
-from ..contact.contactset import stack
+from ..contact.contactset import first_tangent, stack
 from ..contact.pair import contact_stiffness
 from ..errors import CaseError
 from ..model import constant_load
@@ -64,7 +64,8 @@ def contact_modes(case, model, pairs):
     t0 = time.perf_counter()
     try:
         preload = solve_preload(model.K, model.fixed, constant_load(case, model), contacts, cs,
-                                case.solver.newton.tolerance, case.solver.newton.max_iter)
+                                case.solver.newton.tolerance, case.solver.newton.max_iter,
+                                first_tangent(pairs, contacts))
     except PreloadError as exc:
         raise CaseError(case.path, "loads", str(exc)) from None
     tangent = cs.solver(contacts.weights * preload.tangent)
