@@ -67,7 +67,7 @@ def solve_preload(K, fixed, load, contacts, solver, tol=1e-10, max_iter=50, star
         return (load + fc - K @ u)[free], g, p, kt
 
     r, g, p, kt = residual(u)
-    held = None           # the tangents of the Newton tangent kept, when one is
+    held = None           # the laws' tangents the Newton tangent kept was made of (friction)
     scale = max(np.linalg.norm(load[free]), np.linalg.norm(fc[free]), 1e-300)
     norm = np.linalg.norm(r)
     for it in range(1, max_iter + 1):
