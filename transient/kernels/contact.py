@@ -102,13 +102,12 @@ def _traction(i, p, st, sc, fr, w, slip):
 def _friction_fours(C, g0, w, kt0, code, params, q, fr, v, fb, ffb, gap, press, slip, start,
                     stop):
     """_contact_rows with friction on the rows start.. four at a time (as _normal_rows), up to
-    the last four before stop; each row set's dots and updates in loops of their own.
-    pad_disc_squeal's three row sets (3.6 MB) come from the shared cache on one thread, where
-    this is no faster than a row at a time; on two, each core's half fits its own, and a step
-    is 15% faster. Its normal part repeats _normal_rows' spelled out: through helpers for the
-    four dots and the four-row update, pad_disc_long's pass took 36 us against 31 (LLVM
-    vectorized the helpers' loops otherwise). Returns (contact potential, 1/2 sum w k_t*
-    (g - g0)^2, the sliding's input power, the first row left)."""
+    the last four before stop: each four's normal part by _normal_rows, then the dots and
+    updates of their rows along and across in loops of their own. pad_disc_squeal's three row
+    sets (3.6 MB) come from the shared cache on one thread, where this is no faster than a row
+    at a time; on two, each core's half fits its own, and a step is 15% faster. Returns
+    (contact potential, 1/2 sum w k_t* (g - g0)^2, the sliding's input power, the first row
+    left)."""
     n = C.shape[1]
     Ct, Cc, V = fr[0], fr[1], fr[2]
     phi = 0.0
@@ -116,13 +115,11 @@ def _friction_fours(C, g0, w, kt0, code, params, q, fr, v, fb, ffb, gap, press, 
     p_in = 0.0
     i = start
     while i + 4 <= stop:
-        r0, r1, r2, r3 = C[i], C[i + 1], C[i + 2], C[i + 3]
+        e, l_ = _normal_rows(C, g0, w, kt0, code, params, q, fb, gap, press, i, i + 4)
+        phi += e
+        lin += l_
         t0, t1, t2, t3 = Ct[i], Ct[i + 1], Ct[i + 2], Ct[i + 3]
         c0, c1, c2, c3 = Cc[i], Cc[i + 1], Cc[i + 2], Cc[i + 3]
-        s0 = 0.0
-        s1 = 0.0
-        s2 = 0.0
-        s3 = 0.0
         u0 = 0.0
         u1 = 0.0
         u2 = 0.0
@@ -131,12 +128,6 @@ def _friction_fours(C, g0, w, kt0, code, params, q, fr, v, fb, ffb, gap, press, 
         x1 = 0.0
         x2 = 0.0
         x3 = 0.0
-        for j in range(n):
-            x = q[j]
-            s0 += r0[j] * x
-            s1 += r1[j] * x
-            s2 += r2[j] * x
-            s3 += r3[j] * x
         for j in range(n):
             y = v[j]
             u0 += t0[j] * y
@@ -149,12 +140,6 @@ def _friction_fours(C, g0, w, kt0, code, params, q, fr, v, fb, ffb, gap, press, 
             x1 += c1[j] * y
             x2 += c2[j] * y
             x3 += c3[j] * y
-        a0, e0, l0 = _point(i, s0, g0, w, kt0, code, params, gap, press)
-        a1, e1, l1 = _point(i + 1, s1, g0, w, kt0, code, params, gap, press)
-        a2, e2, l2 = _point(i + 2, s2, g0, w, kt0, code, params, gap, press)
-        a3, e3, l3 = _point(i + 3, s3, g0, w, kt0, code, params, gap, press)
-        for j in range(n):
-            fb[j] += (a0 * r0[j] + a1 * r1[j]) + (a2 * r2[j] + a3 * r3[j])
         b0, d0, i0 = _traction(i, press[i], V[i] - u0, -x0, fr, w, slip)
         b1, d1, i1 = _traction(i + 1, press[i + 1], V[i + 1] - u1, -x1, fr, w, slip)
         b2, d2, i2 = _traction(i + 2, press[i + 2], V[i + 2] - u2, -x2, fr, w, slip)
@@ -163,8 +148,6 @@ def _friction_fours(C, g0, w, kt0, code, params, q, fr, v, fb, ffb, gap, press, 
             ffb[j] += (b0 * t0[j] + b1 * t1[j]) + (b2 * t2[j] + b3 * t3[j])
         for j in range(n):
             ffb[j] += (d0 * c0[j] + d1 * c1[j]) + (d2 * c2[j] + d3 * c3[j])
-        phi += (e0 + e1) + (e2 + e3)
-        lin += (l0 + l1) + (l2 + l3)
         p_in += (i0 + i1) + (i2 + i3)
         i += 4
     return phi, lin, p_in, i
