@@ -122,7 +122,7 @@ class _Stages(dict):
         return out
 
 
-def prepare(case, check=None, built=None, unsampled=False):
+def prepare(case, check=None, built=None, unsampled=False, analysis=False):
     """Model, contact, preload, linearization and (optionally) reduction of a case.
 
     The setup's dense algebra runs on one OpenBLAS thread: its calls are many and mid-sized
@@ -133,12 +133,14 @@ def prepare(case, check=None, built=None, unsampled=False):
     The large products of sections that solve nothing run on every core (solve.blas).
     built: the first stages' results when built already (a Built: cea bounds the model's size
     first, a campaign's variants share them). unsampled: also the Setup of a sampled rule's
-    candidates (Setup.unsampled), the cea's, from the same stages."""
+    candidates (Setup.unsampled), the cea's, from the same stages. analysis: the system is
+    linearized, not integrated (the cea's): it gets no critical step and the Setup no rows0
+    (the critical step's eigenvalues were 0.3 s of pad_disc's cea, on its 7734 points)."""
     with blas.one_thread():
-        return _prepare(case, _Stages(check), built or Built(None), unsampled)
+        return _prepare(case, _Stages(check), built or Built(None), unsampled, analysis)
 
 
-def _prepare(case, stages, built, want_unsampled=False):
+def _prepare(case, stages, built, want_unsampled=False, analysis=False):
     solver = case.solver
     model = (stages.timed("loads", build_model, case, built.model) if built.model is not None
              else stages.timed("model", build_model, case))
@@ -189,24 +191,24 @@ def _prepare(case, stages, built, want_unsampled=False):
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
         # the rows and operators on the reduced coordinates (0.8 s for the cea's 7734 points)
         system, state = stages.timed("reduced_system", _reduced, case, red, patterns, signals,
-                                     sensors, names)
+                                     sensors, names, not analysis)
         if want_unsampled and red.unsampled is not None:
             u, t0 = red.unsampled, time.perf_counter()
-            unsampled = Setup(*_reduced(case, u, patterns, signals, sensors, names), None, {},
-                              dict(u.meta), {}, model, (u.X, u.AW))
+            unsampled = Setup(*_reduced(case, u, patterns, signals, sensors, names, False),
+                              None, {}, dict(u.meta), {}, model, (u.X, u.AW))
             stages["reduced_system"] += time.perf_counter() - t0
     else:
         system = stages.timed("time_step", full_system, K_lin, model.lumped_mass,
                         None if solver.lumped else model.M, solver.damping, contacts,
                         preload.tangent, free, patterns, signals, sensors, names,
-                        case.output.field)
+                        case.output.field, not analysis)
         meta = {"free_dofs": len(free)}
         state = State.zeros(system.n, contacts.n_points)
         state.q[:], state.v[:] = preload.u[free], v0[free]
     state.gmin[:] = preload.gap
     consistent = not system.reduced and solver.scheme == "implicit" and not solver.lumped
-    rows0 = schemes.initial_acceleration(system, state, case.output.contact,
-                                         system.M if consistent else None)
+    rows0 = None if analysis else schemes.initial_acceleration(
+        system, state, case.output.contact, system.M if consistent else None)
     meta.update(_contact_meta(pairs, contacts, preload))
     meta["peak_rss_gb"] = dict(stages.peaks)
     if cs is not None:
@@ -218,12 +220,12 @@ def _prepare(case, stages, built, want_unsampled=False):
                  model, (red.X, red.AW) if system.reduced else None, unsampled)
 
 
-def _reduced(case, red, patterns, signals, sensors, names):
-    """(system, initial state) of a ReducedModel."""
+def _reduced(case, red, patterns, signals, sensors, names, critical=True):
+    """(system, initial state) of a ReducedModel; critical: with its critical step."""
     solver = case.solver
     system = reduced_system(red.X, red.AW, red.omega2, solver.reduction.fmax, solver.damping,
                             red.contacts, red.preload.tangent, patterns, signals, sensors,
-                            names, case.output.field, red.preload.pressure)
+                            names, case.output.field, red.preload.pressure, critical)
     state = State.zeros(system.n, red.contacts.n_points)
     state.q[:], state.v[:] = red.q0, red.v0
     state.gmin[:] = red.preload.gap

@@ -65,7 +65,7 @@ def analyse(case, check=None, built=None):
         built = Built(build_model(case))
         stages["model"] = time.perf_counter() - t0
         _bounded(case, int((~built.model.fixed).sum()))
-    setup = prepare(analysed_case(case), check, built)
+    setup = prepare(analysed_case(case), check, built, analysis=True)
     stages.update(setup.stages)
     return analysis_of(case, setup, stages)
 

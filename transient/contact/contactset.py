@@ -77,22 +77,24 @@ class ContactSet:
                                               for name, (a, b) in bounds.items()}, factors,
                           friction)
 
-    def observe(self, T):
-        """C T (P, k) for a dense T (ndof, k): from the factors when held, L (B^T T), which
-        reads r x ndof sparse entries instead of the P dense rows (pad_disc: 1.9 s -> 0.2)."""
+    def observe(self, T, W=None):
+        """C T (P, k) for a dense T (ndof, k), C T W for W (k, n): from the factors when held,
+        L (B^T T), which reads r x ndof sparse entries instead of the P dense rows (pad_disc:
+        1.9 s -> 0.2), and W taken on the r factor rows before the P points'."""
         if self.factors is None:
-            return np.asarray(self.C @ T)
+            return _times(np.asarray(self.C @ T), W)
         L, B = self.factors
-        return L @ np.asarray(B.T @ T)
+        return L @ _times(np.asarray(B.T @ T), W)
 
-    def observe_tangential(self, T):
+    def observe_tangential(self, T, W=None):
         """(Ct T, Cc T): the tangential observations along and across the sliding of a dense
-        T (ndof, k)."""
+        T (ndof, k); (Ct T W, Cc T W) for W (k, n), as in observe."""
         f = self.friction
         if self.factors is None:
-            return np.asarray(f.along @ T), np.asarray(f.across @ T)
+            return _times(np.asarray(f.along @ T), W), _times(np.asarray(f.across @ T), W)
         L = self.factors[0]
-        return L @ np.asarray(f.along.T @ T), L @ np.asarray(f.across.T @ T)
+        return (L @ _times(np.asarray(f.along.T @ T), W),
+                L @ _times(np.asarray(f.across.T @ T), W))
 
     def tangential(self):
         """(Ct, Cc) as CSR rows (P, ndof) (formed from the factors when held)."""
@@ -208,3 +210,7 @@ def _friction(pairs, ndof, factored):
     return FrictionSet(join(along).tocsr(), join(across).tocsr(),
                        *map(np.concatenate, (speed, m, dm, turn, code, v_eps, table)),
                        (tab_v, tab_mu, counts))
+
+
+def _times(Y, W):
+    return Y if W is None else Y @ W

@@ -12,6 +12,7 @@ import scipy.sparse as sp
 
 from . import critical
 from ..model.dofs import free_block, restrict
+from ..solve import blas
 
 
 @dataclass(frozen=True)
@@ -23,7 +24,8 @@ class System:
     sensors: object          # (s, n) observation of q: the sensors, then q itself if stored
     sensor_names: tuple
     n_field: int             # rows of `sensors` after the named ones (the state q itself)
-    critical: object         # CriticalStep (dynamics.critical)
+    critical: object         # CriticalStep (dynamics.critical); None for a system only
+    #                          linearized (the cea's)
 
     @property
     def n(self):
@@ -74,7 +76,7 @@ def patterns_matrix(vectors, n):
 
 
 def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, signals,
-                   sensors, sensor_names, field, pressure=None):
+                   sensors, sensor_names, field, pressure=None, critical_step=True):
     """The reduced system on the basis T = X AW (X (ndof, m), AW (m, n)) with eigenvalues
     omega2. T itself (ndof x n, the setup's largest product at scale: 4x pad_disc's 198 GFLOP)
     is formed only for field output; the contact rows, sensors and loads come from X.
@@ -82,29 +84,32 @@ def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, si
     damping: DampingSpec; modes above fmax [Hz] take the residual ratio on top of the modal.
     patterns: load vectors on the model's dofs; sensors (s, ndof) their observation.
     pressure: the preload's at the points, for the friction's explicit step bounds.
+    critical_step: False for a system that is only linearized (no CriticalStep).
     """
     omega = np.sqrt(omega2)
     above = omega > 2 * np.pi * fmax
     ratio = damping.modal + damping.residual * above
     damp = 2 * ratio * omega + damping.alpha + damping.beta * omega2
-    Cr = np.ascontiguousarray(contacts.observe(X) @ AW)
-    n = len(omega2)
-    S = _observation((sensors @ X) @ AW, n, field, dense=True)
-    Ct = Cc = None
-    if contacts.friction is not None:
-        Ct, Cc = (np.ascontiguousarray(R @ AW) for R in contacts.observe_tangential(X))
+    with blas.every_core():      # products of a few hundred columns, no solve
+        Cr = np.ascontiguousarray(contacts.observe(X, AW))
+        n = len(omega2)
+        S = _observation((sensors @ X) @ AW, n, field, dense=True)
+        Ct = Cc = None
+        if contacts.friction is not None:
+            Ct, Cc = (np.ascontiguousarray(R) for R in contacts.observe_tangential(X, AW))
     return ReducedSystem(contacts, tangent,
                          patterns_matrix([AW.T @ (X.T @ p) for p in patterns], n),
                          signals, S, sensor_names, n if field else 0,
-                         critical.reduced(omega2, Cr, contacts, tangent, Ct, Cc, pressure),
+                         critical.reduced(omega2, Cr, contacts, tangent, Ct, Cc, pressure)
+                         if critical_step else None,
                          omega2=omega2,
                          damp=damp, C=Cr, T=X @ AW if field else None, Ct=Ct, Cc=Cc)
 
 
 def full_system(K_lin, lumped, M, damping, contacts, tangent, free, patterns, signals, sensors,
-                sensor_names, field):
+                sensor_names, field, critical_step=True):
     """The full system on the free dofs. M: the mass the implicit scheme uses, None for the
-    lumped one."""
+    lumped one; critical_step as in reduced_system."""
     Kf = free_block(K_lin, free)
     mass = lumped[free]
     Cf = restrict(contacts.C, cols=free)
@@ -114,6 +119,7 @@ def full_system(K_lin, lumped, M, damping, contacts, tangent, free, patterns, si
         Ct, Cc = (restrict(R, cols=free) for R in contacts.tangential())
     return FullSystem(contacts, tangent, patterns_matrix([p[free] for p in patterns], len(free)),
                       signals, S, sensor_names, len(free) if field else 0,
-                      critical.full(Kf, mass, Cf, contacts, tangent), K=Kf, mass=mass,
+                      critical.full(Kf, mass, Cf, contacts, tangent) if critical_step
+                      else None, K=Kf, mass=mass,
                       M=sp.diags(mass).tocsr() if M is None else free_block(M, free),
                       alpha=damping.alpha, beta=damping.beta, C=Cf, free=free, Ct=Ct, Cc=Cc)

@@ -86,9 +86,9 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
     stages.check()
     t0 = perf_counter()
     with blas.every_core():      # dense algebra on the reduced coordinates, no solve
-        Cr = contacts.observe(basis.X) @ basis.A
+        Cr = contacts.observe(basis.X, basis.A)
         tangential = (None if contacts.friction is None else
-                      tuple(R @ basis.A for R in contacts.observe_tangential(basis.X)))
+                      contacts.observe_tangential(basis.X, basis.A))
         sampled = _sample(case, contacts, mask, basis.omega2, Cr, q0, preload, tangential)
         AW = basis.A @ sampled.W
     stages["sampling"] = perf_counter() - t0
