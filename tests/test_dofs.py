@@ -1,8 +1,9 @@
-"""Free blocks by remapped column indices against SciPy's fancy indexing."""
+"""Free blocks by remapped column indices against SciPy's fancy indexing; K - sigma M by the
+data of a shared pattern against SciPy's sum."""
 import numpy as np
 import scipy.sparse as sp
 
-from transient.model.dofs import free_block, restrict
+from transient.model.dofs import free_block, restrict, shifted
 
 
 def test_restrict_is_scipys_indexing():
@@ -19,3 +20,25 @@ def test_restrict_is_scipys_indexing():
         got.check_format()
     K = (A[:50] + A[:50].T).tocsr()
     assert (free_block(K, cols) != K[cols][:, cols]).nnz == 0
+
+
+def test_shifted_is_scipys_sum_on_a_shared_pattern_and_otherwise():
+    rng = np.random.default_rng(2)
+    pattern = sp.random(40, 40, density=0.2, random_state=3, format="csr")
+    pattern = (pattern + pattern.T + sp.eye(40)).tocsr()
+    pattern.sort_indices()
+    K, M = pattern.copy(), pattern.copy()
+    K.data = rng.standard_normal(K.nnz)
+    M.data = rng.standard_normal(M.nnz)
+    sigma = -3.0
+    # entries that cancel: SciPy's sum leaves them out, and so must the shared-pattern path
+    K.data[:5] = sigma * M.data[:5]
+    M.data[5:9] = K.data[5:9] = 0.0
+    for k, m in ((K, M), (K, sp.csr_matrix(M.toarray()))):     # shared, and not
+        ref = (k - sigma * m).tocsr()
+        got = shifted(k, m, sigma)
+        got.check_format()
+        assert np.array_equal(got.indptr, ref.indptr)
+        assert np.array_equal(got.indices, ref.indices)
+        assert np.array_equal(got.data, ref.data)
+    assert (shifted(K, M, 0.0) != K).nnz == 0

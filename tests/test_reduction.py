@@ -134,7 +134,7 @@ def test_free_rows_moved_to_their_dofs_in_place_and_grams_by_blocks():
     from the last row up, by pieces: against NumPy's scatter, for runs shorter and longer than
     a piece, a fixed first and last dof, and shifts smaller than a piece (overlapping copies).
     The Grams S^T Op S by column blocks equal the whole products."""
-    from transient.reduce.basis import COLUMN_BLOCK, _gram, _to_dofs
+    from transient.reduce.basis import COLUMN_BLOCK, _grams, _to_dofs
     rng = np.random.default_rng(5)
     ndof, k = 200, 7
     fixed = np.zeros(ndof, bool)
@@ -152,4 +152,8 @@ def test_free_rows_moved_to_their_dofs_in_place_and_grams_by_blocks():
     S = rng.normal(size=(n, s + 3))[:, 3:]          # a strided view, as in the basis
     A = sp.random(n, n, density=0.1, random_state=1)
     A = (A + A.T).tocsr()
-    assert np.allclose(_gram(A, S), S.T @ (A @ S), rtol=1e-13, atol=1e-13)
+    B = sp.random(n, n, density=0.2, random_state=2)
+    B = (B + B.T).tocsr()
+    GA, GB = _grams((A, B), S)
+    assert np.allclose(GA, S.T @ (A @ S), rtol=1e-13, atol=1e-13)
+    assert np.allclose(GB, S.T @ (B @ S), rtol=1e-13, atol=1e-13)

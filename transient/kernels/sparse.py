@@ -31,6 +31,32 @@ def csr_take_columns(indptr, indices, data, new):
     return out_ptr, out_idx, out_val
 
 
+@njit
+def csr_combined(indptr, indices, a, b, beta):
+    """The CSR triplet of A + beta B for A and B of one pattern (indptr, indices; data a and
+    b), the entries that come out zero left out (as SciPy's sum leaves them). Counted first,
+    so that the output is allocated once at its size (fresh memory is the cost here)."""
+    m = indptr.shape[0] - 1
+    zeros = 0
+    for k in range(indices.shape[0]):
+        if a[k] + beta * b[k] == 0.0:
+            zeros += 1
+    out_ptr = np.empty(m + 1, indptr.dtype)
+    out_idx = np.empty(indices.shape[0] - zeros, indices.dtype)
+    out_val = np.empty(indices.shape[0] - zeros, a.dtype)
+    p = 0
+    out_ptr[0] = 0
+    for i in range(m):
+        for k in range(indptr[i], indptr[i + 1]):
+            v = a[k] + beta * b[k]
+            if v != 0.0:
+                out_idx[p] = indices[k]
+                out_val[p] = v
+                p += 1
+        out_ptr[i + 1] = p
+    return out_ptr, out_idx, out_val
+
+
 @njit_parallel_ieee
 def csr_matmat(indptr, indices, data, X, Y):
     """Y = A X for a CSR A and a C-ordered block X: rows in parallel, the same sums whatever

@@ -26,3 +26,20 @@ def restrict(A, rows=None, cols=None):
 def free_block(A, free):
     """A on the free dofs, rows and columns (free sorted)."""
     return restrict(A, free, free)
+
+
+def shifted(K, M, sigma):
+    """K - sigma M as CSR. K and M of one assembly share their pattern: then their data are
+    combined in one pass (SciPy's sum merges the two patterns entry by entry: 0.18 s on
+    pad_disc's free dofs), the entries that cancel left out as SciPy leaves them out."""
+    K, M = sp.csr_matrix(K), sp.csr_matrix(M)
+    if not sigma:
+        return K
+    if not (K.has_sorted_indices and M.has_sorted_indices and K.shape == M.shape
+            and np.array_equal(K.indptr, M.indptr) and np.array_equal(K.indices, M.indices)):
+        return (K - sigma * M).tocsr()
+    from ..kernels.sparse import csr_combined
+    indptr, indices, data = csr_combined(K.indptr, K.indices, K.data, M.data, -sigma)
+    out = sp.csr_matrix((data, indices, indptr), shape=K.shape)
+    out.has_sorted_indices = True
+    return out

@@ -143,7 +143,8 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
                 S[:, block] -= np.matmul(Phi, P[:, block], out=buf[:, :P[:, block].shape[1]])
         del buf
         # unit M-norm columns, then drop directions the others already span, then diagonalize
-        G = _gram(Mf, S)
+        # (the K Gram in the same pass over S, scaled and cut as S is below)
+        G, GK = _grams((Mf, Kf), S)
         norms = np.sqrt(np.maximum(np.diag(G), 0.0))
         scale = norms.max() if len(norms) else 0.0
         big = norms > 1e-12 * scale
@@ -153,8 +154,10 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
                 if to != col:
                     S[:, to] = S[:, col]
             X = X[:, :m + len(kept)]
-            S, G, norms = X[:n, m:], G[np.ix_(kept, kept)], norms[kept]
+            S, norms = X[:n, m:], norms[kept]
+            G, GK = G[np.ix_(kept, kept)], GK[np.ix_(kept, kept)]
         S /= norms
+        GK /= np.outer(norms, norms)
         lam, V = np.linalg.eigh(G / np.outer(norms, norms))
         keep = lam > 1e-12 * max(lam.max(), 1.0) if len(lam) else np.zeros(0, bool)
         Vs = V[:, keep] / np.sqrt(lam[keep])          # S Vs: M-orthonormal, M-orthogonal to Phi
@@ -162,7 +165,7 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
         # X^T K X in blocks, with X = [Phi, S Vs] never formed: S^T K S is the one big product
         KPhi = Kf @ Phi
         KPS = (KPhi.T @ S) @ Vs
-        Kr = np.block([[Phi.T @ KPhi, KPS], [KPS.T, Vs.T @ _gram(Kf, S) @ Vs]])
+        Kr = np.block([[Phi.T @ KPhi, KPS], [KPS.T, Vs.T @ GK @ Vs]])
         omega2, W = sla.eigh(0.5 * (Kr + Kr.T))
         _to_dofs(X, free)
         A = np.vstack([W[:m], Vs @ W[m:]])
@@ -173,20 +176,22 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
                  timings, n_shapes, mu, n_static_kept, peaks)
 
 
-def _gram(Op, S):
-    """S^T Op S for a symmetric Op (sparse, or lowrank.TangentStiffness) by column blocks of
-    Op S: never an n x s product whole. Each block's column is taken down to its diagonal
-    block and mirrored (half the n s^2 flops: the Grams were 1.5 s of pad_disc's cea)."""
+def _grams(ops, S):
+    """[S^T Op S for Op in ops], symmetric Ops (sparse, or lowrank.TangentStiffness), by
+    column blocks of Op S: never an n x s product whole, and each block of S copied once for
+    every Op. Each block's column is taken down to its diagonal block and mirrored (half the
+    n s^2 flops: the Grams were 1.5 s of pad_disc's cea)."""
     s = S.shape[1]
-    G = np.empty((s, s))
+    Gs = [np.empty((s, s)) for _ in ops]
     for start in range(0, s, COLUMN_BLOCK):
         stop = min(start + COLUMN_BLOCK, s)
         part = np.ascontiguousarray(S[:, start:stop])
-        G[:stop, start:stop] = S[:, :stop].T @ (csr_dot(Op, part) if sp.issparse(Op)
-                                                 else Op @ part)
-        G[start:stop, :start] = G[:start, start:stop].T
+        for Op, G in zip(ops, Gs):
+            G[:stop, start:stop] = S[:, :stop].T @ (csr_dot(Op, part) if sp.issparse(Op)
+                                                     else Op @ part)
+            G[start:stop, :start] = G[:start, start:stop].T
         part = None        # not held while the next block is copied (n x 128: 68 MB)
-    return G
+    return Gs
 
 
 def _to_dofs(X, free, rows=4096):

@@ -166,13 +166,16 @@ class _Pardiso:
                     -3: "reordering problem"}.get(err.value, "error")
             raise FactorizationError(f"PARDISO {what} (code {err.value})")
 
-    def __call__(self, b):
+    def __call__(self, b, out=None):
         # column-major both ways, as PARDISO reads and writes them: a row-major copy of x
-        # cost 1.2 s of pad_disc_long's setup (a transpose of every block of responses)
+        # cost 1.2 s of pad_disc_long's setup (a transpose of every block of responses).
+        # out: a column-major array of b's shape to write x into (a block of a larger one)
         b = np.asfortranarray(b, dtype=np.float64)
-        x = np.empty_like(b, order="F")
+        x = out if out is not None and out.flags.f_contiguous else np.empty_like(b, order="F")
         self._call(33, b, x)
-        return x
+        if out is not None and x is not out:
+            out[...] = x
+        return x if out is None else out
 
     def __del__(self):
         try:

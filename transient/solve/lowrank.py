@@ -16,7 +16,7 @@ import scipy.sparse as sp
 
 from ..contact.regularize import factored_rows
 from ..kernels.sparse import csr_dot
-from ..model.dofs import free_block, restrict
+from ..model.dofs import free_block, restrict, shifted
 from . import blas
 from .linsolve import factorize
 
@@ -116,7 +116,7 @@ class ContactSolver:
 
     def __init__(self, K, M, C, sigma, backend="auto", factors=None):
         self.K = K.tocsr()
-        self.A0 = (K - sigma * M).tocsr() if sigma else self.K
+        self.A0 = shifted(self.K, M, sigma)
         self.sigma = sigma
         self.backend = backend
         if C is None:
@@ -149,9 +149,17 @@ class ContactSolver:
         self.CT = None if self.by_columns else self.C.T.tocsc()
         self.Z = np.empty((n, rank), order="F") if 8.0 * n * rank <= MAX_BYTES else None
         G = None if self.Z is not None else np.empty((rank, rank))
+        into = getattr(self.solve0, "backend", "") == "pardiso" and self.Z is not None
+        loads = None
         for start in range(0, rank, BLOCK):
             block = slice(start, min(start + BLOCK, rank))
-            Zb = np.atleast_2d(self.solve0(self._loads(block)).T).T
+            # one array of loads for every block, and PARDISO's responses solved into Z's
+            # columns: n x BLOCK of fresh memory a block otherwise, twice (0.1 s on pad_disc)
+            loads = self._loads(block, loads)
+            if into:
+                self.solve0(loads, out=self.Z[:, block])
+                continue
+            Zb = np.atleast_2d(self.solve0(loads).T).T
             if self.Z is not None:
                 self.Z[:, block] = Zb
             else:
@@ -175,16 +183,21 @@ class ContactSolver:
         self.__dict__.update(state)
         self.solve0 = factorize(self.A0, self.backend, definite=self.sigma <= 0)
 
-    def _loads(self, Y):
+    def _loads(self, Y, buffer=None):
         """B Y (n, k), F-ordered: B = E V by columns, C^T otherwise; Y (rank, k), or a slice
-        of B's columns (taken, not multiplied)."""
+        of B's columns (taken, not multiplied). buffer: an earlier call's result, reused by
+        columns when it has enough of them."""
         if isinstance(Y, slice):
             part = self.V[:, Y] if self.by_columns else self.CT[:, Y].toarray()
         else:
             part = self.V @ Y if self.by_columns else self.CT @ Y
         if not self.by_columns:
             return np.asfortranarray(part)
-        b = np.zeros((self.A0.shape[0], part.shape[1]), order="F")
+        k = part.shape[1]
+        if buffer is not None and buffer.shape[1] >= k:
+            b = buffer[:, :k]          # (its nonzero rows are cols, all overwritten)
+        else:
+            b = np.zeros((self.A0.shape[0], k), order="F")
         b[self.cols] = part
         return b
 

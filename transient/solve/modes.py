@@ -8,7 +8,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..model.dofs import free_block
+from ..model.dofs import free_block, shifted
 from .lanczos import TOL, NotConverged, block_lanczos
 from .linsolve import factorize
 
@@ -64,7 +64,7 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
 
     t0 = time.perf_counter()
     if solve is None:
-        solve = factorize((Kf.tocsr() - sigma * Mf).tocsr(), backend, definite=sigma <= 0)
+        solve = factorize(shifted(Kf, Mf, sigma), backend, definite=sigma <= 0)
     timings["factorization"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     lam_max = (2 * np.pi * fmax) ** 2 if fmax > 0 else None
