@@ -187,7 +187,8 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
     if solver.reduction.enabled:
         M = sp.diags(model.lumped_mass).tocsr() if solver.mass == "lumped" else model.M
         red = reduce(case, model, M, pairs, contacts, preload, patterns, v0, tangent,
-                     critical_tangent(contacts, preload.tangent), stages, cs.C)
+                     critical_tangent(contacts, preload.tangent), stages, cs.C,
+                     cs.M if M is model.M else None)
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
         # the rows and operators on the reduced coordinates (0.8 s for the cea's 7734 points)
         system, state = stages.timed("reduced_system", _reduced, case, red, patterns, signals,

@@ -61,7 +61,7 @@ class Basis:
 
 
 def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None, tol=0.0,
-                  coupling=None):
+                  coupling=None, Mf=None):
     """Basis of the modes of (K_lin, M) up to fmax [Hz] and the responses to static loads.
     K_lin: sparse on the model dofs, or the tangent on the free dofs as an operator
     (lowrank.TangentStiffness, what the setup passes).
@@ -76,12 +76,13 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
 
     coupling: loads (nfree, k) of the modes Phi (nfree, n) that the basis must respond to
     beyond them (the friction forces their normal motion drives, reduce.stage), or None.
+    Mf: M on the free dofs when the caller has it (the contact solver's), or None.
     """
     t0 = time.perf_counter()
     free = np.flatnonzero(~fixed)
     # the free blocks once: the modes, the projections and the reduced stiffness share them
     Kf = TangentStiffness(free_block(K_lin, free)) if sp.issparse(K_lin) else K_lin
-    Mf = free_block(M, free)
+    Mf = free_block(M, free) if Mf is None else Mf
     modes = normal_modes(Kf, Mf, None, count=40, fmax=fmax, shift=-shift_hz, solve=solve,
                          tol=MODES_TOL)
     t_modes = time.perf_counter() - t0

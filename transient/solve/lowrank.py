@@ -115,8 +115,8 @@ class ContactSolver:
     """
 
     def __init__(self, K, M, C, sigma, backend="auto", factors=None):
-        self.K = K.tocsr()
-        self.A0 = shifted(self.K, M, sigma)
+        self.K, self.M = K.tocsr(), M.tocsr()     # (M: the reduced basis' mass too)
+        self.A0 = shifted(self.K, self.M, sigma)
         self.sigma = sigma
         self.backend = backend
         if C is None:
