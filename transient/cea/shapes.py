@@ -20,7 +20,12 @@ def nodal_diameters(model, motion, U):
     W = np.einsum("ndk,d->nk", U.reshape(len(U) // 3, 3, U.shape[1])[dofs[:, 0] // 3], axis)
     # up to half the distinct angles of the nodes: beyond, orders alias (N - n is n again)
     angles = len(np.unique(np.round(theta, 6)))
-    E = np.exp(-1j * np.outer(np.arange(0, max(angles // 2, 1) + 1), theta))
+    # E[n] = exp(-i n theta) as powers of E[1] (a product a row: one exp a node instead of
+    # one per order and node, 0.1 s on pad_disc's disc)
+    E = np.empty((max(angles // 2, 1) + 1, len(theta)), complex)
+    E[0] = 1.0
+    E[1:] = np.exp(-1j * theta)
+    np.cumprod(E, axis=0, out=E)
     # an order n and its mirror -n are one nodal diameter: a standing or travelling wave
     c = np.abs(E @ W) ** 2
     c[1:] += np.abs(E[1:].conj() @ W) ** 2
