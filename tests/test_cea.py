@@ -172,6 +172,22 @@ def test_reduced_complex_modes_match_the_full_model():
     assert np.array_equal(red.unstable[near][ref.unstable], ref.unstable[ref.unstable])
 
 
+@pytest.mark.parametrize("reduced", [True, False])
+def test_an_analysis_setup_is_the_runs_without_its_critical_step(reduced):
+    """prepare(analysis=True), the cea's: the same system as a run's setup, bit for bit, but
+    no critical step (its eigenvalues were 0.3 s of pad_disc's cea) and no initial row."""
+    case = analysed_case(small("contact.pad_disc.friction.mu=0.4",
+                               f"solver.reduction.enabled={str(reduced).lower()}"))
+    run, analysis = prepare(case), prepare(case, analysis=True)
+    assert run.system.critical is not None and run.rows0 is not None
+    assert analysis.system.critical is None and analysis.rows0 is None
+    for name in ("C", "Ct", "Cc") + (("omega2", "damp") if reduced else ("K", "M")):
+        a, b = getattr(run.system, name), getattr(analysis.system, name)
+        a, b = (a.toarray(), b.toarray()) if hasattr(a, "toarray") else (a, b)
+        assert np.array_equal(a, b), name
+    assert np.array_equal(run.state.q, analysis.state.q)
+
+
 def test_frictionless_complex_modes_are_the_tied_modes(capsys):
     """mu = 0 with the disc turning: every complex mode is stable (real parts at round-off)
     and its frequency equals the tied modes of `transient modes` (a bilateral law: its tangent
