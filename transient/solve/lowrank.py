@@ -208,28 +208,27 @@ class ContactSolver:
     def responses(self, Y, out=None):
         """Z Y = A0^-1 B Y for Y (rank,) or (rank, k): from Z when held, else one solve.
         out: an (n, k) array to write them into (a view of the reduced basis), for a 2-D Y."""
-        if self.Z is not None:
-            # as (Y^T Z^T)^T, Z^T row-major, on every core (no solve runs meanwhile): OpenBLAS
-            # packs the tall Z of Z Y whole for a few columns. pad_disc's 66554 x 599 times 16
-            # columns (a Lanczos step's Woodbury term) 74 -> 45 ms on one thread, 22 on two;
-            # times one column 24 -> 13 ms on two
+        # Z Y as (Y^T Z^T)^T, Z^T row-major, on every core (no solve runs meanwhile): OpenBLAS
+        # packs the tall Z of Z Y whole for a few columns. pad_disc's 66554 x 599 times 16
+        # columns (a Lanczos step's Woodbury term) 74 -> 45 ms on one thread, 22 on two; times
+        # one column 24 -> 13 ms on two
+        if self.Z is not None and (Y.ndim == 1 or out is None):
             with blas.every_core():
-                if Y.ndim == 1:
-                    return self.Z @ Y
-                if out is None:
-                    return (Y.T @ self.Z.T).T
-                # by column blocks into out (the basis' own columns): no n x k product beside
-                for start in range(0, Y.shape[1], BLOCK):
-                    block = slice(start, min(start + BLOCK, Y.shape[1]))
-                    out[:, block] = (Y[:, block].T @ self.Z.T).T
-                return out
+                return self.Z @ Y if Y.ndim == 1 else (Y.T @ self.Z.T).T
         Y2 = Y[:, None] if Y.ndim == 1 else Y
-        # BLOCK columns at a time: the loads and the solver's own copies are n x BLOCK, not
-        # n x k (the kept contact shapes: 515 at 500k dofs, 2 GB each, three at once)
+        # BLOCK columns at a time: no n x k product beside out (the basis' own columns), and
+        # without Z the loads and the solver's own copies are n x BLOCK, not n x k (the kept
+        # contact shapes: 515 at 500k dofs, 2 GB each, three at once)
         x = np.empty((self.A0.shape[0], Y2.shape[1])) if out is None else out
+        loads = None
         for start in range(0, Y2.shape[1], BLOCK):
             block = slice(start, min(start + BLOCK, Y2.shape[1]))
-            x[:, block] = np.atleast_2d(self.solve0(self._loads(Y2[:, block])).T).T
+            if self.Z is not None:
+                with blas.every_core():
+                    x[:, block] = (Y2[:, block].T @ self.Z.T).T
+                continue
+            loads = self._loads(Y2[:, block], loads)
+            x[:, block] = np.atleast_2d(self.solve0(loads).T).T
         return x[:, 0] if Y.ndim == 1 else x
 
     def solver(self, d):
