@@ -133,8 +133,11 @@ def test_free_rows_moved_to_their_dofs_in_place_and_grams_by_blocks():
     """The basis is built in the free rows at the top of X and moved to the dofs in place,
     from the last row up, by pieces: against NumPy's scatter, for runs shorter and longer than
     a piece, a fixed first and last dof, and shifts smaller than a piece (overlapping copies).
-    The Grams S^T Op S by column blocks equal the whole products."""
+    The Grams S^T M S and S^T K S by column blocks equal the whole products, with M and K of
+    one pattern or not, and K's low-rank update (a TangentStiffness of the rows' space)."""
     from transient.reduce.basis import COLUMN_BLOCK, _grams, _to_dofs
+    from transient.kernels.sparse import shares_pattern
+    from transient.solve.lowrank import TangentStiffness
     rng = np.random.default_rng(5)
     ndof, k = 200, 7
     fixed = np.zeros(ndof, bool)
@@ -154,6 +157,17 @@ def test_free_rows_moved_to_their_dofs_in_place_and_grams_by_blocks():
     A = (A + A.T).tocsr()
     B = sp.random(n, n, density=0.2, random_state=2)
     B = (B + B.T).tocsr()
-    GA, GB = _grams((A, B), S)
-    assert np.allclose(GA, S.T @ (A @ S), rtol=1e-13, atol=1e-13)
-    assert np.allclose(GB, S.T @ (B @ S), rtol=1e-13, atol=1e-13)
+    cols = np.array([2, 7, 30, 59])
+    V = np.linalg.qr(rng.normal(size=(4, 2)))[0]
+    core = np.array([[2.0, 0.5], [0.5, 1.0]])
+    update = np.zeros((n, n))
+    update[np.ix_(cols, cols)] = V @ core @ V.T
+    same = sp.csr_matrix((rng.normal(size=A.nnz), A.indices, A.indptr), shape=A.shape)
+    same = same + same.T           # (the sum sorts the pattern: A's, sorted, is the same)
+    assert shares_pattern(same, A) and not shares_pattern(A, B)
+    for M, K in ((A, TangentStiffness(B)), (A, TangentStiffness(B, cols, V, core)),
+                 (same, TangentStiffness(A, cols, V, core))):
+        GM, GK = _grams(M, K, S)
+        assert np.allclose(GM, S.T @ (M @ S), rtol=1e-13, atol=1e-13)
+        assert np.allclose(GK, S.T @ ((K.K + update * (K.V is not None)) @ S), rtol=1e-13,
+                           atol=1e-13)

@@ -65,3 +65,21 @@ def test_csr_dot_is_the_same_on_every_thread_count_and_scipys_to_round_off():
     assert np.all(np.abs(out[1][2] - A @ X[:, 0]) <= bound[:, 0])
     # every remainder after the groups of four
     assert {int(c) % 4 for c in counts} == {0, 1, 2, 3}
+
+
+def test_a_pair_of_one_pattern_is_two_csr_dots_bit_for_bit():
+    from transient.kernels.sparse import csr_dot_pair, shares_pattern
+    A = sp.random(300, 300, density=0.05, random_state=5).tocsr()
+    A.data -= 0.5
+    B = A.copy()
+    B.data = np.random.default_rng(6).standard_normal(B.nnz)
+    X = np.random.default_rng(7).standard_normal((300, 19))
+    assert shares_pattern(A, B) and {int(c) % 4 for c in np.diff(A.indptr)} == {0, 1, 2, 3}
+    for shared in (None, True):
+        AX, BX = csr_dot_pair(A, B, np.asfortranarray(X), shared)
+        assert np.array_equal(AX, csr_dot(A, X)) and np.array_equal(BX, csr_dot(B, X))
+    # another pattern: the two products apart, the same numbers
+    C = sp.random(300, 300, density=0.04, random_state=8).tocsr()
+    assert not shares_pattern(A, C) and not shares_pattern(A, A.tocsc())
+    AX, CX = csr_dot_pair(A, C, X)
+    assert np.array_equal(AX, csr_dot(A, X)) and np.array_equal(CX, csr_dot(C, X))

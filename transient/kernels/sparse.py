@@ -83,6 +83,35 @@ def csr_matmat(indptr, indices, data, X, Y):
             k += 1
 
 
+@njit_parallel_ieee
+def csr_matmat_pair(indptr, indices, a, b, X, YA, YB):
+    """YA = A X and YB = B X for CSR A and B of one pattern (data a and b) and a C-ordered
+    block X: csr_matmat's sums, term for term, for both, from one read of the pattern and of
+    X's rows (M and K times 128 columns on pad_disc: 0.24 -> 0.16 s)."""
+    n, s = YA.shape
+    for i in prange(n):
+        for c in range(s):
+            YA[i, c] = 0.0
+            YB[i, c] = 0.0
+        k, end = indptr[i], indptr[i + 1]
+        while k + 4 <= end:
+            a0, a1, a2, a3 = a[k], a[k + 1], a[k + 2], a[k + 3]
+            b0, b1, b2, b3 = b[k], b[k + 1], b[k + 2], b[k + 3]
+            j0, j1, j2, j3 = indices[k], indices[k + 1], indices[k + 2], indices[k + 3]
+            for c in range(s):
+                x0, x1, x2, x3 = X[j0, c], X[j1, c], X[j2, c], X[j3, c]
+                YA[i, c] += (a0 * x0 + a1 * x1) + (a2 * x2 + a3 * x3)
+                YB[i, c] += (b0 * x0 + b1 * x1) + (b2 * x2 + b3 * x3)
+            k += 4
+        while k < end:
+            ak, bk = a[k], b[k]
+            j = indices[k]
+            for c in range(s):
+                YA[i, c] += ak * X[j, c]
+                YB[i, c] += bk * X[j, c]
+            k += 1
+
+
 def csr_dot(A, X):
     """A @ X for a SciPy sparse A and a dense X (n,) or (n, s): by csr_matmat (both cores, the
     same sums on any thread count) when A is CSR, by SciPy otherwise."""
@@ -94,6 +123,25 @@ def csr_dot(A, X):
     Y = np.empty((A.shape[0], X.shape[1]))
     csr_matmat(A.indptr, A.indices, np.asarray(A.data, np.float64), np.ascontiguousarray(X), Y)
     return Y
+
+
+def shares_pattern(A, B):
+    """Whether sparse A and B are CSR of one pattern (the M and K of one assembly are)."""
+    return (A.format == "csr" and B.format == "csr" and A.shape == B.shape
+            and np.array_equal(A.indptr, B.indptr) and np.array_equal(A.indices, B.indices))
+
+
+def csr_dot_pair(A, B, X, shared=None):
+    """(A @ X, B @ X) for sparse A and B and a dense block X (n, s), each csr_dot's to the last
+    bit; in one pass (csr_matmat_pair) when they share their pattern. shared: that known
+    already (shares_pattern), or None to test it."""
+    if not (shares_pattern(A, B) if shared is None else shared):
+        return csr_dot(A, X), csr_dot(B, X)
+    X = np.ascontiguousarray(X, dtype=np.float64)
+    YA, YB = np.empty((A.shape[0], X.shape[1])), np.empty((A.shape[0], X.shape[1]))
+    csr_matmat_pair(A.indptr, A.indices, np.asarray(A.data, np.float64),
+                    np.asarray(B.data, np.float64), X, YA, YB)
+    return YA, YB
 
 
 @njit_fast

@@ -13,7 +13,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..case.sizes import peak_rss_gb
-from ..kernels.sparse import csr_dot
+from ..kernels.sparse import shares_pattern
 from ..model.dofs import free_block, restrict
 from ..solve import blas
 from ..solve.lowrank import TangentStiffness
@@ -135,7 +135,9 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
         # part, which the independence test below would otherwise take for round-off and drop
         # with them. By column blocks through one buffer: Phi P whole would be another n x s
         # array, and a new n x 128 array per block fresh memory each time.
-        MPhi = csr_dot(Mf, Phi)
+        # M and K of one assembly: their products with a block read the pattern once
+        shared = shares_pattern(Mf, Kf.K)
+        MPhi, KPhi = Kf.with_mass(Mf, Phi, shared)
         buf = np.empty((n, min(COLUMN_BLOCK, S.shape[1])))
         for _ in range(2):
             P = MPhi.T @ S
@@ -145,7 +147,7 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
         del buf
         # unit M-norm columns, then drop directions the others already span, then diagonalize
         # (the K Gram in the same pass over S, scaled and cut as S is below)
-        G, GK = _grams((Mf, Kf), S)
+        G, GK = _grams(Mf, Kf, S, shared)
         norms = np.sqrt(np.maximum(np.diag(G), 0.0))
         scale = norms.max() if len(norms) else 0.0
         big = norms > 1e-12 * scale
@@ -164,7 +166,6 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
         Vs = V[:, keep] / np.sqrt(lam[keep])          # S Vs: M-orthonormal, M-orthogonal to Phi
         n_static_kept = int(keep.sum())
         # X^T K X in blocks, with X = [Phi, S Vs] never formed: S^T K S is the one big product
-        KPhi = Kf @ Phi
         KPS = (KPhi.T @ S) @ Vs
         Kr = np.block([[Phi.T @ KPhi, KPS], [KPS.T, Vs.T @ GK @ Vs]])
         omega2, W = sla.eigh(0.5 * (Kr + Kr.T))
@@ -177,20 +178,22 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
                  timings, n_shapes, mu, n_static_kept, peaks)
 
 
-def _grams(ops, S):
-    """[S^T Op S for Op in ops], symmetric Ops (sparse, or lowrank.TangentStiffness), by
-    column blocks of Op S: never an n x s product whole, and each block of S copied once for
-    every Op. Each block's column is taken down to its diagonal block and mirrored (half the
-    n s^2 flops: the Grams were 1.5 s of pad_disc's cea)."""
+def _grams(M, K, S, shared=None):
+    """(S^T M S, S^T K S) for M sparse and K a lowrank.TangentStiffness, by column blocks of
+    M S and K S (K.with_mass: one pass over the pattern and the block for both; shared as
+    there): never an n x s product whole, and each block of S copied once. Each block's
+    column is taken down to its diagonal block and mirrored (half the n s^2 flops: the Grams
+    were 1.5 s of pad_disc's cea)."""
     s = S.shape[1]
-    Gs = [np.empty((s, s)) for _ in ops]
+    Gs = (np.empty((s, s)), np.empty((s, s)))
     for start in range(0, s, COLUMN_BLOCK):
         stop = min(start + COLUMN_BLOCK, s)
         part = np.ascontiguousarray(S[:, start:stop])
-        for Op, G in zip(ops, Gs):
-            G[:stop, start:stop] = S[:, :stop].T @ (csr_dot(Op, part) if sp.issparse(Op)
-                                                     else Op @ part)
+        products = list(K.with_mass(M, part, shared))
+        for i, G in enumerate(Gs):
+            G[:stop, start:stop] = S[:, :stop].T @ products[i]
             G[start:stop, :start] = G[:start, start:stop].T
+            products[i] = None       # (two n x 128 blocks at once, 136 MB on pad_disc)
         part = None        # not held while the next block is copied (n x 128: 68 MB)
     return Gs
 

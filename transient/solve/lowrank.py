@@ -15,7 +15,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..contact.regularize import factored_rows
-from ..kernels.sparse import csr_dot
+from ..kernels.sparse import csr_dot, csr_dot_pair
 from ..model.dofs import free_block, restrict, shifted
 from . import blas
 from .linsolve import factorize
@@ -63,7 +63,16 @@ class TangentStiffness:
         return self.K.shape
 
     def __matmul__(self, X):
-        out = csr_dot(self.K, X) if X.ndim == 2 else self.K @ X
+        return self._updated(X, csr_dot(self.K, X) if X.ndim == 2 else self.K @ X)
+
+    def with_mass(self, M, X, shared=None):
+        """(M X, self @ X) for a block X (n, s): M and K of one assembly share their pattern,
+        and both products then read it and X once (csr_dot_pair; shared as there)."""
+        MX, KX = csr_dot_pair(M, self.K, X, shared)
+        return MX, self._updated(X, KX)
+
+    def _updated(self, X, out):
+        """out = K X plus the update times X."""
         if self.V is not None:
             out[self.cols] += self.V @ (self.core @ (self.V.T @ X[self.cols]))
         if self.C is not None:
