@@ -3,7 +3,7 @@ data of a shared pattern against SciPy's sum."""
 import numpy as np
 import scipy.sparse as sp
 
-from transient.model.dofs import free_block, restrict, shifted
+from transient.model.dofs import free_block, restrict, restricted, shifted
 
 
 def test_restrict_is_scipys_indexing():
@@ -20,6 +20,26 @@ def test_restrict_is_scipys_indexing():
         got.check_format()
     K = (A[:50] + A[:50].T).tocsr()
     assert (free_block(K, cols) != K[cols][:, cols]).nnz == 0
+
+
+def test_matrices_of_one_pattern_are_restricted_together_and_others_apart():
+    """restricted gives each matrix's own block, its entries in SciPy's order, whether the
+    matrices share their pattern (one pass, B a copy of A with other values) or not (C)."""
+    rng = np.random.default_rng(2)
+    A = sp.random(80, 80, density=0.15, random_state=3, format="csr")
+    B = sp.csr_matrix((rng.normal(size=A.nnz), A.indices, A.indptr), shape=A.shape)
+    C = sp.random(80, 80, density=0.1, random_state=4, format="csr")
+    rows = np.sort(rng.choice(80, 50, replace=False))
+    cols = np.sort(rng.choice(80, 61, replace=False))
+    for mats in ((A, B), (A, C), (A, B, C)):
+        for r, c in ((rows, cols), (None, cols), (rows, None)):
+            got = restricted(mats, r, c)
+            for X, Y in zip(mats, got):
+                ref = X[r if r is not None else slice(None)][:, c if c is not None
+                                                               else slice(None)]
+                assert Y.shape == ref.shape and np.array_equal(Y.indptr, ref.indptr)
+                assert np.array_equal(Y.indices, ref.indices)
+                assert np.array_equal(Y.data, ref.data)
 
 
 def test_shifted_is_scipys_sum_on_a_shared_pattern_and_otherwise():

@@ -91,13 +91,13 @@ PART_MODES_TOL = 1e-6   # a match by MAC needs shapes, not eigenvalues to round-
 def part_modes(model, part, fmax, shift_hz=1.0):
     """The normal modes of one part alone, on its own supports (contact left out), up to fmax
     [Hz]: (frequencies, shapes on the part's free dofs, those dofs, the part's mass there)."""
-    from ..model.dofs import restrict
+    from ..model.dofs import restricted
     from ..solve.modes import normal_modes
     dofs = model.part_dofs(part)
     dofs = dofs[~model.fixed[dofs]]
     # the part's block by the package's column remapping (SciPy's fancy indexing of the whole
     # model's K and M took 0.6 s on pad_disc)
-    K, M = restrict(model.K, dofs, dofs), restrict(model.M, dofs, dofs)
+    K, M = restricted((model.K, model.M), dofs, dofs)
     modes = normal_modes(K, M, None, count=20, fmax=fmax, shift=-shift_hz, tol=PART_MODES_TOL)
     return modes.frequencies, modes.shapes, dofs, M
 

@@ -7,28 +7,38 @@ from numba import prange
 from ..jit import njit, njit_fast, njit_parallel_ieee
 
 
-@njit
-def csr_take_columns(indptr, indices, data, new):
-    """The CSR triplet of the columns j with new[j] >= 0, renumbered new[j] (in row order)."""
-    m = indptr.shape[0] - 1
-    out_ptr = np.zeros(m + 1, indptr.dtype)
-    for i in range(m):
+@njit_parallel_ieee
+def csr_block(indptr, indices, rows, new, datas):
+    """The block of CSR matrices of one pattern (indptr, indices; data datas, a tuple) on the
+    rows `rows` and the columns j with new[j] >= 0, renumbered new[j] (in row order):
+    (indptr, indices, data (len(datas), nnz)), the rows in parallel (the M and K of one
+    assembly taken in one pass: copies, no arithmetic)."""
+    m = rows.shape[0]
+    counts = np.zeros(m, indptr.dtype)
+    for r in prange(m):
+        i = rows[r]
         c = 0
         for k in range(indptr[i], indptr[i + 1]):
             if new[indices[k]] >= 0:
                 c += 1
-        out_ptr[i + 1] = out_ptr[i] + c
+        counts[r] = c
+    out_ptr = np.empty(m + 1, indptr.dtype)
+    out_ptr[0] = 0
+    for r in range(m):
+        out_ptr[r + 1] = out_ptr[r] + counts[r]
     out_idx = np.empty(out_ptr[m], indices.dtype)
-    out_val = np.empty(out_ptr[m], data.dtype)
-    for i in range(m):
-        p = out_ptr[i]
+    out_data = np.empty((len(datas), out_ptr[m]))
+    for r in prange(m):
+        i = rows[r]
+        p = out_ptr[r]
         for k in range(indptr[i], indptr[i + 1]):
             j = new[indices[k]]
             if j >= 0:
                 out_idx[p] = j
-                out_val[p] = data[k]
+                for d in range(len(datas)):
+                    out_data[d, p] = datas[d][k]
                 p += 1
-    return out_ptr, out_idx, out_val
+    return out_ptr, out_idx, out_data
 
 
 @njit

@@ -16,7 +16,7 @@ import scipy.sparse as sp
 
 from ..contact.regularize import factored_rows
 from ..kernels.sparse import csr_dot, csr_dot_pair
-from ..model.dofs import free_block, restrict, shifted
+from ..model.dofs import restrict, restricted, shifted
 from . import blas
 from .linsolve import factorize
 
@@ -333,7 +333,7 @@ def contact_solver(model, contacts, sigma, backend="auto"):
     free = model.free
     factors = (None if contacts.factors is None
                else (contacts.factors[0], contacts.factors[1][free]))
-    return ContactSolver(free_block(model.K, free), free_block(model.M, free),
+    return ContactSolver(*restricted((model.K, model.M), free, free),
                          None if contacts.rows is None else restrict(contacts.C, cols=free),
                          sigma, backend, factors)
 
