@@ -84,8 +84,7 @@ def spinning(ms=SPIN_MS):
     slept between passes: 88-104 us per step on two threads against 35-37 on one, and 27-30
     with 200 ms (pad_disc_long's stepper, load 0.1). The setting is restored after the block:
     between chunks the history's writes do not compete with spinning threads. Under libgomp
-    (no MKL, or Numba's pool started before MKL's first threaded call: MKL then takes libgomp
-    too) this does nothing."""
+    (no MKL: `_load_iomp`) this does nothing."""
     lib = _iomp()
     if lib is None:
         yield
@@ -114,3 +113,26 @@ def _iomp():
         lib = ctypes.CDLL(sorted(paths)[0])
         _runtime["iomp"] = lib if hasattr(lib, "kmp_set_blocktime") else None
     return _runtime["iomp"]
+
+
+def _load_iomp():
+    """MKL's OpenMP runtime (libiomp5, the MKL wheels' lib directory) loaded into the process's
+    global scope before Numba starts its thread pool, when MKL is installed. Numba's omp layer
+    takes the GOMP entry points of the runtime loaded first: PARDISO's first threaded call
+    loads libiomp5, but a parallel kernel that runs before it (a setup stage before the
+    factorization: model.dofs.restricted) binds Numba and then MKL to libgomp, whose threads
+    `spinning` cannot keep awake: pad_disc_long's two-thread steps took 99 us against 26, and
+    its kernel ran on one thread (11.7 s against 8.5)."""
+    import sys
+    from ctypes.util import find_library
+    from pathlib import Path
+    for path in (Path(sys.prefix, "lib", "libiomp5.so"), find_library("iomp5")):
+        if path and (not isinstance(path, Path) or path.exists()):
+            try:
+                ctypes.CDLL(str(path), mode=ctypes.RTLD_GLOBAL)
+                return
+            except OSError:
+                continue
+
+
+_load_iomp()
