@@ -188,6 +188,23 @@ def test_an_analysis_setup_is_the_runs_without_its_critical_step(reduced):
     assert np.array_equal(run.state.q, analysis.state.q)
 
 
+def test_the_unstable_shapes_are_the_same_with_the_pads_modes_beside_the_qz_or_after(
+        monkeypatch):
+    """analysis_of makes the still parts' own modes in a thread beside the dense QZ when the
+    process has two cores or more, after it on one (a campaign's worker): the same numbers."""
+    from transient.cea.stage import analysis_of
+    from transient.stages import prepare
+    case = small("contact.pad_disc.friction.mu=0.4")
+    setup = prepare(analysed_case(case), analysis=True)
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "2")
+    beside = analysis_of(case, setup)
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "1")
+    after = analysis_of(case, setup)
+    assert beside.shapes and all("part_modes" in row for row in beside.shapes)
+    assert beside.shapes == after.shapes
+    assert np.array_equal(beside.modes.eigenvalues, after.modes.eigenvalues)
+
+
 def test_frictionless_complex_modes_are_the_tied_modes(capsys):
     """mu = 0 with the disc turning: every complex mode is stable (real parts at round-off)
     and its frequency equals the tied modes of `transient modes` (a bilateral law: its tangent

@@ -28,7 +28,8 @@ def nodal_diameters(model, motion, U):
     np.cumprod(E, axis=0, out=E)
     # an order n and its mirror -n are one nodal diameter: a standing or travelling wave
     c = np.abs(E @ W) ** 2
-    c[1:] += np.abs(E[1:].conj() @ W) ** 2
+    # conj(E) W as conj(E conj(W)), the same numbers: no conjugate copy of E (nodes x orders)
+    c[1:] += np.abs(E[1:] @ W.conj()) ** 2
     n = np.argmax(c, axis=0)
     return n, c[n, np.arange(len(n))] / np.maximum(c.sum(axis=0), 1e-300)
 
@@ -56,18 +57,25 @@ def real_times(R, Z):
     return Y[:, :k] + 1j * Y[:, k:]
 
 
-def describe(case, model, basis, modes, which):
+def still_parts(case, model):
+    """The parts no rotation turns (the pad): those whose own modes describe a mode."""
+    turned = {m.part for m in case.motion.values() if m.kind == "rotation"}
+    return [p for p in model.parts if p not in turned]
+
+
+def describe(case, model, basis, modes, which, fmax=None, own=None):
     """One dict per mode index in which: frequency, real part, the rotating parts' nodal
     diameter and the parts' energy shares. basis: (X, A), the modes' coordinates z are
-    X (A z) on the model's dofs."""
+    X (A z) on the model's dofs. The still parts' own modes up to fmax [Hz] (None: the
+    modes' highest frequency), or own: {part: part_modes(model, part, fmax)} made already."""
     X, A = basis
     U = real_times(X, A @ modes.vectors[:, which])
     rotations = {m.part: nodal_diameters(model, m, U)
                  for m in case.motion.values() if m.kind == "rotation"}
     # the parts that do not turn (the pad): which of their own modes the motion resembles
-    still = [p for p in model.parts if p not in rotations]
-    matched = matched_part_modes(model, U, still, modes.frequency_hz.max()) if len(
-        which) else {}
+    still = still_parts(case, model)
+    top = modes.frequency_hz.max() if fmax is None else fmax
+    matched = matched_part_modes(model, U, still, top, own) if len(which) else {}
     out = []
     shares = part_shares(model, model.M, U)
     for k, j in enumerate(which):
@@ -102,13 +110,13 @@ def part_modes(model, part, fmax, shift_hz=1.0):
     return modes.frequencies, modes.shapes, dofs, M
 
 
-def matched_part_modes(model, U, parts, fmax):
+def matched_part_modes(model, U, parts, fmax, own=None):
     """{part: (index (k,), frequency (k,), MAC (k,))}: for each displacement U[:, j], the mode
     of each part alone that its motion on the part resembles most (the modal assurance
-    criterion in the part's mass)."""
+    criterion in the part's mass); own: {part: part_modes(model, part, fmax)} made already."""
     out = {}
     for part in parts:
-        f, Phi, dofs, M = part_modes(model, part, fmax)
+        f, Phi, dofs, M = own[part] if own else part_modes(model, part, fmax)
         if Phi.shape[1] == 0:
             continue
         Up = U[dofs]
