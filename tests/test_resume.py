@@ -173,15 +173,17 @@ def test_thread_choice_follows_the_last_chunks_and_retries_the_other():
     choice = ThreadChoice(stepper)
     first = choice.next()
     assert first == many                          # each tried once, all threads first
-    choice.record(first, 3.0, 1000)               # slow: 3 ms per step
+    choice.record(first, 3.0, 1000)               # slow: 3 ms per step (the team's start)
     assert choice.next() == 1
     choice.record(1, 1.0, 1000)
     seen = []
     for _ in range(2 * PROBE):
         seen.append(choice.next())
         choice.record(seen[-1], 1.0 if seen[-1] == 1 else 0.5, 1000)
-    # the probe of chunk PROBE finds all threads faster now: the run follows them
-    assert seen[PROBE - 3] == many and all(c == many for c in seen[PROBE - 2:2 * PROBE - 3])
+    # all threads get a second chunk, faster now: the run follows them, and retries one
+    # thread every PROBE-th chunk (the third call was the second chunk on all threads)
+    assert seen[0] == many and all(c == many for c in seen[1:PROBE - 3])
+    assert seen[PROBE - 3] == 1 and all(c == many for c in seen[PROBE - 2:2 * PROBE - 3])
     assert seen[2 * PROBE - 3] == 1               # the next probe
     summary = choice.summary()
     assert set(summary) == {str(many), "1"} and sum(s for s, _ in summary.values()) == \
@@ -191,3 +193,34 @@ def test_thread_choice_follows_the_last_chunks_and_retries_the_other():
     assert choice.steps_of(1, 2000, 4) == 2000 // PROBE_SHARE // 4 * 4
     assert choice.steps_of(1, 2000, 3) % 3 == 0 and choice.steps_of(1, 5, 4) == 4
     assert full.steps_of(0, 2000, 4) == 2000
+
+
+@pytest.mark.parametrize("name", ["two_bars", "pad_disc_squeal"])
+def test_automatic_chunks_give_the_fixed_chunks_history(tmp_path, name):
+    """solver.chunk = 0 cuts the run by the kernel's speed (dynamics.chunks.ChunkSize): the
+    history, its last checkpoint included, is the one of a fixed chunk bit for bit."""
+    _, t2, _, coarse = SHORT[name]
+    case = str(CASES / f"{FILES.get(name, name)}.toml")
+    sets = [a for o in coarse + [f"solver.t_end={t2}"] for a in ("--set", o)] + ["--quiet"]
+    fixed, auto = tmp_path / "fixed.h5", tmp_path / "auto.h5"
+    # 24 steps a chunk: cut elsewhere than the automatic chunks (a 20th of the run here)
+    transient("run", case, "-o", str(fixed), "--set", "solver.chunk=24", *sets)
+    transient("run", case, "-o", str(auto), "--set", "solver.chunk=0", *sets)
+    assert_same(series(fixed), series(auto))
+
+
+def test_chunk_size_is_a_share_of_a_second_of_the_kernel_within_its_bounds():
+    """A set solver.chunk as before; an automatic one MIN_CHUNK steps first and at least, else
+    about CHUNK_SECONDS of the kernel at the last speed, within a checks-th of the run and
+    the rows' BUFFER_BYTES, in whole rows."""
+    from transient.dynamics.chunks import BUFFER_BYTES, CHUNK_SECONDS, MIN_CHUNK, ChunkSize
+    fixed = ChunkSize.of(500, 8, 10**6, 100, 20)
+    assert (fixed.cap, fixed.steps(), fixed.steps(1e-9)) == (496, 496, 496)
+    assert ChunkSize.of(10**6, 8, 1000, 100, 20).cap == 48       # a 20th of the run
+    auto = ChunkSize.of(0, 8, 10**7, 100, 20)
+    assert auto.cap == 500_000 and auto.steps() == MIN_CHUNK == auto.steps(10.0)
+    assert auto.steps(1e-6) == int(CHUNK_SECONDS / 1e-6) // 8 * 8 > MIN_CHUNK
+    assert auto.steps(1e-9) == auto.cap
+    assert ChunkSize.of(0, 8, 8000, 100, 20).steps() == 400       # a 20th, below MIN_CHUNK
+    rows = ChunkSize.of(0, 3, 10**9, 10**5, 20)      # wide rows: the buffer bounds the chunk
+    assert rows.cap == int(BUFFER_BYTES // 10**5) * 3 and rows.cap % 3 == 0

@@ -14,7 +14,7 @@ import numpy as np
 
 from . import __version__
 from .case.checks import check_transient
-from .dynamics.chunks import ThreadChoice, buffer, chunks, stop_requests, threaded_blocks
+from .dynamics.chunks import ChunkSize, ThreadChoice, buffer, chunks, stop_requests, threaded_blocks
 from .dynamics.energy import Balance
 from .errors import RunAborted
 from .io.history import CASE_TEXT, History
@@ -119,11 +119,12 @@ def _loop(case, path, start, progress, t_start, stop):
     n_total = int(round(solver.t_end / dt))
     # the checks between chunks come at least every CHECKS-th of the run, so a run going
     # wrong is stopped within that fraction of its length (where a run is cut changes nothing)
-    chunk = max(every, min(solver.chunk, -(-n_total // CHECKS)) // every * every)
+    row_bytes = sum(x.nbytes for x in buffer(system, 1, output.contact).arrays)
+    chunk = ChunkSize.of(solver.chunk, every, n_total, row_bytes, CHECKS)
     step, t_stored = start.step, state.time
     status, t_kernel = "complete", 0.0
     bar = _progress_bar(progress, n_total, step)
-    out = buffer(system, chunk // every, output.contact)
+    out = buffer(system, chunk.cap // every, output.contact)
     threads = ThreadChoice(scheme)
     with history:
         try:

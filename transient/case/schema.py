@@ -297,9 +297,9 @@ SOLVER = Table("solution settings", {
     "dt": Value("float", "time step (0: 0.9 times the critical step for explicit, "
                 "1 / (20 reduction.fmax) for exponential)", 0.0, "s", minimum=0.0),
     "force_dt": Value("bool", "run explicit with dt above the critical step anyway", False),
-    "chunk": Value("int", "steps per kernel call at most (output and checks between calls, "
-                   "at least 20 times a run; the results do not depend on it)", 2000,
-                   minimum=1),
+    "chunk": Value("int", "steps per kernel call at most, 0 for about 0.2 s of the kernel "
+                   "each and 2000 steps at least (output and checks between calls, at least "
+                   "20 times a run; the results do not depend on it)", 0, minimum=0),
     "drift_tolerance": Value("float", "stop when the energy balance drifts by more than this "
                              "fraction of the largest energy the run holds (mechanical) or "
                              "has exchanged (work in, dissipated)", 0.05, open_min=0.0),

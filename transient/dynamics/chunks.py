@@ -33,14 +33,57 @@ def buffer(system, rows, store_contact):
     return Rows.of(system, rows, store_contact)
 
 
+CHUNK_SECONDS = 0.2   # kernel time an automatic chunk aims at: Python's work between chunks
+#                       (the history's rows, its checkpoint, the checks) was 7 ms a chunk on
+#                       pad_disc_long, 1.3 s of its 160 chunks of 2000 steps (52 ms each).
+#                       Longer chunks keep a thread count that a machine's load made the
+#                       faster for a while longer than it is (ThreadChoice retries the other
+#                       every PROBE-th chunk)
+MIN_CHUNK = 2000      # steps of an automatic chunk at least, and of the first on a thread
+#                       count (the fixed default before: a slow kernel is cut as it was)
+BUFFER_BYTES = 64e6   # the rows of an automatic chunk at most (its output buffer)
+
+
+@dataclass(frozen=True)
+class ChunkSize:
+    """Steps per kernel call: solver.chunk when set; 0 (automatic) about CHUNK_SECONDS of the
+    kernel a call, from the speed of the last chunk on the same thread count, and MIN_CHUNK
+    steps at least (and before any), so that Python's work between chunks stays a small
+    share of a fast kernel's. Either way at most a `checks`-th of the run, whole rows of
+    `every` steps, and an automatic chunk's rows at most BUFFER_BYTES. Where the run is cut
+    changes when Python looks, never the numbers."""
+    cap: int                 # steps of a chunk at most (the output buffer holds its rows)
+    every: int
+    fixed: bool
+
+    @classmethod
+    def of(cls, chunk, every, n_total, row_bytes, checks):
+        """chunk: solver.chunk (0: automatic); row_bytes: one output row's."""
+        cap = chunk if chunk else int(BUFFER_BYTES // max(row_bytes, 1)) * every
+        cap = max(every, min(cap, -(-n_total // checks)) // every * every)
+        return cls(cap, every, bool(chunk))
+
+    def steps(self, seconds_per_step=None):
+        """The next chunk's steps, from the last one's seconds per step on its thread count
+        (None: not run yet)."""
+        if self.fixed:
+            return self.cap
+        want = MIN_CHUNK if not seconds_per_step else max(MIN_CHUNK,
+                                                          CHUNK_SECONDS / seconds_per_step)
+        return max(self.every, min(self.cap, int(want) // self.every * self.every))
+
+
 def chunks(stepper, state, n_total, chunk, every, out, step=0, threads=None):
-    """Advance state to n_total steps, chunk steps per kernel call, one row stored every
-    `every` steps into out (a buffer of chunk // every rows); stops after a chunk whose status
-    is not OK. threads: a ThreadChoice that sets each call's Numba threads (else the
-    stepper's). A chunk that went non-finite keeps only the rows before the first with
-    anything not finite, and the state's time is that of its last row kept."""
+    """Advance state to n_total steps, chunk steps per kernel call (an int, or a ChunkSize),
+    one row stored every `every` steps into out (a buffer of the largest chunk's rows); stops
+    after a chunk whose status is not OK. threads: a ThreadChoice that sets each call's Numba
+    threads (else the stepper's). A chunk that went non-finite keeps only the rows before the
+    first with anything not finite, and the state's time is that of its last row kept."""
+    size = chunk if isinstance(chunk, ChunkSize) else ChunkSize(chunk, every, True)
+    per_step = {}            # thread count -> seconds per step of its last chunk
     while step < n_total:
         count = threads.next() if threads is not None else stepper.threads
+        chunk = size.steps(per_step.get(count))
         n = min(threads.steps_of(count, chunk, every) if threads is not None else chunk,
                 n_total - step)
         call = replace(stepper, threads=count) if count != stepper.threads else stepper
@@ -55,6 +98,8 @@ def chunks(stepper, state, n_total, chunk, every, out, step=0, threads=None):
         seconds = time.perf_counter() - t0
         if threads is not None:
             threads.record(count, seconds, done)
+        if done:
+            per_step[count] = seconds / done
         # a kernel stopping on a non-finite state has not stored that step
         rows = (done - (status == NOT_FINITE)) // every
         finite = all(np.all(np.isfinite(x[:rows])) for x in out.arrays) and \
@@ -91,7 +136,8 @@ class ThreadChoice:
     the same blocks, so the choice changes the speed only, never the numbers. The chunks'
     timings choose: no trial steps are spent before the run. A count tried or retried while
     the other is the faster runs a short chunk (PROBE_SHARE), where the results do not depend
-    on the chunks either."""
+    on the chunks either; all threads get a second chunk before the choice, their first
+    paying for the team's start."""
 
     def __init__(self, stepper):
         many = numba.get_num_threads()
@@ -107,6 +153,10 @@ class ThreadChoice:
         untried = [c for c in self.counts if not self.seconds[c]]
         if untried:
             return untried[0]
+        many = self.counts[0]
+        if len(self.counts) > 1 and len(self.seconds[many]) == 1:
+            # its first chunk paid for the team's start: judged on a second one (a short one)
+            return many
         best = self._fastest()
         if self.calls % PROBE == 0:
             return next((c for c in self.counts if c != best), best)
