@@ -52,3 +52,36 @@ def test_every_core_keeps_to_a_one_thread_worker(monkeypatch):
     monkeypatch.delenv("OPENBLAS_NUM_THREADS")
     monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
     assert blas.budget() == len(os.sched_getaffinity(0))
+
+
+def test_this_thread_alone_sets_numba_and_mkl_for_its_thread_only():
+    """Inside, the calling thread has one Numba and one MKL thread, another thread keeps its
+    own; after, the caller's come back."""
+    import threading
+
+    import numba
+    import pytest
+
+    from transient.solve.linsolve import _mkl
+    try:
+        mkl = _mkl()
+    except OSError:
+        pytest.skip("no MKL")
+    outside = (numba.get_num_threads(), mkl.MKL_Get_Max_Threads())
+    seen, inside, other = {}, threading.Event(), threading.Event()
+
+    def elsewhere():
+        inside.wait()
+        seen["other"] = (numba.get_num_threads(), mkl.MKL_Get_Max_Threads())
+        other.set()
+
+    t = threading.Thread(target=elsewhere)
+    t.start()
+    with blas.this_thread_alone():
+        seen["inside"] = (numba.get_num_threads(), mkl.MKL_Get_Max_Threads())
+        inside.set()
+        other.wait()
+    t.join()
+    assert seen["inside"] == (1, 1)
+    assert seen["other"] == outside and (numba.get_num_threads(),
+                                         mkl.MKL_Get_Max_Threads()) == outside

@@ -63,8 +63,11 @@ def complex_modes(M, D, K):
     n = M.shape[0]
     eye, zero = np.eye(n), np.zeros((n, n))
     if np.array_equal(M, eye):
-        # a reduced model's M = I: the standard problem, Hessenberg QR (half QZ's time)
-        lam, Z = sla.eig(np.block([[zero, eye], [-K, -D]]))
+        # a reduced model's M = I: the standard problem, Hessenberg QR (half QZ's time), by
+        # NumPy's LAPACK call, which lets other threads run (SciPy's holds the GIL: the cea
+        # makes the pad's own modes meanwhile) and took 0.39 s against SciPy's 0.46 (754^2)
+        lam, Z = np.linalg.eig(np.block([[zero, eye], [-K, -D]]))
+        lam, Z = lam.astype(complex), Z.astype(complex)    # (real when every root is real)
     else:
         lam, Z = sla.eig(np.block([[zero, eye], [-K, -D]]), np.block([[eye, zero], [zero, M]]))
     scale = np.max(np.abs(lam)) if lam.size else 1.0

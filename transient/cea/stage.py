@@ -85,12 +85,13 @@ def analysis_of(case, setup, stages=None):
     t0 = time.perf_counter()
     # The still parts' own modes (the unstable modes' description: a factorization and a
     # Lanczos of the pad alone, 0.35 s on pad_disc) are made beside the dense QZ, which keeps
-    # one core busy and leaves the other idle; both on one BLAS thread, so that the arithmetic
-    # is the same whichever finishes first. One core (a campaign's worker): after, if needed.
-    model = setup.model
+    # one core busy and leaves the other idle: the QZ on one BLAS thread, the part modes on
+    # one thread of everything (_alone), so that the arithmetic is the same whichever ends
+    # first. On one core (a campaign's worker) they come after, if needed, the same way.
+    model, still = setup.model, still_parts(case, setup.model)
     with blas.one_thread(), ThreadPoolExecutor(1) as pool:
-        own = ({p: pool.submit(part_modes, model, p, fmax) for p in still_parts(case, model)}
-               if blas.budget() > 1 else None)
+        beside = ({p: pool.submit(_alone, model, p, fmax) for p in still}
+                  if blas.budget() > 1 else None)
         M, D, K = linearized(system, setup.state)
         if system.reduced:
             modes = complex_modes(M, D, K).below(fmax)
@@ -101,11 +102,19 @@ def analysis_of(case, setup, stages=None):
         basis = (setup.basis if system.reduced else
                  (_full_basis(model.ndof, system.free), sp.identity(system.n, format="csr")))
         t0 = time.perf_counter()
-        shapes = describe(case, model, basis, modes, np.flatnonzero(modes.unstable), fmax,
-                          own and {p: done.result() for p, done in own.items()})
+        which = np.flatnonzero(modes.unstable)
+        own = ({p: done.result() for p, done in beside.items()} if beside is not None else
+               {p: _alone(model, p, fmax) for p in still} if len(which) else None)
+        shapes = describe(case, model, basis, modes, which, fmax, own)
         stages["shapes"] = time.perf_counter() - t0
     return Analysis(modes, fmax, int(ndof), system.n if system.reduced else 0, stages,
                     setup.meta, shapes, model, basis)
+
+
+def _alone(model, part, fmax):
+    """part_modes on one thread of Numba and MKL, whatever thread runs it."""
+    with blas.this_thread_alone():
+        return part_modes(model, part, fmax)
 
 
 def _full_basis(ndof, free):

@@ -48,3 +48,26 @@ def every_core():
     """OpenBLAS on every core this process may use (budget), inside; as before, after."""
     with _openblas().limit(limits=budget()):
         yield
+
+
+@contextmanager
+def this_thread_alone():
+    """Numba's and MKL's threads at one for the calling thread only, inside (both set per
+    thread; OpenBLAS's count is the process's: hold one_thread around both threads): work
+    beside another thread's on a core of its own, with one thread's arithmetic wherever it
+    runs (PARDISO's conditional reproducibility is per thread count)."""
+    import numba
+    try:
+        from .linsolve import _mkl
+        mkl = _mkl()
+    except (ImportError, OSError):
+        mkl = None
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    local = mkl.MKL_Set_Num_Threads_Local(1) if mkl is not None else None
+    try:
+        yield
+    finally:
+        numba.set_num_threads(before)
+        if mkl is not None:
+            mkl.MKL_Set_Num_Threads_Local(local)
