@@ -120,15 +120,15 @@ def _loop(case, path, start, progress, t_start, stop):
     # the checks between chunks come at least every CHECKS-th of the run, so a run going
     # wrong is stopped within that fraction of its length (where a run is cut changes nothing)
     row_bytes = sum(x.nbytes for x in buffer(system, 1, output.contact).arrays)
-    chunk = ChunkSize.of(solver.chunk, every, n_total, row_bytes, CHECKS)
+    size = ChunkSize.of(solver.chunk, every, n_total, row_bytes, CHECKS)
     step, t_stored = start.step, state.time
     status, t_kernel = "complete", 0.0
     bar = _progress_bar(progress, n_total, step)
-    out = buffer(system, chunk.cap // every, output.contact)
+    out = buffer(system, size.cap // every, output.contact)
     threads = ThreadChoice(scheme)
     with history:
         try:
-            for c in chunks(scheme, state, n_total, chunk, every, out, step, threads):
+            for c in chunks(scheme, state, n_total, size, every, out, step, threads):
                 t_kernel += c.seconds
                 if len(c.rows.time):
                     history.append(series(system, output, c.rows))

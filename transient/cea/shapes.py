@@ -63,19 +63,18 @@ def still_parts(case, model):
     return [p for p in model.parts if p not in turned]
 
 
-def describe(case, model, basis, modes, which, fmax=None, own=None):
+def describe(case, model, basis, modes, which, fmax, own=None):
     """One dict per mode index in which: frequency, real part, the rotating parts' nodal
     diameter and the parts' energy shares. basis: (X, A), the modes' coordinates z are
-    X (A z) on the model's dofs. The still parts' own modes up to fmax [Hz] (None: the
-    modes' highest frequency), or own: {part: part_modes(model, part, fmax)} made already."""
+    X (A z) on the model's dofs. The still parts' own modes up to fmax [Hz], or own:
+    {part: part_modes(model, part, fmax)} made already."""
     X, A = basis
     U = real_times(X, A @ modes.vectors[:, which])
     rotations = {m.part: nodal_diameters(model, m, U)
                  for m in case.motion.values() if m.kind == "rotation"}
     # the parts that do not turn (the pad): which of their own modes the motion resembles
     still = still_parts(case, model)
-    top = modes.frequency_hz.max() if fmax is None else fmax
-    matched = matched_part_modes(model, U, still, top, own) if len(which) else {}
+    matched = matched_part_modes(model, U, still, fmax, own) if len(which) else {}
     out = []
     shares = part_shares(model, model.M, U)
     for k, j in enumerate(which):

@@ -73,13 +73,12 @@ class ChunkSize:
         return max(self.every, min(self.cap, int(want) // self.every * self.every))
 
 
-def chunks(stepper, state, n_total, chunk, every, out, step=0, threads=None):
-    """Advance state to n_total steps, chunk steps per kernel call (an int, or a ChunkSize),
-    one row stored every `every` steps into out (a buffer of the largest chunk's rows); stops
+def chunks(stepper, state, n_total, size, every, out, step=0, threads=None):
+    """Advance state to n_total steps, the steps of each kernel call from size (a ChunkSize),
+    one row stored every `every` steps into out (a buffer of size.cap // every rows); stops
     after a chunk whose status is not OK. threads: a ThreadChoice that sets each call's Numba
     threads (else the stepper's). A chunk that went non-finite keeps only the rows before the
     first with anything not finite, and the state's time is that of its last row kept."""
-    size = chunk if isinstance(chunk, ChunkSize) else ChunkSize(chunk, every, True)
     per_step = {}            # thread count -> seconds per step of its last chunk
     while step < n_total:
         count = threads.next() if threads is not None else stepper.threads

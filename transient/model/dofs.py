@@ -49,10 +49,9 @@ def shifted(K, M, sigma):
     K, M = sp.csr_matrix(K), sp.csr_matrix(M)
     if not sigma:
         return K
-    if not (K.has_sorted_indices and M.has_sorted_indices and K.shape == M.shape
-            and np.array_equal(K.indptr, M.indptr) and np.array_equal(K.indices, M.indices)):
+    from ..kernels.sparse import csr_combined, shares_pattern
+    if not (K.has_sorted_indices and M.has_sorted_indices and shares_pattern(K, M)):
         return (K - sigma * M).tocsr()
-    from ..kernels.sparse import csr_combined
     indptr, indices, data = csr_combined(K.indptr, K.indices, K.data, M.data, -sigma)
     out = sp.csr_matrix((data, indices, indptr), shape=K.shape)
     out.has_sorted_indices = True
