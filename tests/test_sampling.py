@@ -88,6 +88,22 @@ def test_nnls_in_gram_form_matches_scipy():
     assert res3 < 1e-6
 
 
+def test_nnls_in_gram_form_grows_its_buffers_past_the_first_256_points():
+    # every candidate may be taken (max_points = N): the buffers double as points are taken
+    rng = np.random.default_rng(3)
+    Z = rng.normal(size=(700, 600))
+    b = Z @ np.where(rng.uniform(size=600) < 0.8, rng.uniform(size=600), 0.0) \
+        + 0.1 * rng.normal(size=700)
+    G, h, bb = Z.T @ Z, Z.T @ b, b @ b
+    x_ref, r_ref = nnls(Z, b)
+    idx, x, res = nnls_gram(lambda j: G[:, j], h, bb, 0.0, 600)
+    assert len(idx) > 256
+    assert res == pytest.approx(r_ref / np.sqrt(bb), rel=1e-8)
+    full = np.zeros(600)
+    full[idx] = x
+    assert np.allclose(full, x_ref, atol=1e-8)
+
+
 def test_a_rule_that_is_its_own_sample_is_reproduced_exactly():
     rng = np.random.default_rng(2)
     omega2, Cr, p, kt, q0, band = _random_system(rng, m=12, n=4, band=2)

@@ -93,10 +93,12 @@ def nnls_gram(column, h, bb, tol, max_points):
     N = len(h)
     cap = min(max_points, N)
     P = np.zeros(0, np.int64)
-    cols = np.empty((N, cap), order="F")     # a column per point taken, written whole
-    # the factor in place (its leading k x k block): growing it by np.block copied it whole at
-    # every point taken
-    Lbuf = np.zeros((cap, cap))
+    # a column per point taken, written whole, and the factor in place (its leading k x k
+    # block; growing it by np.block copied it whole at every point taken). Both double as
+    # points are taken: sized for every candidate, a 1M-dof model's 64.6k asked 31 GiB.
+    room = min(cap, 256)
+    cols = np.empty((N, room), order="F")
+    Lbuf = np.zeros((room, room))
     x = np.zeros(0)
     grad = h.copy()
     banned = np.zeros(N, bool)
@@ -122,6 +124,11 @@ def nnls_gram(column, h, bb, tol, max_points):
         if d2 <= 1e-12 * g[j]:
             banned[j] = True          # already in the span of the points taken
             continue
+        if k == room:
+            room = min(2 * room, cap)
+            cols, old = np.empty((N, room), order="F"), cols
+            cols[:, :k] = old[:, :k]
+            Lbuf = np.pad(Lbuf[:k, :k], (0, room - k))
         cols[:, k] = g
         P = np.append(P, j)
         Lbuf[k, :k] = l
