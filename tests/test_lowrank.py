@@ -33,6 +33,30 @@ def test_updates_solve_the_updated_system(m):
         assert np.allclose(cs.solver(d)(b[:, 0]), x[:, 0])
 
 
+def test_the_solver_forms_a0_when_asked_and_bounds_its_blocks_by_bytes():
+    """A0 = K - sigma M is not held beside its factors (a sparse matrix more through the
+    setup: 1.2 GB at 1M dofs), and travels to another process as K and M; the blocks of
+    right-hand sides shrink where n x 128 floats would pass BLOCK_BYTES."""
+    import pickle
+    from transient.solve.lowrank import BLOCK_BYTES, block_columns
+    rng = np.random.default_rng(11)
+    n, m = 80, 60
+    K, M = spd(n, 3)
+    cols = rng.choice(n, 12, replace=False)
+    C = sp.csr_matrix((rng.standard_normal(m), (np.arange(m), rng.choice(cols, m))),
+                      shape=(m, n))
+    cs = ContactSolver(K, M, C, -4.0)
+    assert "A0" not in vars(cs)
+    assert abs(cs.A0 - (K + 4.0 * M)).max() == 0
+    d, b = rng.uniform(0, 1e3, m), rng.standard_normal(n)
+    copy = pickle.loads(pickle.dumps(cs))
+    assert np.array_equal(copy.solver(d)(b), cs.solver(d)(b))
+    assert block_columns(66_554) == 128 and block_columns(231_000) == 128
+    assert block_columns(971_042) == 32 and block_columns(10**8) == 8
+    assert block_columns(2 * 10**6, most=16) == 16
+    assert 8 * 971_042 * block_columns(971_042) <= BLOCK_BYTES
+
+
 def test_rows_of_low_rank_run_on_their_row_space():
     """Regularized rows: dense on the touched dofs but of rank rho < k < m."""
     rng = np.random.default_rng(7)

@@ -16,7 +16,7 @@ from ..case.sizes import peak_rss_gb
 from ..kernels.sparse import shares_pattern
 from ..model.dofs import free_block, restrict
 from ..solve import blas
-from ..solve.lowrank import TangentStiffness
+from ..solve.lowrank import TangentStiffness, block_columns
 from ..solve.modes import normal_modes
 
 
@@ -27,7 +27,8 @@ BY_COLUMNS_BYTES = 1.5e9   # K^-1 E dense (n x k) when the contact points outnum
 # exact K_lin. Against 1e-12: pad_disc_long's Lanczos 6.0-6.4 -> 3.8-4.4 s (15 blocks, not 21),
 # histories within 7e-8 (drilled_cube's energies) and 1e-9 (pad_disc's sensors)
 MODES_TOL = 1e-9
-COLUMN_BLOCK = 128     # columns of an n x s update formed at a time
+COLUMN_BLOCK = 128     # columns of an n x s update formed at a time (fewer at scale:
+#                        lowrank.block_columns)
 
 
 @dataclass(frozen=True)
@@ -138,11 +139,12 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
         # M and K of one assembly: their products with a block read the pattern once
         shared = shares_pattern(Mf, Kf.K)
         MPhi, KPhi = Kf.with_mass(Mf, Phi, shared)
-        buf = np.empty((n, min(COLUMN_BLOCK, S.shape[1])))
+        width = block_columns(n, COLUMN_BLOCK)
+        buf = np.empty((n, min(width, S.shape[1])))
         for _ in range(2):
             P = MPhi.T @ S
-            for start in range(0, P.shape[1], COLUMN_BLOCK):
-                block = slice(start, start + COLUMN_BLOCK)
+            for start in range(0, P.shape[1], width):
+                block = slice(start, start + width)
                 S[:, block] -= np.matmul(Phi, P[:, block], out=buf[:, :P[:, block].shape[1]])
         del buf
         # unit M-norm columns, then drop directions the others already span, then diagonalize
@@ -184,10 +186,10 @@ def _grams(M, K, S, shared=None):
     there): never an n x s product whole, and each block of S copied once. Each block's
     column is taken down to its diagonal block and mirrored (half the n s^2 flops: the Grams
     were 1.5 s of pad_disc's cea)."""
-    s = S.shape[1]
+    s, width = S.shape[1], block_columns(S.shape[0], COLUMN_BLOCK)
     Gs = (np.empty((s, s)), np.empty((s, s)))
-    for start in range(0, s, COLUMN_BLOCK):
-        stop = min(start + COLUMN_BLOCK, s)
+    for start in range(0, s, width):
+        stop = min(start + width, s)
         part = np.ascontiguousarray(S[:, start:stop])
         products = list(K.with_mass(M, part, shared))
         for i, G in enumerate(Gs):

@@ -25,7 +25,16 @@ MAX_BYTES = 1.5e9     # Z = A0^-1 C^T held dense up to this; G (rank^2) too, bey
 BLOCK = 128           # right-hand sides per solve when forming Z (bounds the solver's copies: three
 #                       n x BLOCK arrays, 0.4 GB at 140k dofs; on pad_disc_long's interface loads
 #                       as fast per column as 300 or all 599 at once)
+BLOCK_BYTES = 2.56e8  # ... and fewer where n x BLOCK floats pass this: at 1M dofs a block of
+#                       128 is 1 GB, three at once beside 9.8 GB of factors and the n x 819 basis
 ROW_SPACE_TOL = 1e-12
+
+
+def block_columns(n, most=None):
+    """Columns of a block of n-row arrays: `most` (BLOCK), fewer where they would pass
+    BLOCK_BYTES (32 at 1M dofs, 128 up to 250k)."""
+    most = BLOCK if most is None else most
+    return max(8, min(most, int(BLOCK_BYTES // (8 * max(n, 1)))))
 
 
 @dataclass(frozen=True)
@@ -125,7 +134,7 @@ class ContactSolver:
 
     def __init__(self, K, M, C, sigma, backend="auto", factors=None):
         self.K, self.M = K.tocsr(), M.tocsr()     # (M: the reduced basis' mass too)
-        self.A0 = shifted(self.K, self.M, sigma)
+        self.n = K.shape[0]
         self.sigma = sigma
         self.backend = backend
         if C is None:
@@ -140,7 +149,7 @@ class ContactSolver:
         self.by_columns = k < m and 8.0 * k * k <= MAX_BYTES
         if C is None and not self.by_columns:
             self.C = factored_rows(*factors)
-        self.solve0 = factorize(self.A0, backend, definite=sigma <= 0)
+        self.solve0 = factorize(self.A0, backend, definite=sigma <= 0)   # A0 not held
         if m and self.by_columns:
             # the gate is on what Z holds, rho columns: regularized rows span far fewer
             # directions than the k dofs they touch (pad_disc: 599 of 2668)
@@ -159,9 +168,9 @@ class ContactSolver:
         self.Z = np.empty((n, rank), order="F") if 8.0 * n * rank <= MAX_BYTES else None
         G = None if self.Z is not None else np.empty((rank, rank))
         into = getattr(self.solve0, "backend", "") == "pardiso" and self.Z is not None
-        loads = None
-        for start in range(0, rank, BLOCK):
-            block = slice(start, min(start + BLOCK, rank))
+        loads, width = None, block_columns(n)
+        for start in range(0, rank, width):
+            block = slice(start, min(start + width, rank))
             # one array of loads for every block, and PARDISO's responses solved into Z's
             # columns: n x BLOCK of fresh memory a block otherwise, twice (0.1 s on pad_disc)
             loads = self._loads(block, loads)
@@ -179,6 +188,12 @@ class ContactSolver:
             # the rows are Rm V^T on cols from here on: the dense copy (points x interface dofs,
             # the largest array of a regularized fine rule at scale) is not held
             self.C = None
+
+    @property
+    def A0(self):
+        """K - sigma M, formed when asked: the factors hold it, and at scale a copy is a sparse
+        matrix more through the setup (1.2 GB of a 1M-dof tet10 model's)."""
+        return shifted(self.K, self.M, self.sigma)
 
     def __getstate__(self):
         # a factorization does not travel between processes (PARDISO's handle is its own):
@@ -206,7 +221,7 @@ class ContactSolver:
         if buffer is not None and buffer.shape[1] >= k:
             b = buffer[:, :k]          # (its nonzero rows are cols, all overwritten)
         else:
-            b = np.zeros((self.A0.shape[0], k), order="F")
+            b = np.zeros((self.n, k), order="F")
         b[self.cols] = part
         return b
 
@@ -228,10 +243,10 @@ class ContactSolver:
         # BLOCK columns at a time: no n x k product beside out (the basis' own columns), and
         # without Z the loads and the solver's own copies are n x BLOCK, not n x k (the kept
         # contact shapes: 515 at 500k dofs, 2 GB each, three at once)
-        x = np.empty((self.A0.shape[0], Y2.shape[1])) if out is None else out
-        loads = None
-        for start in range(0, Y2.shape[1], BLOCK):
-            block = slice(start, min(start + BLOCK, Y2.shape[1]))
+        x = np.empty((self.n, Y2.shape[1])) if out is None else out
+        loads, width = None, block_columns(self.n)
+        for start in range(0, Y2.shape[1], width):
+            block = slice(start, min(start + width, Y2.shape[1]))
             if self.Z is not None:
                 with blas.every_core():
                     x[:, block] = (Y2[:, block].T @ self.Z.T).T
@@ -308,13 +323,14 @@ class ContactSolver:
         else:
             # fewer points than dofs: the responses to the rows' orthonormal basis, solved
             _, V = row_space(self.C[:, cols].toarray())
-            n, rank = self.A0.shape[0], V.shape[1]
+            n, rank = self.n, V.shape[1]
             if 8.0 * n * rank > MAX_BYTES:
                 raise ValueError(f"the responses to the {rank} directions of the contact "
                                  f"rows on {n} dofs exceed {MAX_BYTES / 1e9:g} GB")
             ZV = np.empty((n, rank), order="F")
-            for start in range(0, rank, BLOCK):
-                block = slice(start, min(start + BLOCK, rank))
+            width = block_columns(n)
+            for start in range(0, rank, width):
+                block = slice(start, min(start + width, rank))
                 b = np.zeros((n, block.stop - start), order="F")
                 b[cols] = V[:, block]
                 ZV[:, block] = np.atleast_2d(solve0(b).T).T
