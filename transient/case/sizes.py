@@ -11,9 +11,12 @@ from ..errors import CaseError
 NODES = {"hex8": 8, "hex20": 20, "tet4": 4, "tet10": 10}
 TETS_PER_HEX = 6          # the generators split each hex in six tets (Kuhn)
 # bytes per entry of the element matrices (COO rows, columns, values; K and M), times the
-# setup's multiple of them (factorization, basis, contact): 3.45 GB measured for pad_disc's
-# 14.6 M entries, 240 bytes each
-BYTES_PER_ENTRY = 240
+# setup's multiple of them (factorization, basis, contact), from the setups' measured peaks
+# (2026-12-05): pad_disc's 14.6 M entries 2.22 GB (152 bytes each), 4x pad_disc's 55.8 M
+# 7.23 GB (130), a 500k-dof tet10 pad and disc's 95.6 M 12.1 GB (127), and the 1M-dof one's
+# 193 M killed past 25 GB (over 130). 240 (pad_disc's 3.45 GB of 2026-12-02) asked 23 GB for
+# the 500k one and 46 GB for the 1M one: a 32 GB machine would have refused it
+BYTES_PER_ENTRY = 160
 
 
 def peak_rss_gb():
