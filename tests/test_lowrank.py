@@ -47,6 +47,8 @@ def test_the_solver_forms_a0_when_asked_and_bounds_its_blocks_by_bytes():
                       shape=(m, n))
     cs = ContactSolver(K, M, C, -4.0)
     assert "A0" not in vars(cs)
+    assert set(cs.timings) == {"factors", "row_space", "responses"}
+    assert min(cs.timings.values()) >= 0
     assert abs(cs.A0 - (K + 4.0 * M)).max() == 0
     d, b = rng.uniform(0, 1e3, m), rng.standard_normal(n)
     copy = pickle.loads(pickle.dumps(cs))

@@ -8,6 +8,7 @@ identity needs only A0 = K - sigma M factorized once, Z = A0^-1 C^T (m solves) a
 
 so a new tangent D costs an m x m factorization, and a solve one sparse solve plus O(n m).
 """
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -149,13 +150,19 @@ class ContactSolver:
         self.by_columns = k < m and 8.0 * k * k <= MAX_BYTES
         if C is None and not self.by_columns:
             self.C = factored_rows(*factors)
+        # what the stage's seconds go to: at 1M dofs 112 s of factors, then 187 s for the 780
+        # responses G takes (Z not held; in 25 blocks of 32, 130 s in 7 of 128 at 1 GB each)
+        t0 = time.perf_counter()
         self.solve0 = factorize(self.A0, backend, definite=sigma <= 0)   # A0 not held
+        self.timings = {"factors": time.perf_counter() - t0}
+        t0 = time.perf_counter()
         if m and self.by_columns:
             # the gate is on what Z holds, rho columns: regularized rows span far fewer
             # directions than the k dofs they touch (pad_disc: 599 of 2668)
             self.Rm, self.V = (row_space(self.C[:, self.cols].toarray()) if factors is None
                                else factored_row_space(*factors, self.cols))
         rank = self.Rm.shape[1] if m and self.by_columns else min(m, k)
+        self.timings["row_space"] = time.perf_counter() - t0
         # Woodbury needs G (rank x rank); Z = A0^-1 B (n x rank) is held when it fits, and
         # otherwise solved for at each use (two solves per solve instead of one and Z times a
         # block): memory n x BLOCK instead of n x rank (n rank grows as n^5/3 with the mesh)
@@ -184,6 +191,7 @@ class ContactSolver:
                 G[:, block] = self._rows_of(Zb)
         # with Z held, G in one product (as before Z could be left out: the same sums)
         self.G = self._rows_of(self.Z) if self.Z is not None else G
+        self.timings["responses"] = time.perf_counter() - t0 - self.timings["row_space"]
         if self.by_columns:
             # the rows are Rm V^T on cols from here on: the dense copy (points x interface dofs,
             # the largest array of a regularized fine rule at scale) is not held
