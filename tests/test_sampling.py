@@ -66,19 +66,26 @@ def test_friction_features_gram_is_the_explicit_one():
     assert np.allclose(gram_target(feats, w, terms), G @ w, rtol=1e-11)
 
 
-def test_nnls_in_gram_form_matches_scipy():
-    rng = np.random.default_rng(1)
-    Z = rng.normal(size=(60, 40))
-    b = Z @ np.where(rng.uniform(size=40) < 0.3, rng.uniform(size=40), 0.0) \
-        + 0.3 * rng.normal(size=60)
+def _nnls_against_scipy(seed, rows, n, share, noise):
+    """nnls_gram on a random least-squares problem with every candidate allowed, against
+    SciPy's NNLS: (G, h, bb, x_ref, indices taken, residual)."""
+    rng = np.random.default_rng(seed)
+    Z = rng.normal(size=(rows, n))
+    b = Z @ np.where(rng.uniform(size=n) < share, rng.uniform(size=n), 0.0) \
+        + noise * rng.normal(size=rows)
     G, h, bb = Z.T @ Z, Z.T @ b, b @ b
     x_ref, r_ref = nnls(Z, b)
-    idx, x, res = nnls_gram(lambda j: G[:, j], h, bb, 0.0, 40)
-    assert np.all(x > 0) and 0 < len(idx) < 40
+    idx, x, res = nnls_gram(lambda j: G[:, j], h, bb, 0.0, n)
+    assert np.all(x > 0) and 0 < len(idx) < n
     assert res == pytest.approx(r_ref / np.sqrt(bb), rel=1e-8)
-    full = np.zeros(40)
+    full = np.zeros(n)
     full[idx] = x
     assert np.allclose(full, x_ref, atol=1e-8)
+    return G, h, bb, x_ref, idx, res
+
+
+def test_nnls_in_gram_form_matches_scipy():
+    G, h, bb, x_ref, idx, _ = _nnls_against_scipy(1, 60, 40, 0.3, 0.3)
     # a looser tolerance stops early, with fewer points, at a residual within it
     idx2, x2, res2 = nnls_gram(lambda j: G[:, j], h, bb, 0.9, 40)
     assert res2 <= 0.9 and len(idx2) < len(idx)
@@ -90,18 +97,8 @@ def test_nnls_in_gram_form_matches_scipy():
 
 def test_nnls_in_gram_form_grows_its_buffers_past_the_first_256_points():
     # every candidate may be taken (max_points = N): the buffers double as points are taken
-    rng = np.random.default_rng(3)
-    Z = rng.normal(size=(700, 600))
-    b = Z @ np.where(rng.uniform(size=600) < 0.8, rng.uniform(size=600), 0.0) \
-        + 0.1 * rng.normal(size=700)
-    G, h, bb = Z.T @ Z, Z.T @ b, b @ b
-    x_ref, r_ref = nnls(Z, b)
-    idx, x, res = nnls_gram(lambda j: G[:, j], h, bb, 0.0, 600)
+    _, _, _, _, idx, _ = _nnls_against_scipy(3, 700, 600, 0.8, 0.1)
     assert len(idx) > 256
-    assert res == pytest.approx(r_ref / np.sqrt(bb), rel=1e-8)
-    full = np.zeros(600)
-    full[idx] = x
-    assert np.allclose(full, x_ref, atol=1e-8)
 
 
 def test_a_rule_that_is_its_own_sample_is_reproduced_exactly():
