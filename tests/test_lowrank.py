@@ -35,7 +35,7 @@ def test_updates_solve_the_updated_system(m):
 
 def test_the_solver_forms_a0_when_asked_and_bounds_its_blocks_by_bytes():
     """A0 = K - sigma M is not held beside its factors (a sparse matrix more through the
-    setup: 1.2 GB at 1M dofs), and travels to another process as K and M; the blocks of
+    setup: 0.40 GB of 4x pad_disc's peak), and travels to another process as K and M; the blocks of
     right-hand sides shrink where n x 128 floats would pass BLOCK_BYTES."""
     import pickle
     from transient.solve.lowrank import BLOCK_BYTES, block_columns

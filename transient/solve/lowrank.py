@@ -199,8 +199,8 @@ class ContactSolver:
 
     @property
     def A0(self):
-        """K - sigma M, formed when asked: the factors hold it, and at scale a copy is a sparse
-        matrix more through the setup (1.2 GB of a 1M-dof tet10 model's)."""
+        """K - sigma M, formed when asked: the factors hold it, and a copy is a sparse matrix
+        more through the setup (held, it was 0.40 GB of 4x pad_disc's 7.23 GB peak)."""
         return shifted(self.K, self.M, self.sigma)
 
     def __getstate__(self):
