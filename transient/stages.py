@@ -216,7 +216,7 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
         # K - sigma M: the preload's Newton, shift-invert and the static responses
         meta["factorizations"] = {"stiffness": why(getattr(cs.solve0, "backend", "?"),
                                                    solver.linear_solver)}
-        meta["factorization_timings"] = dict(getattr(cs, "timings", {}))
+        meta["factorization_timings"] = dict(cs.timings)
     stages.check()
     return Setup(system, state, rows0, dict(stages), meta, _geometry(case, system, pairs),
                  model, (red.X, red.AW) if system.reduced else None, unsampled)
