@@ -186,9 +186,11 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
     names = tuple(model.sensor_names) if case.output.sensors else ()
     if solver.reduction.enabled:
         M = sp.diags(model.lumped_mass).tocsr() if solver.mass == "lumped" else model.M
+        # the factors freed after the basis' last solve, unless a campaign's variants share them
         red = reduce(case, model, M, pairs, contacts, preload, patterns, v0, tangent,
                      critical_tangent(contacts, preload.tangent), stages, cs.C,
-                     cs.M if M is model.M else None)
+                     cs.M if M is model.M else None, cs.release if cs is not built.solver
+                     else None)
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
         # the rows and operators on the reduced coordinates (0.8 s for the cea's 7734 points)
         system, state = stages.timed("reduced_system", _reduced, case, red, patterns, signals,

@@ -86,5 +86,6 @@ def assemble(points, blocks, stiffness_degree=None, mass_degree=None):
     indices = indices.astype(index_type)
     shape = (3 * n_nodes, 3 * n_nodes)
     K = sp.csr_matrix((k_data, indices, indptr), shape=shape)
-    M = sp.csr_matrix((m_data, indices.copy(), indptr.copy()), shape=shape)
+    # one pattern for both (0.31 GB at 1M dofs): nothing edits a model's pattern in place
+    M = sp.csr_matrix((m_data, indices, indptr), shape=shape)
     return Operators(K, M, np.repeat(lumped, 3), min_det)

@@ -62,7 +62,7 @@ class Basis:
 
 
 def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None, tol=0.0,
-                  coupling=None, Mf=None):
+                  coupling=None, Mf=None, solved=None):
     """Basis of the modes of (K_lin, M) up to fmax [Hz] and the responses to static loads.
     K_lin: sparse on the model dofs, or the tangent on the free dofs as an operator
     (lowrank.TangentStiffness, what the setup passes).
@@ -78,6 +78,7 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     coupling: loads (nfree, k) of the modes Phi (nfree, n) that the basis must respond to
     beyond them (the friction forces their normal motion drives, reduce.stage), or None.
     Mf: M on the free dofs when the caller has it (the contact solver's), or None.
+    solved: called after the last solve (the owner of the factors frees them), or None.
     """
     t0 = time.perf_counter()
     free = np.flatnonzero(~fixed)
@@ -114,6 +115,8 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
         columns.append(np.atleast_2d(solve(np.asfortranarray(statics[free])).T).T)
     t_static = time.perf_counter() - t0 - t_modes
     peaks["statics"] = peak_rss_gb()
+    if solved is not None:
+        solved()
     # X in the making: its first n rows hold the free rows [Phi, S] (S a strided view, which
     # BLAS takes as is) until they are scattered to their dofs at the end, so that S and X are
     # one array, the contact shapes are solved into it, and M S and K S are never whole: an
@@ -307,6 +310,7 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols, out=
     # Y Y^T and Y^T Y = H^1/2 X^T X H^1/2 share their eigenvalues mu: the k x k one is the
     # cheap one (m >= k), and X^T u_i = X^T Y v_i / sqrt(mu_i) = X^T X H^1/2 v_i / sqrt(mu_i)
     XtX = X.T @ X
+    X = None       # points x rho (0.40 GB at 1M dofs): not held while the shapes are solved
     mu, Q = np.linalg.eigh(root @ XtX @ root)
     mu, Q = np.maximum(mu[::-1], 0.0), Q[:, ::-1]
     kept = mu >= tol

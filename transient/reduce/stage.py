@@ -42,12 +42,13 @@ def candidates(case, pairs, contacts):
 
 
 def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_crit, stages,
-           rows=None, Mf=None):
+           rows=None, Mf=None, solved=None):
     """The reduced model of a case (solver.reduction) on its linearized stiffness K_lin, the
     tangent solve's (solve: lowrank.TangentSolve; solve.stiffness is K_lin on the free dofs).
     rows: the contact rows on the free dofs, when the factorization stage has them; without
     them, a solve that holds the rows' space (solve.row_space) stands for them. Mf: M on the
-    free dofs when the caller has it."""
+    free dofs when the caller has it. solved: called once the basis has made its last solve
+    (reduced_basis)."""
     from time import perf_counter
     reduction = case.solver.reduction
     loads = [np.stack(patterns, axis=1)] if patterns and reduction.statics else []
@@ -66,7 +67,7 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
                 if contacts.friction is not None and reduction.statics else None)
     basis = reduced_basis(K_lin, M, model.fixed, reduction.fmax, np.hstack(loads), solve,
                           case.solver.shift_hz, contact, reduction.statics_tolerance, coupling,
-                          Mf)
+                          Mf, solved)
     stages["reduction"] = perf_counter() - t0
     # T^T (M u): two sparse products with vectors, not one with the n x r basis
     q0, v = basis.coordinates(M @ preload.u), basis.coordinates(M @ v0)

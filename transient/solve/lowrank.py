@@ -204,6 +204,15 @@ class ContactSolver:
         more through the setup (held, it was 0.40 GB of 4x pad_disc's 7.23 GB peak)."""
         return shifted(self.K, self.M, self.sigma)
 
+    def release(self):
+        """Free the factors for good, once the setup that owns this solver is past its last
+        solve (reduce: the basis' orthonormalization and the sampling solve nothing): at 1M
+        dofs they were 10.3 GB of the 24 the Grams ran out of. A shared solver (a campaign's)
+        is not released. Only PARDISO's factors can be freed in place (the solves hold them)."""
+        free = getattr(self.solve0, "free", None)
+        if free is not None:
+            free()
+
     def __getstate__(self):
         # a factorization does not travel between processes (PARDISO's handle is its own):
         # the receiver factorizes A0 again, the same factors in the same thread setting
