@@ -122,12 +122,12 @@ def test_override_errors_name_the_key(tmp_path):
 
 
 def test_a_model_past_limits_memory_is_refused_at_load_naming_its_divisions(tmp_path):
-    # 160 bytes per element-matrix entry: the block's 5 hex8 cells (576 entries each) ask
-    # 0.46 MB, within a limit of 1 MB and not of 0.4 MB
+    # 130 bytes per element-matrix entry: the block's 5 hex8 cells (576 entries each) ask
+    # 0.37 MB, within a limit of 1 MB and not of 0.3 MB
     from transient.case.sizes import BYTES_PER_ENTRY, setup_bytes
     assert setup_bytes([(5, 8)]) == 5 * 24 ** 2 * BYTES_PER_ENTRY
     assert load(write(tmp_path, BLOCK), ["limits.memory=1e-3"]).limits.memory == 1e-3
-    message = error_of(tmp_path, BLOCK, ["limits.memory=4e-4"])
+    message = error_of(tmp_path, BLOCK, ["limits.memory=3e-4"])
     assert message.startswith(str(tmp_path / "case.toml") + ": parts.block.mesh.divisions: ")
     assert "more than limits.memory allows" in message and "\n" not in message
 

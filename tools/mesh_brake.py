@@ -35,11 +35,9 @@ meshes both parts at each uniform size and fits the node model's three constants
 What the mirrored case costs (2026-12-02, 2 cores, load about 0.5; the run to t_end = 0.01,
 eps 1e-3): 200k dofs 62 s and 5.4 GB, 500k 305-322 s and 13.8 GB (the factorization stage
 10.0 GB of it: PARDISO's factors 4 GB). At 1M dofs (985k, 2026-12-05), PARDISO's factors
-take 9.8 GB and the setup does not fit in 24 GB: limits.memory's estimate (31 GB) refuses
-the case at load, and with `--set limits.memory=100` it was killed at 25 GB in the basis'
-Grams, 12 minutes in (with an eps of 6e-12 its auto eps then took from round-off, 14
-contact shapes instead of 780, it ran through in 4.6 minutes and 21.3 GB). --interface
-multiplies the fine rule's points and the interface dofs.
+take 10.3 GB and the 10 ms run took 807 s, its setup 805 s and 23.1 GB (the basis X beside
+the factors; the factors are freed before the basis' Grams); 500k took 231 s and 9.6 GB.
+--interface multiplies the fine rule's points and the interface dofs.
 """
 import argparse
 import importlib.util
