@@ -52,10 +52,11 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
     # needs only its solves, the dense eigensolver and ARPACK its matrix or products
     Kf = free_block(K, free) if sp.issparse(K) else K
     Mf = free_block(M, free)
+    del K    # the caller's on all dofs: not held through the factorization and the Lanczos
     n = len(free)
     sigma = shift_sigma(shift)
     timings = {}
-    if n <= DENSE_LIMIT and K is not None:
+    if n <= DENSE_LIMIT and Kf is not None:
         t0 = time.perf_counter()
         lam, vec = sla.eigh(Kf.toarray(), Mf.toarray())
         timings["eigensolver"] = time.perf_counter() - t0
