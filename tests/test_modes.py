@@ -123,3 +123,39 @@ def test_pardiso_is_found_without_importing_pypardiso():
     if out[0] != "True":
         pytest.skip("PARDISO is not installed")
     assert out[1] == "False"
+
+
+def test_the_arpack_fallback_runs_without_the_stalled_lanczos_basis(monkeypatch):
+    """When the block Lanczos stalls, ARPACK finds the same modes, and runs after the
+    exception is gone: its traceback held the Lanczos' frame and basis (4 GB at 1M dofs, held
+    beside the factors through ARPACK's solves). Checked with a weak reference."""
+    import weakref
+
+    import scipy.sparse as sp
+
+    from transient.solve import modes as modes_module
+    from transient.solve.lanczos import NotConverged
+
+    class Basis:
+        pass
+    refs, seen = [], []
+
+    def stalled(*args, **kwargs):
+        basis = Basis()
+        refs.append(weakref.ref(basis))
+        raise NotConverged("stalled")
+
+    arpack = modes_module._arpack
+
+    def checked(*args):
+        seen.append(refs[0]() is None)
+        return arpack(*args)
+    monkeypatch.setattr(modes_module, "block_lanczos", stalled)
+    monkeypatch.setattr(modes_module, "_arpack", checked)
+    n = 800
+    K = sp.diags([-np.ones(n - 1), 2.0 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1]).tocsr()
+    M = sp.identity(n, format="csr")
+    out = normal_modes(K * 1e6, M, count=6)
+    assert seen == [True] and "ARPACK" in out.backend and "stalled" in out.backend
+    lam = sla.eigh(K.toarray() * 1e6, eigvals_only=True)[:6]
+    assert np.allclose((2 * np.pi * out.frequencies) ** 2, lam, rtol=1e-8)

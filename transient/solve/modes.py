@@ -70,12 +70,17 @@ def normal_modes(K, M, fixed=None, count=20, fmax=0.0, shift=-1.0, backend="auto
     t0 = time.perf_counter()
     lam_max = (2 * np.pi * fmax) ** 2 if fmax > 0 else None
     name = getattr(solve, "backend", "?")
+    stalled = None
     try:
         lam, vec, _ = block_lanczos(solve, Mf, sigma, lam_max, count, BLOCK, tol=tol)
     except NotConverged as exc:
-        # a spectrum the block method does not resolve: ARPACK, one vector at a time
+        stalled = str(exc)
+    if stalled is not None:
+        # a spectrum the block method does not resolve: ARPACK, one vector at a time, outside
+        # the except clause, whose traceback holds the Lanczos' frame and basis (4 GB at 1M
+        # dofs, else held beside the factors through all of ARPACK's solves)
         lam, vec = _arpack(Kf, Mf, sigma, solve, count, fmax)
-        name += f" (ARPACK; block Lanczos: {exc})"
+        name += f" (ARPACK; block Lanczos: {stalled})"
     timings["eigensolver"] = time.perf_counter() - t0
     keep = frequencies_hz(lam) <= fmax if fmax > 0 else slice(0, count)
     lam, vec = lam[keep], vec[:, keep]
