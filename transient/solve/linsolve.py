@@ -182,15 +182,19 @@ class _Pardiso:
     def free(self):
         """Release the factors (PARDISO's memory and MKL's cached buffers: 10.3 GB at 1M
         dofs) for a setup past its last solve; a solve after it is an error."""
-        if self.data is None:
-            return
-        self._call(-1, np.zeros(1), np.zeros(1))
-        self.data = self.indptr = self.indices = None
+        self._release()
         self._lib.mkl_free_buffers()
 
+    def _release(self):
+        if self.data is not None:
+            self._call(-1, np.zeros(1), np.zeros(1))
+            self.data = self.indptr = self.indices = None
+
     def __del__(self):
+        # the factors only: MKL keeps its buffers for the next factorization (a preload's
+        # Newton may factorize at every iteration), which free() alone gives back
         try:
-            self.free()
+            self._release()
         except Exception:
             pass
 
