@@ -41,6 +41,12 @@ def setup_bytes(cells):
     return sum(BYTES_PER_ENTRY * n * (3 * nodes) ** 2 for n, nodes in cells)
 
 
+def model_cells(model):
+    """(count, nodes per cell) of each cell block of a built model's meshes."""
+    return [(len(c), c.shape[1]) for part in model.parts.values()
+            for c in part.mesh.cells.values()]
+
+
 def check_memory(case, cells, keys):
     """Refuse (CaseError) a model whose estimated setup exceeds limits.memory; keys: the case
     keys that set the cell counts (divisions, mesh files)."""

@@ -100,11 +100,14 @@ def nnls_gram(column, h, bb, tol, max_points):
     cols = np.empty((N, room), order="F")
     Lbuf = np.zeros((room, room))
     x = np.zeros(0)
+    Gx = np.zeros(N)           # G x on every candidate, as the gradient h - G x needs it
     grad = h.copy()
     banned = np.zeros(N, bool)
 
     def residual(x):
-        return np.sqrt(max(bb - 2 * h[P] @ x + x @ (cols[P, :len(P)] @ x), 0.0) / bb)
+        # x^T G_PP x from G x: a k x k gather of the columns at every point taken was 1.3 s of
+        # 4x pad_disc's 11.5 s sampling (791 points)
+        return np.sqrt(max(bb - 2 * h[P] @ x + x @ Gx[P], 0.0) / bb)
 
     res = 1.0
     while len(P) < cap:
@@ -153,7 +156,8 @@ def nnls_gram(column, h, bb, tol, max_points):
             Lbuf[:k, :k] = np.linalg.cholesky(cols[P, :k])
             Lbuf[:k, k:] = 0.0
             L = Lbuf[:k, :k]
-        grad = h - cols[:, :len(P)] @ x
+        Gx = cols[:, :len(P)] @ x
+        grad = h - Gx
     res = residual(x) if len(P) else 1.0
     return P, x, float(res)
 

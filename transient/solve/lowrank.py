@@ -20,6 +20,7 @@ from ..kernels.sparse import csr_dot, csr_dot_pair
 from ..model.dofs import restrict, restricted, shifted
 from . import blas
 from .linsolve import factorize
+from .rowspace import factored_row_space, row_space
 
 MAX_BYTES = 1.5e9     # Z = A0^-1 C^T held dense up to this; G (rank^2) too, beyond it the
 #                       dense form A0 + C^T D C is factorized
@@ -28,7 +29,6 @@ BLOCK = 128           # right-hand sides per solve when forming Z (bounds the so
 #                       as fast per column as 300 or all 599 at once)
 BLOCK_BYTES = 2.56e8  # ... and fewer where n x BLOCK floats pass this: at 1M dofs a block of
 #                       128 is 1 GB, three at once beside 9.8 GB of factors and the n x 819 basis
-ROW_SPACE_TOL = 1e-12
 
 
 def block_columns(n, most=None):
@@ -175,17 +175,18 @@ class ContactSolver:
         self.CT = None if self.by_columns else self.C.T.tocsc()
         self.Z = np.empty((n, rank), order="F") if 8.0 * n * rank <= MAX_BYTES else None
         G = None if self.Z is not None else np.empty((rank, rank))
-        into = getattr(self.solve0, "backend", "") == "pardiso" and self.Z is not None
         loads, width = None, block_columns(n)
+        into = self._into(min(width, rank)) if self.Z is None else None
         for start in range(0, rank, width):
             block = slice(start, min(start + width, rank))
             # one array of loads for every block, and PARDISO's responses solved into Z's
-            # columns: n x BLOCK of fresh memory a block otherwise, twice (0.1 s on pad_disc)
+            # columns, or without Z into one block: n x BLOCK of fresh memory a block
+            # otherwise, twice (0.1 s on pad_disc; 25 blocks of 252 MB at 1M dofs)
             loads = self._loads(block, loads)
-            if into:
+            if self._pardiso and self.Z is not None:
                 self.solve0(loads, out=self.Z[:, block])
                 continue
-            Zb = np.atleast_2d(self.solve0(loads).T).T
+            Zb = self._solved(loads, into)
             if self.Z is not None:
                 self.Z[:, block] = Zb
             else:
@@ -225,6 +226,20 @@ class ContactSolver:
         self.__dict__.update(state)
         self.solve0 = factorize(self.A0, self.backend, definite=self.sigma <= 0)
 
+    @property
+    def _pardiso(self):
+        return getattr(self.solve0, "backend", "") == "pardiso"
+
+    def _into(self, width):
+        """An n x width block PARDISO's responses are solved into block after block, or None."""
+        return np.empty((self.n, width), order="F") if self._pardiso else None
+
+    def _solved(self, loads, into=None):
+        """A0^-1 loads (n, k), into the first k columns of `into` (_into) when given."""
+        if into is None:
+            return np.atleast_2d(self.solve0(loads).T).T
+        return self.solve0(loads, out=into[:, :loads.shape[1]])
+
     def _loads(self, Y, buffer=None):
         """B Y (n, k), F-ordered: B = E V by columns, C^T otherwise; Y (rank, k), or a slice
         of B's columns (taken, not multiplied). buffer: an earlier call's result, reused by
@@ -263,6 +278,7 @@ class ContactSolver:
         # contact shapes: 515 at 500k dofs, 2 GB each, three at once)
         x = np.empty((self.n, Y2.shape[1])) if out is None else out
         loads, width = None, block_columns(self.n)
+        into = self._into(min(width, Y2.shape[1])) if self.Z is None else None
         for start in range(0, Y2.shape[1], width):
             block = slice(start, min(start + width, Y2.shape[1]))
             if self.Z is not None:
@@ -270,7 +286,7 @@ class ContactSolver:
                     x[:, block] = (Y2[:, block].T @ self.Z.T).T
                 continue
             loads = self._loads(Y2[:, block], loads)
-            x[:, block] = np.atleast_2d(self.solve0(loads).T).T
+            x[:, block] = self._solved(loads, into)
         return x[:, 0] if Y.ndim == 1 else x
 
     def solver(self, d):
@@ -324,8 +340,8 @@ class ContactSolver:
         (A0 + B D B^T)^-1 b = y - Z (D^-1 + G)^-1 B^T y tends to y - Z G^-1 B^T y (y = A0^-1
         b): x with B^T x = 0, the constraint's multipliers G^-1 B^T y. B = E V, V an
         orthonormal basis of the rows' space on the dofs they touch: the rows' singular values
-        above 1e-6 of the largest (ROW_SPACE_TOL on their Gram), so a rich rule's round-off
-        directions stay free. The difference cancels what A0^-1 gives a part that only the
+        above 1e-6 of the largest (rowspace.ROW_SPACE_TOL on their Gram), so a rich rule's
+        round-off directions stay free. The difference cancels what A0^-1 gives a part that only the
         contact holds (10^7 times the rest with a 1 Hz shift, the pad on the disc): through an
         orthonormal V the solve stays symmetric to 3e-9 there, through the rows themselves
         (their singular values spread over 1e6) to 1e-5, where the Lanczos stalls."""
@@ -345,13 +361,12 @@ class ContactSolver:
             if 8.0 * n * rank > MAX_BYTES:
                 raise ValueError(f"the responses to the {rank} directions of the contact "
                                  f"rows on {n} dofs exceed {MAX_BYTES / 1e9:g} GB")
-            ZV = np.empty((n, rank), order="F")
-            width = block_columns(n)
+            ZV, width = np.empty((n, rank), order="F"), block_columns(n)
             for start in range(0, rank, width):
                 block = slice(start, min(start + width, rank))
                 b = np.zeros((n, block.stop - start), order="F")
                 b[cols] = V[:, block]
-                ZV[:, block] = np.atleast_2d(solve0(b).T).T
+                ZV[:, block] = self._solved(b, ZV[:, block] if self._pardiso else None)
             G, Z = V.T @ ZV[cols], ZV.__matmul__
         cho = sla.cho_factor(G)
 
@@ -370,26 +385,3 @@ def contact_solver(model, contacts, sigma, backend="auto"):
     return ContactSolver(*restricted((model.K, model.M), free, free),
                          None if contacts.rows is None else restrict(contacts.C, cols=free),
                          sigma, backend, factors)
-
-
-def factored_row_space(L, B, cols, tol=ROW_SPACE_TOL):
-    """row_space of C E = L B[cols]^T (L (m, r), B (n, r) sparse) without the dense rows: with
-    B[cols] = Q R, C E = (L R^T) Q^T, and the eigenvectors X of (L R^T)^T (L R^T) (r x r)
-    above tol give V = Q X and Rm = L R^T X, the same cut as row_space (its k x k Gram has
-    the same nonzero eigenvalues). The columns of B need not be independent."""
-    with blas.every_core():         # products of a few hundred columns (an r x r eigh)
-        Q, R = np.linalg.qr(B[cols].toarray())
-        LR = L @ R.T
-        lam, X = np.linalg.eigh(LR.T @ LR)
-        X = X[:, lam > tol * max(lam.max(), 1e-300)]
-        return LR @ X, Q @ X
-
-
-def row_space(Cc, tol=ROW_SPACE_TOL):
-    """Cc (m x k) = Rm V^T with V (k x rho) orthonormal: the eigenvectors of Cc^T Cc above
-    tol of its largest eigenvalue. The eigenvalues of the Gram carry round-off of about 1e-16
-    of the largest, so tol 1e-12 keeps singular values from 1e-6 of the largest: the part of
-    C dropped is below 1e-6 of it (projected rows have such round-off directions)."""
-    lam, V = np.linalg.eigh(Cc.T @ Cc)
-    V = V[:, lam > tol * max(lam.max(), 1e-300)]
-    return Cc @ V, V
