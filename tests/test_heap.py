@@ -38,21 +38,26 @@ def test_a_retaining_heap_reuses_a_freed_block_without_faulting_it_again():
     plain = [faults(), faults()]
     ok = heap.retain_freed()
     kept = [faults(), faults()]
-    print(json.dumps({"plain": plain, "kept": kept, "ok": ok}))
+    heap.settle()
+    settled = [faults(), faults()]
+    print(json.dumps({"plain": plain, "kept": kept, "settled": settled, "ok": ok,
+                      "after": heap.retaining()}))
     """)
-    assert out["ok"]
+    assert out["ok"] and not out["after"]
     pages = 64e6 / 4096
     # glibc maps a 64 MB block afresh each time, faulting its pages in every time
     assert min(out["plain"]) > 0.5 * pages
     # retained: the first block's pages are faulted once, the second reuses them
     assert out["kept"][1] < 0.05 * pages
+    # settled: the retained pages were given back, and a 64 MB block is mapped afresh again
+    assert min(out["settled"]) > 0.5 * pages
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt")
 @pytest.mark.parametrize("share, retains", [(0.1, True), (0.8, False)])
 def test_the_setup_retains_freed_blocks_only_far_below_the_memory_bound(share, retains):
     """A setup estimated at over half of limits.memory keeps glibc's defaults (its freed blocks
-    in the heap's middle would stay resident); a small one retains them."""
+    in the heap's middle would stay resident); a small one retains them, until it ends."""
     out = _run(f"""
     import json
     import transient.heap as heap
@@ -64,6 +69,7 @@ def test_the_setup_retains_freed_blocks_only_far_below_the_memory_bound(share, r
     need = setup_bytes(model_cells(build_model(case)))
     case = load("cases/two_bars.toml", [f"limits.memory={{need / {share} / 1e9}}"])
     prepare(case)
-    print(json.dumps({{"retaining": heap.retaining()}}))
+    print(json.dumps({{"retained": heap.last_setup_retained(), "after": heap.retaining()}}))
     """)
-    assert out["retaining"] is retains
+    assert out["retained"] is retains
+    assert out["after"] is False      # the retention ends with the setup

@@ -137,7 +137,7 @@ def prepare(case, check=None, built=None, unsampled=False, analysis=False):
     candidates (Setup.unsampled), the cea's, from the same stages. analysis: the system is
     linearized, not integrated (the cea's): it gets no critical step and the Setup no rows0
     (the critical step's eigenvalues were 0.3 s of pad_disc's cea, on its 7734 points)."""
-    with blas.one_thread():
+    with blas.one_thread(), heap.setup():
         return _prepare(case, _Stages(check), built or Built(None), unsampled, analysis)
 
 
