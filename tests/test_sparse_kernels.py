@@ -4,7 +4,8 @@ import pytest
 import scipy.sparse as sp
 
 from transient.kernels.newmark import factor_columns
-from transient.kernels.sparse import csr_abs_matvec, csr_dot, csr_matvec, factor_solve
+from transient.kernels.sparse import (csr_abs_matvec, csr_dot, csr_matvec, csr_upper,
+                                      factor_solve)
 from transient.solve.linsolve import available, triangular_factors
 
 
@@ -83,3 +84,16 @@ def test_a_pair_of_one_pattern_is_two_csr_dots_bit_for_bit():
     assert not shares_pattern(A, C) and not shares_pattern(A, A.tocsc())
     AX, CX = csr_dot_pair(A, C, X)
     assert np.array_equal(AX, csr_dot(A, X)) and np.array_equal(CX, csr_dot(C, X))
+
+
+def test_the_upper_triangle_is_scipys_triu_entry_for_entry():
+    """What PARDISO is given: SciPy's triu (sorted), explicit zeros and all, as int32."""
+    for seed in range(3):
+        A = spd(80, seed)
+        A.data[::7] = 0.0                  # explicit zeros are kept, as triu keeps them
+        U = sp.triu(A, format="csr")
+        U.sort_indices()
+        indptr, indices, data = csr_upper(A.indptr, A.indices, A.data)
+        assert indptr.dtype == indices.dtype == np.int32
+        assert np.array_equal(indptr, U.indptr) and np.array_equal(indices, U.indices)
+        assert np.array_equal(data, U.data)

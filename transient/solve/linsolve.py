@@ -16,6 +16,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import FactorizationError  # noqa: F401 (raised here, caught by callers)
+from ..kernels.sparse import csr_upper
 
 
 def available():
@@ -128,12 +129,13 @@ class _Pardiso:
                        i32, i32, i32, i32, i32, i32, ctypes.c_void_p, ctypes.c_void_p, i32]
         fn.restype = None
         self._fn = fn
-        U = sp.triu(A, format="csr")
-        U.sort_indices()
-        self.n = U.shape[0]
-        self.data = np.ascontiguousarray(U.data, dtype=np.float64)
-        self.indptr = U.indptr.astype(np.int32)
-        self.indices = U.indices.astype(np.int32)
+        A = sp.csr_matrix(A)
+        if not A.has_canonical_format:       # sorted, without duplicates (summed)
+            A = A.copy()
+            A.sum_duplicates()
+        self.n = A.shape[0]
+        self.indptr, self.indices, self.data = csr_upper(A.indptr, A.indices,
+                                                         A.data.astype(np.float64, copy=False))
         self.mtype = mtype
         self.pt = np.zeros(64, dtype=np.int64)
         self.iparm = np.zeros(64, dtype=np.int32)
