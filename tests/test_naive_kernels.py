@@ -467,13 +467,16 @@ def test_exponential_coefficients_match_the_closed_form():
     assert error.max() <= 1e-12
 
 
-def passes(fn, args, qs, blocks, fr=None, vs=None):
+def passes(fn, args, qs, blocks, fr=None, vs=None, plain=False):
     """fn (a contact pass or its twin, args up to params) at each q of qs (and velocity of vs
-    with friction fr): the arrays it fills and its returns, stacked."""
+    with friction fr): the arrays it fills and its returns, stacked. The pass writes its blocks
+    into contact.block_buffers, or rows side by side if plain."""
     m, n = N_POINTS, qs.shape[1]
     f, gap, press, fbuf = np.zeros(n), np.zeros(m), np.zeros(m), np.zeros((len(blocks) - 1, n))
     ff, slip, ffbuf = np.zeros(n), np.zeros((2, m)), np.zeros((len(blocks) - 1, n))
     out = {"f": [], "gap": [], "press": [], "ff": [], "slip": [], "energies": []}
+    if fn is contact.contact_pass and not plain:
+        fbuf, ffbuf = contact.block_buffers(len(blocks) - 1, n)     # what the kernels pass
     for k, q in enumerate(qs):
         if fn is contact.contact_pass:
             fr_k = fr if fr is not None else nv.no_friction(n)
@@ -534,6 +537,24 @@ def test_contact_pass_with_friction(systems, blocks):
     assert np.any(r.fr[3] == nv.NONE)
     along = ref["slip"][:, :N_POINTS]
     assert np.any(along < 0) and np.any(along > 0)          # slipping both ways
+
+
+def test_the_blocks_buffers_keep_a_cache_line_between_rows_and_change_no_sum(systems):
+    """Two threads writing rows side by side shared a cache line at the boundary (false
+    sharing); padded, the rows are 64 bytes apart at least and the pass is the same to the
+    bit as with rows side by side."""
+    fb, ffb = contact.block_buffers(2, 345)
+    for buf in (fb, ffb):
+        assert buf.strides[0] - 345 * buf.itemsize >= 64
+    r = with_friction(systems[(False, False)])
+    qs = perturbed(r.state[0], 9)
+    vs = r.state[1] + np.abs(r.state[1]).max() * np.random.default_rng(10).standard_normal(
+        qs.shape)
+    args = (r.C, r.g0, r.w, r.kt0, r.code, r.params)
+    padded = passes(contact.contact_pass, args, qs, TWO_BLOCKS, r.fr, vs)
+    plain = passes(contact.contact_pass, args, qs, TWO_BLOCKS, r.fr, vs, plain=True)
+    for name in padded:
+        assert np.array_equal(padded[name], plain[name]), name
 
 
 def test_remainder_sparse(systems):

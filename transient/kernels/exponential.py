@@ -7,7 +7,7 @@ import numpy as np
 
 from ..jit import njit_fast
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
-from .contact import contact_pass
+from .contact import block_buffers, contact_pass
 from .friction import friction_energy
 from .stepping import _external, _finite, _store, modal_step_energies
 from .woodbury import coupled_rows, coupled_solve, friction_move, newton_update
@@ -72,8 +72,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     svals = np.empty(patterns.shape[0])
     gap = np.empty(m)
     press = np.empty(m)
-    fbuf = np.empty((blocks.shape[0] - 1, n))
-    ffbuf = np.empty((blocks.shape[0] - 1, n))
+    fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
     energy = np.empty(5)
     fext0 = np.empty(n)
     ff = np.empty(n)
@@ -177,8 +176,7 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
     cu = np.empty((stride * m, 3))
     size = np.empty(stride * m)
     active = np.empty(stride * m, np.int64)
-    fbuf = np.empty((blocks.shape[0] - 1, n))
-    ffbuf = np.empty((blocks.shape[0] - 1, n))
+    fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
     energy = np.empty(5)
     ff = np.empty(n)
     slip = np.empty((2, fr[0].shape[0]))

@@ -17,7 +17,7 @@ import numpy as np
 from ..jit import njit_fast
 from .sparse import csr_abs_matvec, csr_matvec, factor_solve
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
-from .contact import contact_pass
+from .contact import block_buffers, contact_pass
 from .friction import friction_energy, friction_pass_sparse, friction_work
 from .stepping import (_energies, _external, _finite, _store, _store_sparse, modal_step_energies,
                        remainder_sparse)
@@ -72,8 +72,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
     cu = np.empty((stride * m, 3))
     size = np.empty(stride * m)
     active = np.empty(stride * m, np.int64)
-    fbuf = np.empty((blocks.shape[0] - 1, n))
-    ffbuf = np.empty((blocks.shape[0] - 1, n))
+    fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
     energy = np.empty(5)
     ff = np.empty(n)
     slip = np.empty((2, fr[0].shape[0]))

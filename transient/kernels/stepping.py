@@ -20,7 +20,7 @@ import numpy as np
 
 from ..jit import njit, njit_fast
 from .codes import CONTACT, DISSIPATED, KINETIC, NOT_FINITE, OK, STRAIN, WORK
-from .contact import contact_pass
+from .contact import block_buffers, contact_pass
 from .friction import friction_energy, friction_pass_sparse, friction_work
 from .laws import pressure_potential
 from .signals import signal_values
@@ -113,8 +113,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
     svals = np.empty(patterns.shape[0])
     gap = np.empty(m)
     press = np.empty(m)
-    fbuf = np.empty((blocks.shape[0] - 1, n))
-    ffbuf = np.empty((blocks.shape[0] - 1, n))
+    fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
     energy = np.empty(5)
     dq = np.empty(n)
     ff = np.empty(n)
