@@ -171,3 +171,16 @@ def test_free_rows_moved_to_their_dofs_in_place_and_grams_by_blocks():
         assert np.allclose(GM, S.T @ (M @ S), rtol=1e-13, atol=1e-13)
         assert np.allclose(GK, S.T @ ((K.K + update * (K.V is not None)) @ S), rtol=1e-13,
                            atol=1e-13)
+
+
+def test_the_static_directions_asked_count_the_frictions_coupling_loads():
+    """With friction the basis also solves for the coupling loads of the modes (one per mode):
+    they are static directions asked, so the kept ones never outnumber them."""
+    from test_cea import small
+    from transient.stages import prepare
+    asked = {}
+    for mu in (0.0, 0.4):
+        meta = prepare(small(f"contact.pad_disc.friction.mu={mu}")).meta
+        asked[mu], kept = meta["static_shapes"]
+        assert kept <= asked[mu]
+    assert asked[0.4] == asked[0.0] + meta["normal_modes"]

@@ -64,6 +64,14 @@ def test_friction_features_gram_is_the_explicit_one():
                            atol=1e-12 * abs(G).max())
     w = rng.uniform(0.5, 1.5, m_pts)
     assert np.allclose(gram_target(feats, w, terms), G @ w, rtol=1e-11)
+    # each feature's product with row j made once (ct and the band's rows are shared by
+    # terms): the same arithmetic as every product made where it appears
+    c, cb, kt_, ps = feats
+    for j in (0, 11, 39):
+        g = (c @ c[j]) * (kt_ * kt_[j] * (cb @ cb[j]) + ps * ps[j])
+        for t, L, R in terms:
+            g += (t * t[j]) * (L @ L[j]) * (R @ R[j])
+        assert np.array_equal(gram_column(feats, j, terms), g)
 
 
 def _nnls_against_scipy(seed, rows, n, share, noise):

@@ -41,7 +41,8 @@ class Basis:
     A: np.ndarray            # (m, n)
     omega2: np.ndarray       # (n,) [rad^2/s^2], ascending
     n_modes: int             # normal modes below fmax in the basis
-    n_static: int            # static vectors added (before removing dependent directions)
+    n_static: int            # static vectors added (loads, the preload, friction's coupling
+    #                          loads; before removing dependent directions)
     timings: dict
     n_contact_shapes: int = 0      # contact shapes kept (reduction.statics_tolerance)
     contact_flexibility: np.ndarray = None   # mu of contact_shapes, descending
@@ -93,6 +94,7 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     n, m = len(free), Phi.shape[1]
     columns, shapes, held = [], None, []
     width = (m if coupling is not None else 0) + statics.shape[1]
+    n_static = width         # the friction's coupling loads are static directions asked too
 
     def into_basis(r):
         """X, allocated once the r contact shapes kept are known: they are solved into it."""
@@ -179,7 +181,7 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     timings = {"modes": t_modes, "statics": t_static,
                "orthonormalization": time.perf_counter() - t0 - t_modes - t_static}
     peaks["orthonormalization"] = peak_rss_gb()
-    return Basis(X, A, np.maximum(omega2, 0.0), len(modes.frequencies), statics.shape[1],
+    return Basis(X, A, np.maximum(omega2, 0.0), len(modes.frequencies), n_static,
                  timings, n_shapes, mu, n_static_kept, peaks)
 
 
