@@ -62,11 +62,11 @@ def test_the_setup_retains_freed_blocks_only_far_below_the_memory_bound(share, r
     import json
     import transient.heap as heap
     from transient.case.loading import load
-    from transient.case.sizes import model_cells, setup_bytes
+    from transient.case.sizes import parts_cells, setup_bytes
     from transient.model import build_model
     from transient.stages import prepare
     case = load("cases/two_bars.toml")
-    need = setup_bytes(model_cells(build_model(case)))
+    need = setup_bytes(parts_cells(build_model(case).parts))
     case = load("cases/two_bars.toml", [f"limits.memory={{need / {share} / 1e9}}"])
     prepare(case)
     print(json.dumps({{"retained": heap.last_setup_retained(), "after": heap.retaining()}}))

@@ -11,7 +11,7 @@ import scipy.sparse as sp
 
 from .case.signals import compile_signals
 from . import heap
-from .case.sizes import check_steps, model_cells, peak_rss_gb, setup_bytes
+from .case.sizes import check_steps, parts_cells, peak_rss_gb, setup_bytes
 from .contact.contactset import first_tangent, stack
 from .contact.pair import GEOMETRY, build_contact, build_geometry, contact_stiffness
 from .dynamics import schemes
@@ -145,7 +145,7 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
     solver = case.solver
     model = (stages.timed("loads", build_model, case, built.model) if built.model is not None
              else stages.timed("model", build_model, case))
-    if setup_bytes(model_cells(model)) <= case.limits.memory_bytes / 2:
+    if setup_bytes(parts_cells(model.parts)) <= case.limits.memory_bytes / 2:
         heap.retain_freed()     # freed blocks reused, not faulted in afresh (heap's docstring)
     if built.geometry is not None:
         pairs = build_contact(case, model, geometry=built.geometry)

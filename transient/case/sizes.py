@@ -41,10 +41,9 @@ def setup_bytes(cells):
     return sum(BYTES_PER_ENTRY * n * (3 * nodes) ** 2 for n, nodes in cells)
 
 
-def model_cells(model):
-    """(count, nodes per cell) of each cell block of a built model's meshes."""
-    return [(len(c), c.shape[1]) for part in model.parts.values()
-            for c in part.mesh.cells.values()]
+def parts_cells(parts):
+    """(count, nodes per cell) of each cell block of the parts' meshes (model.Part by name)."""
+    return [(len(c), c.shape[1]) for part in parts.values() for c in part.mesh.cells.values()]
 
 
 def check_memory(case, cells, keys):

@@ -176,21 +176,17 @@ class ContactSolver:
         self.Z = np.empty((n, rank), order="F") if 8.0 * n * rank <= MAX_BYTES else None
         G = None if self.Z is not None else np.empty((rank, rank))
         loads, width = None, block_columns(n)
-        into = self._into(min(width, rank)) if self.Z is None else None
+        into = np.empty((n, min(width, rank)), order="F") if self.Z is None else None
         for start in range(0, rank, width):
             block = slice(start, min(start + width, rank))
-            # one array of loads for every block, and PARDISO's responses solved into Z's
-            # columns, or without Z into one block: n x BLOCK of fresh memory a block
-            # otherwise, twice (0.1 s on pad_disc; 25 blocks of 252 MB at 1M dofs)
+            # one array of loads for every block, and the responses solved into Z's columns,
+            # or without Z into one block: n x BLOCK of fresh memory a block otherwise, twice
+            # (0.1 s on pad_disc; 25 blocks of 252 MB at 1M dofs)
             loads = self._loads(block, loads)
-            if self._pardiso and self.Z is not None:
-                self.solve0(loads, out=self.Z[:, block])
-                continue
-            Zb = self._solved(loads, into)
             if self.Z is not None:
-                self.Z[:, block] = Zb
+                self._solve_into(loads, self.Z[:, block])
             else:
-                G[:, block] = self._rows_of(Zb)
+                G[:, block] = self._rows_of(self._solve_into(loads, into[:, :loads.shape[1]]))
         # with Z held, G in one product (as before Z could be left out: the same sums)
         self.G = self._rows_of(self.Z) if self.Z is not None else G
         self.timings["responses"] = time.perf_counter() - t0
@@ -226,19 +222,13 @@ class ContactSolver:
         self.__dict__.update(state)
         self.solve0 = factorize(self.A0, self.backend, definite=self.sigma <= 0)
 
-    @property
-    def _pardiso(self):
-        return getattr(self.solve0, "backend", "") == "pardiso"
-
-    def _into(self, width):
-        """An n x width block PARDISO's responses are solved into block after block, or None."""
-        return np.empty((self.n, width), order="F") if self._pardiso else None
-
-    def _solved(self, loads, into=None):
-        """A0^-1 loads (n, k), into the first k columns of `into` (_into) when given."""
-        if into is None:
-            return np.atleast_2d(self.solve0(loads).T).T
-        return self.solve0(loads, out=into[:, :loads.shape[1]])
+    def _solve_into(self, loads, out):
+        """out = A0^-1 loads (n, k), returned: PARDISO writes a column-major out itself, other
+        backends' solutions are copied in."""
+        if getattr(self.solve0, "backend", "") == "pardiso":
+            return self.solve0(loads, out=out)
+        out[...] = np.atleast_2d(self.solve0(loads).T).T
+        return out
 
     def _loads(self, Y, buffer=None):
         """B Y (n, k), F-ordered: B = E V by columns, C^T otherwise; Y (rank, k), or a slice
@@ -278,7 +268,8 @@ class ContactSolver:
         # contact shapes: 515 at 500k dofs, 2 GB each, three at once)
         x = np.empty((self.n, Y2.shape[1])) if out is None else out
         loads, width = None, block_columns(self.n)
-        into = self._into(min(width, Y2.shape[1])) if self.Z is None else None
+        into = (np.empty((self.n, min(width, Y2.shape[1])), order="F") if self.Z is None
+                else None)
         for start in range(0, Y2.shape[1], width):
             block = slice(start, min(start + width, Y2.shape[1]))
             if self.Z is not None:
@@ -286,7 +277,7 @@ class ContactSolver:
                     x[:, block] = (Y2[:, block].T @ self.Z.T).T
                 continue
             loads = self._loads(Y2[:, block], loads)
-            x[:, block] = self._solved(loads, into)
+            x[:, block] = self._solve_into(loads, into[:, :loads.shape[1]])
         return x[:, 0] if Y.ndim == 1 else x
 
     def solver(self, d):
@@ -366,7 +357,7 @@ class ContactSolver:
                 block = slice(start, min(start + width, rank))
                 b = np.zeros((n, block.stop - start), order="F")
                 b[cols] = V[:, block]
-                ZV[:, block] = self._solved(b, ZV[:, block] if self._pardiso else None)
+                self._solve_into(b, ZV[:, block])
             G, Z = V.T @ ZV[cols], ZV.__matmul__
         cho = sla.cho_factor(G)
 
