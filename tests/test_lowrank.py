@@ -263,7 +263,8 @@ def test_a_setup_frees_the_factors_it_owns_after_its_last_solve(monkeypatch):
 
     from transient.case.loading import load
     from transient.solve.linsolve import available
-    from transient.stages import build_shared, prepare
+    from transient.shared import build_shared
+    from transient.stages import prepare
     case = load(Path(__file__).resolve().parent.parent / "cases" / "pad_disc.toml",
                 ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1,1]"])
     released, release = [], ContactSolver.release

@@ -12,6 +12,7 @@ import pytest
 
 from transient.cli import main
 from transient.errors import CaseError
+from transient.io.history import summary
 from transient.sweep.campaign import THREAD_ENV
 from transient.sweep.variants import make_variants, parse_parameter
 
@@ -112,8 +113,9 @@ def test_a_sweep_equals_its_variants_run_one_by_one(campaign):
     saved = json.loads((out / "sweep.json").read_text())
     assert saved["rows"] == rows
     # the model, the contact's geometry and the factorization built once for the three
-    # (stages.stage_key), by tasks of their own: no variant ran them, each its own loads
-    assert saved["shared"] == {"model": 1, "contact": 1, "factorization": 1}
+    # (shared.stage_key), by tasks of their own: no variant ran them, each its own loads
+    # (the basis follows mu: each variant makes its own, but test_a_friction_sweep_at_one_...)
+    assert saved["shared"] == {"model": 1, "contact": 1, "factorization": 1, "basis": 0}
     for r in rows:
         assert "loads" in r["stages"] and "preload" in r["stages"]
         assert not {"model", "contact", "factorization"} & set(r["stages"])
@@ -292,7 +294,7 @@ class _Recorder:
 
 
 def _outside(reads, stage):
-    from transient.stages import READS
+    from transient.shared import READS
     allowed = READS[stage] + ("path", "directory")
     # a table's own path is its names looked up (what a field of each of them reads too)
     return sorted(r for r in reads if not any(r == a or r.startswith(a + ".")
@@ -305,7 +307,7 @@ CASES = [(PAD, SMALL), (ROOT / "cases" / "drilled_cube.toml", [])]
 @pytest.mark.parametrize("case, more", CASES)
 def test_the_model_reads_only_what_its_key_holds(case, more):
     """build_model through a case that records its reads: every field its structure reads is
-    under stages.READS['model'] (or names the case's file), so variants equal there may share
+    under shared.READS['model'] (or names the case's file), so variants equal there may share
     it; the loads and sensors it reads are applied to a shared structure again."""
     from transient.case.loading import load
     from transient.model import build_model
@@ -325,13 +327,13 @@ def test_the_model_reads_only_what_its_key_holds(case, more):
 @pytest.mark.parametrize("case, more", CASES)
 def test_the_contact_and_the_factorization_read_only_what_their_keys_hold(case, more):
     """The pairs' geometry and the factorization through a recording case read only the fields
-    of stages.READS['contact'] and ['factorization'] (the law and the friction are each
+    of shared.READS['contact'] and ['factorization'] (the law and the friction are each
     variant's own)."""
     from transient.case.loading import load
     from transient.contact.contactset import stack
     from transient.contact.pair import build_geometry
     from transient.model import build_model
-    from transient.stages import factorization
+    from transient.shared import factorization
     loaded = load(case, more + ["contact.{}.friction.mu=0.3".format(
         next(iter(load(case, more).contact)))] if case == PAD else more)
     model = build_model(loaded)
@@ -346,6 +348,64 @@ def test_the_contact_and_the_factorization_read_only_what_their_keys_hold(case, 
     assert not _outside(reads, "factorization") and "solver.linear_solver" in reads
 
 
+def test_a_friction_sweep_at_one_basis_mu_shares_the_basis(tmp_path):
+    """With contact.<pair>.friction.basis_mu, the variants of a friction sweep share the basis
+    made at that friction (one build, counted) and each rebases it on its own preload; their
+    histories and complex modes are bit for bit those of `transient run` and `transient cea`
+    of the same variant, which make that basis themselves (mu = 0.2: the basis is its own, made
+    by the shared stage as by the variant alone)."""
+    out = tmp_path / "basis"
+    more = [f"--set={o}" for o in SMALL + ["contact.pad_disc.friction.basis_mu=0.2"]]
+    env = {**os.environ, **THREAD_ENV, "PYTHONPATH": str(ROOT)}
+
+    def transient(*args):
+        done = subprocess.run([sys.executable, "-m", "transient", *args, *more],
+                              capture_output=True, text=True, env=env, timeout=600)
+        assert done.returncode == 0, done.stderr
+        return done.stdout
+    rows = json.loads(transient("sweep", str(PAD), "--param",
+                                "contact.pad_disc.friction.mu=[0.0,0.2,0.4]", "--kind", "both",
+                                "--workers", "2", "--out", str(out),
+                                "--json").splitlines()[-1])["rows"]
+    saved = json.loads((out / "sweep.json").read_text())
+    assert saved["shared"] == {"model": 1, "contact": 1, "factorization": 1, "basis": 1}
+    for row, mu in zip(rows, (0.0, 0.2, 0.4)):
+        assert row["status"] == "complete"
+        assert not {"factorization", "reference"} & set(row["stages"])
+        assert "basis" in row["shared_s"]           # all three from the one build
+        alone = tmp_path / f"alone_{mu}.h5"
+        transient("run", str(PAD), "-o", str(alone), "--quiet",
+                  f"--set=contact.pad_disc.friction.mu={mu}")
+        got, ref = _arrays(out / row["output"]), _arrays(alone)
+        assert set(got) == set(ref) and len(got) > 5
+        for name in ref:
+            assert np.array_equal(got[name], ref[name]), (mu, name)
+        cea = json.loads(transient("cea", str(PAD), "--json",
+                                   f"--set=contact.pad_disc.friction.mu={mu}"))
+        modes = json.loads((out / row["modes_output"]).read_text())["modes"]
+        assert [(m["frequency_hz"], m["real"]) for m in modes] == [
+            (m["frequency_hz"], m["real"]) for m in cea["modes"]]
+        # one by one, the variant makes the basis at 0.2 itself (its own at 0.2)
+        assert ("reference" in summary(alone)["meta"]["stages"]) == (mu != 0.2)
+    assert rows[2]["growth_rate"] > 500 and rows[2]["unstable"] >= 1
+
+
+def test_the_shared_basis_reads_only_what_its_key_holds():
+    """The basis at a reference friction through a recording case reads only the fields of
+    shared.READS['basis'] (and the sensors that the model's loads place with them)."""
+    from transient.case.loading import load
+    from transient.shared import build_shared, shared_basis
+    loaded = load(PAD, SMALL + ["contact.pad_disc.friction.mu=0.3"])
+    built = build_shared(loaded, "factorization")
+    reads = set()
+    shared = shared_basis(_Recorder(loaded, "", reads), built.model, built.geometry,
+                          built.solver)
+    assert shared.basis.X.shape[1] > shared.basis.n_modes > 0
+    outside = _outside(reads, "basis")
+    assert {r.split(".")[0] for r in outside} <= {"sensors"}, outside
+    assert any(r.startswith("contact.") and "friction" in r for r in reads)
+
+
 def test_a_pressure_sweep_shares_every_first_stage(tmp_path, capsys):
     """The piston's pressure is a load: two pressures share the model's structure, the
     contact's geometry and the factorization; each variant's preload is its own (the contact
@@ -358,7 +418,7 @@ def test_a_pressure_sweep_shares_every_first_stage(tmp_path, capsys):
     assert main(args) == 0
     capsys.readouterr()
     saved = json.loads((out / "sweep.json").read_text())
-    assert saved["shared"] == {"model": 1, "contact": 1, "factorization": 1}
+    assert saved["shared"] == {"model": 1, "contact": 1, "factorization": 1, "basis": 0}
     assert all(r["status"] == "complete" for r in saved["rows"])
 
 

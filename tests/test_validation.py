@@ -69,6 +69,15 @@ def sets(*overrides):
     ("cea", PAD, ["contact.pad_disc.friction.mu=0.4", "motion.disc.omega=0.0"],
      "contact.pad_disc.friction.mu"),
     ("cea", PAD, ["contact.pad_disc.friction.v_eps=0.0"], "contact.pad_disc.friction.v_eps"),
+    # a reference friction for the basis: a constant mu, a reduced model, a sliding
+    ("cea", PAD, ["contact.pad_disc.friction.basis_mu=0.3",
+                  "contact.pad_disc.friction.speeds=[0.0,1.0]",
+                  "contact.pad_disc.friction.values=[0.4,0.3]"],
+     "contact.pad_disc.friction.basis_mu"),
+    ("run", PAD, ["contact.pad_disc.friction.basis_mu=0.3", "solver.reduction.enabled=false",
+                  'contact.pad_disc.rule="fine"'], "contact.pad_disc.friction.basis_mu"),
+    ("cea", PAD, ["contact.pad_disc.friction.basis_mu=0.3", "motion.disc.omega=0.0"],
+     "contact.pad_disc.friction.basis_mu"),
     ("run", PAD, ["contact.pad_disc.friction.mu=0.4", "solver.dt=1e-5"], "solver.dt"),
     # Newmark on the full model with friction keeps S^-1 [C; Ct; Cc]^T: 12 GB here
     ("run", PAD, ["contact.pad_disc.friction.mu=0.4", 'solver.scheme="implicit"',

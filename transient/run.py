@@ -63,7 +63,7 @@ def run(case, path, resume=False, progress=None, key="output.file", built=None,
     stage; a resumed run continues the system stored in the history. Returns a RunResult; a
     run that stops early (NaN, energy drift, Ctrl-C) keeps every chunk in the file, marked
     `aborted: <reason>`. built: the first stages' results when built already (a campaign's
-    variants share them: stages.Built). on_setup(setup): called with a new run's setup (with
+    variants share them: shared.Built). on_setup(setup): called with a new run's setup (with
     Setup.unsampled) before the integration: a campaign's variant analyses its modes there.
     """
     check_transient(case)

@@ -13,7 +13,7 @@ from .case.signals import compile_signals
 from . import heap
 from .case.sizes import check_steps, parts_cells, peak_rss_gb, setup_bytes
 from .contact.contactset import first_tangent, stack
-from .contact.pair import GEOMETRY, build_contact, build_geometry, contact_stiffness
+from .contact.pair import build_contact, contact_stiffness
 from .dynamics import schemes
 from .dynamics.chunks import buffer
 from .dynamics.critical import CONTACT_OMEGA_DT, REMAINDER_OMEGA_DT, critical_tangent
@@ -22,68 +22,13 @@ from .dynamics.system import full_system, reduced_system
 from .errors import CaseError
 from .kernels.codes import ENERGY_TERMS, NO_CONVERGENCE, NOT_FINITE, OK
 from .model import build_model, constant_load
+from .reduce.basis import rebase
+from .reduce.reference import rebased, reference_basis
 from .reduce.stage import reduce
+from .shared import Built, factorization
 from .solve import blas
 from .solve.linsolve import why
-from .solve.lowrank import contact_solver
 from .solve.preload import PreloadError, solve_preload
-
-
-# The spec fields each shareable stage reads, with those of the stages before it
-# (tests/test_sweep.py records each stage's reads and holds it to these): variants equal on
-# them share the stage's result. A path through a table of named specs ("contact.k") reads
-# that field of every one of them. The loads and sensors are each variant's own, applied to
-# the shared model's structure (model.build_model): a pressure sweep shares every stage here.
-_MODEL = ("parts", "materials", "constraints", "solver.quadrature", "limits")
-_CONTACT = _MODEL + tuple(f"contact.{name}" for name in GEOMETRY)
-READS = {"model": _MODEL, "contact": _CONTACT,
-         "factorization": _CONTACT + ("solver.shift_hz", "solver.linear_solver")}
-SHARED = tuple(READS)       # the stages in order
-
-
-def stage_key(case, stage):
-    """What a stage's result depends on: the case's directory (its mesh files) and the reprs
-    of the fields it reads (frozen specs: equal reprs, equal inputs)."""
-    def field(x, names):
-        if isinstance(x, dict):
-            return tuple((k, field(v, names)) for k, v in x.items())
-        return field(getattr(x, names[0]), names[1:]) if names else repr(x)
-    return (str(case.directory),) + tuple(field(case, path.split("."))
-                                          for path in READS[stage])
-
-
-@dataclass(frozen=True)
-class Built:
-    """What the first stages built once give each of the variants that share them (a
-    campaign's: stage_key): the Model, the contact pairs' geometry, the factorization of
-    K - sigma M with the contact's low-rank update, as far as they go."""
-    model: object
-    geometry: list = None        # contact.pair.build_geometry of each pair
-    solver: object = None        # solve.lowrank.ContactSolver
-    seconds: dict = None         # stage -> seconds it took to build
-
-
-def build_shared(case, depth, built=None):
-    """The Built of a case's first stages to `depth` (one of SHARED), going on from `built`
-    (a Built of a shallower depth, for cases equal on its stages' READS)."""
-    stages = _Stages()
-    with blas.one_thread():
-        model = built.model if built is not None else stages.timed("model", build_model, case)
-        geometry = built.geometry if built is not None else None
-        if depth != "model" and case.contact and geometry is None:
-            geometry = stages.timed("contact", lambda: [build_geometry(case, model, name)
-                                                        for name in case.contact])
-        solver = (stages.timed("factorization", factorization, case, model,
-                               stack(geometry, model.ndof))
-                  if depth == "factorization" and case.contact else None)
-    seconds = {**(built.seconds if built is not None else {}), **stages}
-    return Built(model, geometry, solver, seconds)
-
-
-def factorization(case, model, contacts):
-    """K - sigma M factorized on the model's free dofs, with the contacts' low-rank update."""
-    return contact_solver(model, contacts, -(2 * np.pi * case.solver.shift_hz) ** 2,
-                          case.solver.linear_solver)
 
 
 @dataclass(frozen=True)
@@ -102,7 +47,7 @@ class Setup:
     #                           before the sampling (what the cea analyses; no rows0)
 
 
-class _Stages(dict):
+class Stages(dict):
     """Stage -> seconds, the process's peak memory when each ended (`peaks`, GB), and the check
     run between stages (a stop requested meanwhile)."""
 
@@ -138,7 +83,7 @@ def prepare(case, check=None, built=None, unsampled=False, analysis=False):
     linearized, not integrated (the cea's): it gets no critical step and the Setup no rows0
     (the critical step's eigenvalues were 0.3 s of pad_disc's cea, on its 7734 points)."""
     with blas.one_thread(), heap.setup():
-        return _prepare(case, _Stages(check), built or Built(None), unsampled, analysis)
+        return _prepare(case, Stages(check), built or Built(None), unsampled, analysis)
 
 
 def _prepare(case, stages, built, want_unsampled=False, analysis=False):
@@ -189,11 +134,24 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
     names = tuple(model.sensor_names) if case.output.sensors else ()
     if solver.reduction.enabled:
         M = sp.diags(model.lumped_mass).tocsr() if solver.mass == "lumped" else model.M
+        Mf = cs.M if M is model.M else None
         # the factors freed after the basis' last solve, unless a campaign's variants share them
+        release = cs.release if cs is not built.solver else None
+        basis, shared = None, built.basis
+        if shared is None and rebased(case):
+            shared = stages.timed("reference", reference_basis, case, model, M, pairs, cs,
+                                  patterns, Mf)
+        if shared is not None:
+            # a basis made at another friction (or this case's own, shared by a campaign)
+            basis = (shared.basis if not rebased(case) else stages.timed(
+                "reduction", rebase, shared.basis, shared.K0r, tangent.stiffness, M,
+                model.fixed, preload.u))
+            if release is not None:
+                release()           # the last solve was the preload's
+            release = None
         red = reduce(case, model, M, pairs, contacts, preload, patterns, v0, tangent,
-                     critical_tangent(contacts, preload.tangent), stages, cs.C,
-                     cs.M if M is model.M else None, cs.release if cs is not built.solver
-                     else None)
+                     critical_tangent(contacts, preload.tangent), stages, cs.C, Mf, release,
+                     basis)
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
         # the rows and operators on the reduced coordinates (0.8 s for the cea's 7734 points)
         system, state = stages.timed("reduced_system", _reduced, case, red, patterns, signals,

@@ -147,11 +147,19 @@ def _friction(case):
                 _fail(case, f"{key}.speeds", "expected increasing speeds")
             if f.mu != 0.0:
                 _fail(case, f"{key}.mu", "give mu or the table speeds / values, not both")
-        if not f.active:
+        if f.basis_mu:
+            if f.speeds:
+                _fail(case, f"{key}.basis_mu", "a basis at another friction coefficient needs "
+                      "a constant mu, not a table speeds / values")
+            if not case.solver.reduction.enabled:
+                _fail(case, f"{key}.basis_mu", "the basis is the reduced model's: set "
+                      "solver.reduction.enabled = true")
+        if not f.active and not f.basis_mu:
             continue
         parts = {_part_of(c.surface1)} | ({_part_of(c.surface2)} if not c.wall else set())
         if not parts & moving:
-            _fail(case, f"{key}.mu", f"friction needs sliding: no [motion] moves "
+            _fail(case, f"{key}.{'mu' if f.active else 'basis_mu'}", "friction needs "
+                  "sliding: no [motion] moves "
                   f"{' or '.join(sorted(parts))} (a rotation of the disc, a translation of "
                   "a belt)")
 

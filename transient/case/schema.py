@@ -230,6 +230,9 @@ CONTACT = Table("a contact pair: two face sets of two parts, gap observed on the
         "v_eps": Value("float", "slip velocity of the regularization: the law's slope at rest "
                        "is mu p w / v_eps, a viscous damper that bounds an explicit step",
                        1e-3, "m/s", open_min=0.0),
+        "basis_mu": Value("float", "friction coefficient the reduced basis is built at, then "
+                          "given the case's preload: a friction sweep's variants share it "
+                          "(transient sweep); 0: mu", 0.0, minimum=0.0, maximum=10.0),
     }, optional=True),
 })
 

@@ -68,6 +68,7 @@ class FrictionSpec:
     values: tuple
     regularization: str      # tanh, atan
     v_eps: float             # [m/s]
+    basis_mu: float = 0.0    # the reduced basis' friction coefficient; 0: mu's
 
     @property
     def active(self):

@@ -55,9 +55,10 @@ def fmax_of(case):
 
 def analyse(case, check=None, built=None):
     """Complex modes of a case at its steady sliding state (Analysis); built: its first
-    stages' results when built already (stages.Built: a campaign's variants share them)."""
+    stages' results when built already (shared.Built: a campaign's variants share them)."""
     from ..model import build_model
-    from ..stages import Built, prepare
+    from ..shared import Built
+    from ..stages import prepare
     stages = {}
     if built is not None and not case.solver.reduction.enabled:
         _bounded(case, int((~built.model.fixed).sum()))

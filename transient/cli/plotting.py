@@ -133,7 +133,7 @@ def _plot_cea(args):
     stem = Path(case.path).stem
     # the values of mu share the model, the contact's geometry and the factorization (the
     # full model, a small case's reference, is bounded by analyse before its setup)
-    from ..stages import build_shared
+    from ..shared import build_shared
     built = build_shared(case, "factorization") if case.solver.reduction.enabled else None
     result = analyse(case, built=built)
     mu = case.contact[pair].friction.mu

@@ -66,7 +66,7 @@ def _surface(case, model, ref, key):
 
 
 # The spec fields the pair's geometry reads (interface, compatibility, regularization, rule):
-# variants equal on them share it (stages.READS); the law and the friction are the variant's
+# variants equal on them share it (shared.READS); the law and the friction are the variant's
 GEOMETRY = ("surface1", "surface2", "wall", "wall_point", "wall_normal", "order", "k", "rule",
             "candidates", "points", "tolerance", "weights", "master", "regularized", "eps",
             "formulation", "project", "norm")

@@ -249,7 +249,7 @@ def _sensors(case, parts, ndof):
 def build_model(case, structure=None):
     """Mesh every part, assemble K and M, and apply constraints (the structure), then loads and
     sensors. structure: a Model built for a case equal on the structure's fields (those of
-    stages.READS['model']), whose meshes, K, M and constraints are taken as they are: only the
+    shared.READS['model']), whose meshes, K, M and constraints are taken as they are: only the
     loads and sensors are this case's (a campaign's pressure sweep shares the rest)."""
     if structure is not None:
         s = structure

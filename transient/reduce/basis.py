@@ -185,6 +185,48 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
                  timings, n_shapes, mu, n_static_kept, peaks)
 
 
+def rebase(basis, K0r, K_lin, M, fixed, u):
+    """A Basis made on another tangent (a reference friction's: reduce.reference) for the
+    tangent K_lin (lowrank.TangentStiffness on the free dofs) and the preload u (ndof,): u's
+    M-orthogonal remainder beyond T joins the basis as one column (so that the preload is
+    held exactly), and the whole is diagonalized again on K_lin. K0r: T^T K T of the
+    structure without the contact's update (T^T K_lin T is K0r plus the update's Gram: no
+    product of K with the n x r basis)."""
+    t0 = time.perf_counter()
+    free = np.flatnonzero(~fixed)
+    with blas.every_core():
+        T = basis.X[free] @ basis.A
+        Kr = K0r + K_lin.update_gram(T)
+        Mu = M @ u
+        r = u.copy()
+        for _ in range(2):            # twice, for round-off
+            r -= basis.expand(basis.coordinates(M @ r))
+        norm = np.sqrt(max(float(r @ (M @ r)), 0.0))
+        extra = norm > 1e-10 * np.sqrt(max(float(u @ Mu), 0.0))
+        X, A = basis.X, basis.A
+        if extra:
+            t = r / norm
+            Kt = K_lin @ t[free]
+            corner = np.array([[t[free] @ Kt]])
+            Kr = np.block([[Kr, (T.T @ Kt)[:, None]], [(Kt @ T)[None, :], corner]])
+            X = np.hstack([X, t[:, None]])
+            A = np.block([[A, np.zeros((A.shape[0], 1))], [np.zeros((1, A.shape[1])), 1.0]])
+        omega2, W = sla.eigh(0.5 * (Kr + Kr.T))
+        A = A @ W
+    timings = {"rebase": time.perf_counter() - t0}
+    return Basis(X, A, np.maximum(omega2, 0.0), basis.n_modes, basis.n_static + 1, timings,
+                 basis.n_contact_shapes, basis.contact_flexibility,
+                 basis.n_static_kept + int(extra), {"rebase": peak_rss_gb()})
+
+
+def structural_gram(basis, K_lin, fixed):
+    """T^T K T of a Basis diagonalized on K_lin (lowrank.TangentStiffness): diag(omega^2)
+    without the contact's update (rebase's K0r)."""
+    with blas.every_core():
+        T = basis.X[np.flatnonzero(~fixed)] @ basis.A
+        return np.diag(basis.omega2) - K_lin.update_gram(T)
+
+
 def _grams(M, K, S, shared=None):
     """(S^T M S, S^T K S) for M sparse and K a lowrank.TangentStiffness, by column blocks of
     M S and K S (K.with_mass: one pass over the pattern and the block for both; shared as

@@ -42,33 +42,21 @@ def candidates(case, pairs, contacts):
 
 
 def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_crit, stages,
-           rows=None, Mf=None, solved=None):
+           rows=None, Mf=None, solved=None, basis=None):
     """The reduced model of a case (solver.reduction) on its linearized stiffness K_lin, the
     tangent solve's (solve: lowrank.TangentSolve; solve.stiffness is K_lin on the free dofs).
     rows: the contact rows on the free dofs, when the factorization stage has them; without
     them, a solve that holds the rows' space (solve.row_space) stands for them. Mf: M on the
     free dofs when the caller has it. solved: called once the basis has made its last solve
-    (reduced_basis)."""
+    (reduced_basis). basis: the case's Basis made already (reduce.reference: of a reference
+    friction, rebased on this K_lin), or None to make it here."""
     from time import perf_counter
     reduction = case.solver.reduction
-    loads = [np.stack(patterns, axis=1)] if patterns and reduction.statics else []
-    K_lin, free = solve.stiffness, ~model.fixed
-    Ku = np.zeros((model.ndof, 1))
-    Ku[free] = K_lin @ preload.u[free][:, None]     # its response is the preload itself
-    loads.append(Ku)
-    known = getattr(solve, "row_space", None)
-    if rows is None and not (known is not None and len(known.Rm) == contacts.n_points
-                             and reduction.statics_tolerance > 0):
-        rows = contacts.C        # the contact shapes need the rows themselves
-    contact = ((rows, contacts.weights * kt_crit)
-               if reduction.statics and contacts.n_points else None)
     t0 = perf_counter()
-    coupling = (_friction_loads(contacts, preload, free)
-                if contacts.friction is not None and reduction.statics else None)
-    basis = reduced_basis(K_lin, M, model.fixed, reduction.fmax, np.hstack(loads), solve,
-                          case.solver.shift_hz, contact, reduction.statics_tolerance, coupling,
-                          Mf, solved)
-    stages["reduction"] = perf_counter() - t0
+    if basis is None:
+        basis = make_basis(case, model, M, contacts, preload, patterns, solve, kt_crit, rows,
+                           Mf, solved)
+    stages["reduction"] = stages.get("reduction", 0.0) + perf_counter() - t0
     # T^T (M u): two sparse products with vectors, not one with the n x r basis
     q0, v = basis.coordinates(M @ preload.u), basis.coordinates(M @ v0)
     meta = {"reduced_dofs": len(basis.omega2), "normal_modes": basis.n_modes,
@@ -106,6 +94,30 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
                                     _sampled_pairs(pairs, contacts, sampled.keep,
                                                    sampled.contacts), held, meta, unsampled),
                        cap)
+
+
+def make_basis(case, model, M, contacts, preload, patterns, solve, kt_crit, rows=None,
+               Mf=None, solved=None):
+    """The Basis of the case's preloaded structure on the tangent solve's K_lin (reduce's
+    arguments): its modes, the contact shapes, the friction's coupling loads' and the load
+    patterns' responses, and the preload itself."""
+    reduction = case.solver.reduction
+    loads = [np.stack(patterns, axis=1)] if patterns and reduction.statics else []
+    K_lin, free = solve.stiffness, ~model.fixed
+    Ku = np.zeros((model.ndof, 1))
+    Ku[free] = K_lin @ preload.u[free][:, None]     # its response is the preload itself
+    loads.append(Ku)
+    known = getattr(solve, "row_space", None)
+    if rows is None and not (known is not None and len(known.Rm) == contacts.n_points
+                             and reduction.statics_tolerance > 0):
+        rows = contacts.C        # the contact shapes need the rows themselves
+    contact = ((rows, contacts.weights * kt_crit)
+               if reduction.statics and contacts.n_points else None)
+    coupling = (_friction_loads(contacts, preload, free)
+                if contacts.friction is not None and reduction.statics else None)
+    return reduced_basis(K_lin, M, model.fixed, reduction.fmax, np.hstack(loads), solve,
+                         case.solver.shift_hz, contact, reduction.statics_tolerance, coupling,
+                         Mf, solved)
 
 
 def mass_scaled(red, cap_hz):

@@ -81,6 +81,17 @@ class TangentStiffness:
         MX, KX = csr_dot_pair(M, self.K, X, shared)
         return MX, self._updated(X, KX)
 
+    def update_gram(self, X):
+        """X^T U X for the update U = C^T diag(d) C of K, X (n, s) on the free dofs: from the
+        rows' space or the rows' products with X, never U X whole."""
+        if self.V is not None:
+            B = self.V.T @ X[self.cols]
+            return B.T @ (self.core @ B)
+        if self.C is not None:
+            CX = self.C @ X
+            return CX.T @ (self.d[:, None] * CX)
+        return np.zeros((X.shape[1], X.shape[1]))
+
     def _updated(self, X, out):
         """out = K X plus the update times X."""
         if self.V is not None:

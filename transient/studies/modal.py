@@ -13,7 +13,7 @@ from ..errors import CaseError
 from ..model import build_model
 from ..solve.modes import mac_pairs, receptance
 from ..solve.tied import contact_modes
-from ..stages import stage_key
+from ..shared import stage_key
 
 POINTS = 4000     # frequencies of the transfer function
 
@@ -43,7 +43,7 @@ def sensor_row(case, model, name, key):
 
 def compare(case_a, case_b, sensor_in, sensor_out, damping, fmax=None):
     """The ModalComparison of two cases of one structure: modes by their solver.modes (tie
-    included), pairs by MAC when both share a model (stages.stage_key), else by order."""
+    included), pairs by MAC when both share a model (shared.stage_key), else by order."""
     model_a = build_model(case_a)
     # one structure: the second model is the first's with its own loads and sensors
     shared = stage_key(case_a, "model") == stage_key(case_b, "model")

@@ -5,7 +5,7 @@ each, with BLAS, MKL, OpenMP and Numba at one thread set in their environment be
 start (so that a worker is the one-thread `transient run` it stands for, and N of them share
 the cores); the Numba cache is shared, its first compile serialized by transient.jit's lock.
 --scheduler ADDRESS runs the same tasks on an existing cluster instead (dask-jobqueue on
-SLURM: the README). Variants equal on the fields a first stage reads (stages.READS: the
+SLURM: the README). Variants equal on the fields a first stage reads (shared.READS: the
 model's structure, the contact pairs' geometry, the factorization with the contact's low-rank
 update) share its result, built once by a task of its own and sent to each worker once (a
 factorization is made again where it lands: PARDISO's handle does not travel). A task whose
@@ -31,10 +31,10 @@ FIRST = ("variant", "status", "seconds")
 def check_variants(case_path, overrides, variants, kind):
     """Load every variant (and, for runs, check what the transient refuses) before anything
     runs: the first bad one is a CaseError naming it. Returns each variant's keys of the
-    shareable stages (stages.stage_key, by stage): variants with equal keys share them."""
+    shareable stages (shared.stage_key, by stage): variants with equal keys share them."""
     from ..case.checks import check_transient
     from ..case.loading import load
-    from ..stages import SHARED, stage_key
+    from ..shared import SHARED, stage_key
     keys = {}
     for v in variants:
         try:
@@ -116,7 +116,7 @@ def _gather(client, case_path, overrides, todo, out, kind, rows, total, progress
     an argument of theirs, so it is built once and travels to each worker once (the
     scheduler keeps it where it is needed)."""
     from dask.distributed import as_completed
-    from ..stages import SHARED
+    from ..shared import SHARED
     built, counts, before = {}, {}, {v.name: None for v in todo}
     for depth in SHARED:
         groups = {}

@@ -45,7 +45,7 @@ def output_path(out, name, kind):
 
 def run_variant(case_path, overrides, out, kind, built=None):
     """The row of one variant: status, seconds, the stages it ran and the summary numbers of
-    its kind. built: the first stages' results it shares with others (stages.Built), or
+    its kind. built: the first stages' results it shares with others (shared.Built), or
     None to build them."""
     t0 = time.perf_counter()
     try:
@@ -61,10 +61,10 @@ def run_variant(case_path, overrides, out, kind, built=None):
 
 
 def build_shared(case_path, overrides, depth, built=None):
-    """The first stages, to `depth`, of a group of variants that share them (stages.stage_key),
+    """The first stages, to `depth`, of a group of variants that share them (shared.stage_key),
     built once, going on from a shallower group's `built`."""
     from ..case.loading import load
-    from ..stages import build_shared
+    from ..shared import build_shared
     return build_shared(load(case_path, overrides), depth, built)
 
 
