@@ -75,6 +75,18 @@ def test_the_rebased_model_holds_its_preload_and_one_more_direction():
     assert "reference" in rebased.stages and "reference" not in own.stages
 
 
+def test_a_rebased_run_takes_the_points_and_weights_sampled_at_the_reference():
+    """The sampled rule's points and weights are the reference's (chosen once, on its basis
+    and preload: physical points, whatever the coordinates), the reduced preload the case's."""
+    at = prepare(small(MU + "0.3"))
+    rebased = prepare(small(MU + "0.4", BASIS + "0.3"))
+    a, b = at.system.contacts, rebased.system.contacts
+    assert a.n_points == b.n_points > 0
+    assert np.array_equal(a.weights, b.weights)
+    assert rebased.meta["sampling"]["residual"] == at.meta["sampling"]["residual"]
+    assert not np.array_equal(at.state.gmin, rebased.state.gmin)      # its own preload
+
+
 def test_the_update_gram_and_the_structural_part_against_direct_products():
     """T^T U T (lowrank.TangentStiffness.update_gram) against T^T (K_lin T - K T), and the
     reference basis' K0r + T^T U T against T^T K_lin T = diag(omega^2)."""

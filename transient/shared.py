@@ -27,9 +27,10 @@ _CONTACT = _MODEL + tuple(f"contact.{name}" for name in GEOMETRY)
 _FACTORIZATION = _CONTACT + ("solver.shift_hz", "solver.linear_solver")
 # the basis: of the case at its reference friction (reduce.reference.reference_case, whose
 # key a friction sweep's variants share when they give one basis_mu); its preload reads the
-# loads, the laws, the friction and the sliding
+# loads, the laws, the friction and the sliding, and a sampled rule's points its tolerance
 _BASIS = _FACTORIZATION + ("loads", "motion", "contact.law", "contact.friction",
-                           "solver.newton", "solver.mass", "solver.reduction.enabled",
+                           "contact.sampling_tolerance", "solver.newton", "solver.mass",
+                           "solver.reduction.enabled",
                            "solver.reduction.fmax", "solver.reduction.statics",
                            "solver.reduction.statics_tolerance")
 READS = {"model": _MODEL, "contact": _CONTACT, "factorization": _FACTORIZATION,

@@ -137,7 +137,7 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
         Mf = cs.M if M is model.M else None
         # the factors freed after the basis' last solve, unless a campaign's variants share them
         release = cs.release if cs is not built.solver else None
-        basis, shared = None, built.basis
+        basis, sample, shared = None, None, built.basis
         if shared is None and rebased(case):
             shared = stages.timed("reference", reference_basis, case, model, M, pairs, cs,
                                   patterns, Mf)
@@ -146,12 +146,13 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
             basis = (shared.basis if not rebased(case) else stages.timed(
                 "reduction", rebase, shared.basis, shared.K0r, tangent.stiffness, M,
                 model.fixed, preload.u))
+            sample = shared.sample
             if release is not None:
                 release()           # the last solve was the preload's
             release = None
         red = reduce(case, model, M, pairs, contacts, preload, patterns, v0, tangent,
                      critical_tangent(contacts, preload.tangent), stages, cs.C, Mf, release,
-                     basis)
+                     basis, sample)
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
         # the rows and operators on the reduced coordinates (0.8 s for the cea's 7734 points)
         system, state = stages.timed("reduced_system", _reduced, case, red, patterns, signals,

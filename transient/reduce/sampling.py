@@ -208,7 +208,7 @@ class Sampled:
 
 
 def sample_contact(contacts, candidate, omega2, Cr, q0, gap, pressure, tangent, band, tol,
-                   max_points, newton_tol=1e-10, max_iter=50, tangential=None):
+                   max_points, newton_tol=1e-10, max_iter=50, tangential=None, given=None):
     """Sample the candidate points (bool mask) of a reduced model built on the rich rule, then
     re-solve the preload with the points kept and re-diagonalize the linearized stiffness.
 
@@ -217,15 +217,17 @@ def sample_contact(contacts, candidate, omega2, Cr, q0, gap, pressure, tangent, 
     kept with their weights and left out of the features (their contribution is exact).
     tangential: (Ct, Cc) the rich model's tangential rows, with friction (contacts.friction):
     the points then reproduce the friction's coupling and damping too, and the reduced preload
-    is the steady sliding one.
+    is the steady sliding one. given: the points and weights (a Sample) chosen already, on
+    another preload of the same candidates (reduce.reference), or None to choose them here.
     """
     cand = np.flatnonzero(candidate)
     w = contacts.weights
     f = contacts.friction
     friction = (None if f is None else
                 (tangential[0][cand], tangential[1][cand], f.m[cand], f.dm[cand], f.turn[cand]))
-    s = sample(omega2, Cr[cand], w[cand], pressure[cand], tangent[cand], q0, band, tol,
-               max_points or len(cand), friction)
+    s = given if given is not None else sample(omega2, Cr[cand], w[cand], pressure[cand],
+                                               tangent[cand], q0, band, tol,
+                                               max_points or len(cand), friction)
     weights = w.copy()
     weights[cand] = 0.0
     weights[cand[s.chosen]] = s.weights

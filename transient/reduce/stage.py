@@ -42,14 +42,15 @@ def candidates(case, pairs, contacts):
 
 
 def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_crit, stages,
-           rows=None, Mf=None, solved=None, basis=None):
+           rows=None, Mf=None, solved=None, basis=None, sample=None):
     """The reduced model of a case (solver.reduction) on its linearized stiffness K_lin, the
     tangent solve's (solve: lowrank.TangentSolve; solve.stiffness is K_lin on the free dofs).
     rows: the contact rows on the free dofs, when the factorization stage has them; without
     them, a solve that holds the rows' space (solve.row_space) stands for them. Mf: M on the
     free dofs when the caller has it. solved: called once the basis has made its last solve
     (reduced_basis). basis: the case's Basis made already (reduce.reference: of a reference
-    friction, rebased on this K_lin), or None to make it here."""
+    friction, rebased on this K_lin), or None to make it here; sample: a sampled rule's points
+    and weights (sampling.Sample) chosen already (at that reference), or None to choose them."""
     from time import perf_counter
     reduction = case.solver.reduction
     t0 = perf_counter()
@@ -76,11 +77,8 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
         return unsampled
     stages.check()
     t0 = perf_counter()
-    with blas.every_core():      # dense algebra on the reduced coordinates, no solve
-        Cr = contacts.observe(basis.X, basis.A)
-        tangential = (None if contacts.friction is None else
-                      contacts.observe_tangential(basis.X, basis.A))
-        sampled = _sample(case, contacts, mask, basis.omega2, Cr, q0, preload, tangential)
+    sampled = sample_on(case, contacts, mask, basis, q0, preload, sample)
+    with blas.every_core():
         AW = basis.A @ sampled.W
     stages["sampling"] = perf_counter() - t0
     held = Preload(basis.X @ (AW @ sampled.q), sampled.gap, sampled.pressure, sampled.tangent,
@@ -157,9 +155,21 @@ def _friction_loads(contacts, preload, free):
     return loads
 
 
-def _sample(case, contacts, candidate, omega2, Cr, q0, preload, tangential=None):
+def sample_on(case, contacts, candidate, basis, q0, preload, sample=None):
+    """The sampled rule's points on a Basis and the reduced preload they hold (_sample), with
+    the rows observed on the basis' coordinates."""
+    with blas.every_core():      # dense algebra on the reduced coordinates, no solve
+        Cr = contacts.observe(basis.X, basis.A)
+        tangential = (None if contacts.friction is None else
+                      contacts.observe_tangential(basis.X, basis.A))
+        return _sample(case, contacts, candidate, basis.omega2, Cr, q0, preload, tangential,
+                       sample)
+
+
+def _sample(case, contacts, candidate, omega2, Cr, q0, preload, tangential=None, sample=None):
     """The sampled rule's points (sampling.py), with the reduced preload they hold. The points
-    of every sampled pair are chosen together, to the first one's tolerance and cap."""
+    of every sampled pair are chosen together, to the first one's tolerance and cap (or
+    given: sample)."""
     solver = case.solver
     name = next(n for n, s in contacts.slices.items() if candidate[s].any())
     spec = case.contact[name]
@@ -168,7 +178,8 @@ def _sample(case, contacts, candidate, omega2, Cr, q0, preload, tangential=None)
         return sample_contact(contacts, candidate, omega2, Cr, q0, preload.gap,
                               preload.pressure, preload.tangent, band,
                               spec.sampling_tolerance, spec.points,
-                              solver.newton.tolerance, solver.newton.max_iter, tangential)
+                              solver.newton.tolerance, solver.newton.max_iter, tangential,
+                              sample)
     except ReducedPreloadError as exc:
         raise CaseError(case.path, f"contact.{name}.sampling_tolerance", str(exc)) from None
 
