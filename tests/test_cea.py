@@ -245,10 +245,14 @@ def test_nodal_diameter_of_a_disc_wave():
         assert shares["disc"] == pytest.approx(1.0) and shares["pad"] == 0.0
 
 
-def test_plot_cea_draws_the_diagram_the_unstable_shapes_and_the_mu_map(tmp_path, capsys):
+@pytest.mark.parametrize("basis", [[], ["contact.pad_disc.friction.basis_mu=0.3"]])
+def test_plot_cea_draws_the_diagram_the_unstable_shapes_and_the_mu_map(tmp_path, capsys,
+                                                                      basis):
+    """(With a basis_mu, the values of mu share one basis.)"""
     from PIL import Image
     args = ["plot", "cea", str(PAD), "--out", str(tmp_path), "--mu", "0:0.4:2"]
-    args += [a for o in SMALL + ["contact.pad_disc.friction.mu=0.4"] for a in ("--set", o)]
+    args += [a for o in SMALL + ["contact.pad_disc.friction.mu=0.4"] + basis
+             for a in ("--set", o)]
     assert main(args) == 0
     paths = [Path(p) for p in capsys.readouterr().out.split()]
     names = [p.name for p in paths]

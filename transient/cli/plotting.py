@@ -132,10 +132,19 @@ def _plot_cea(args):
         raise CaseError(case.path, "--out", f"cannot create: {exc}") from None
     stem = Path(case.path).stem
     # the values of mu share the model, the contact's geometry and the factorization (the
-    # full model, a small case's reference, is bounded by analyse before its setup)
-    from ..shared import build_shared
-    built = build_shared(case, "factorization") if case.solver.reduction.enabled else None
-    result = analyse(case, built=built)
+    # full model, a small case's reference, is bounded by analyse before its setup), and the
+    # basis when the case makes it at a basis_mu (those equal on its key)
+    from ..shared import build_shared, stage_key
+    built = basis = None
+    if case.solver.reduction.enabled:
+        built = build_shared(case, "factorization")
+        if any(c.friction.basis_mu for c in case.contact.values()):
+            basis = build_shared(case, "basis", built)
+
+    def shared(v):
+        same = basis is not None and stage_key(v, "basis") == stage_key(case, "basis")
+        return basis if same else built
+    result = analyse(case, built=shared(case))
     mu = case.contact[pair].friction.mu
     paths = [out / f"{stem}_stability.png"]
     stability_figure(result, paths[0], f"{stem}: complex modes at mu = {mu:g}")
@@ -151,7 +160,7 @@ def _plot_cea(args):
         print(f"error: {exc}", file=sys.stderr)
         return 1
     if mus:
-        analyses = [analyse(v, built=built) for v in variants]
+        analyses = [analyse(v, built=shared(v)) for v in variants]
         path = out / f"{stem}_mu_map.png"
         mu_map_figure(mus, analyses, path, f"{stem}: complex modes against mu ({pair})")
         paths.append(path)
