@@ -114,7 +114,32 @@ def test_the_update_gram_and_the_structural_part_against_direct_products():
     KT = K @ T.copy()
     U = T.T @ (KT - K.K @ T)
     scale = basis.omega2.max()
-    np.testing.assert_allclose(K.update_gram(T), U, atol=1e-11 * scale)
+    np.testing.assert_allclose(K.update_gram(lambda idx: T[idx], T.shape[1]), U,
+                               atol=1e-11 * scale)
     np.testing.assert_allclose(T.T @ KT, np.diag(basis.omega2), atol=1e-9 * scale)
     K0r = structural_gram(basis, K, model.fixed)
     np.testing.assert_allclose(K0r, T.T @ (K.K @ T), atol=1e-9 * scale)
+
+
+def test_the_update_gram_in_both_forms_against_dense_products():
+    """X^T C^T diag(d) C X from the rows (C, d) and from the rows' space (cols, V, core), given
+    X by its rows, against the dense product and the operator's own."""
+    import scipy.sparse as sp
+    from transient.solve.lowrank import TangentStiffness
+    rng = np.random.default_rng(0)
+    n, p, s = 40, 12, 5
+    K = sp.random(n, n, density=0.2, random_state=1, format="csr")
+    K = (K + K.T).tocsr()
+    C = sp.random(p, n, density=0.1, random_state=2, format="csr")
+    d = rng.random(p)
+    X = rng.standard_normal((n, s))
+    ref = (C @ X).T @ (d[:, None] * (C @ X))
+    cols = np.unique(C.indices)
+    assert len(cols) < n                       # the rows touch some dofs only
+    Q, R = np.linalg.qr(C[:, cols].toarray().T)
+    forms = [TangentStiffness(K, C=C, d=d),
+             TangentStiffness(K, cols=cols, V=Q, core=R @ (d[:, None] * R.T))]
+    for form in forms:
+        np.testing.assert_allclose(form.update_gram(lambda idx: X[idx], s), ref, rtol=1e-10)
+        np.testing.assert_allclose(X.T @ (form @ X.copy() - K @ X), ref, rtol=1e-10,
+                                   atol=1e-12)

@@ -190,27 +190,27 @@ def rebase(basis, K0r, K_lin, M, fixed, u):
     tangent K_lin (lowrank.TangentStiffness on the free dofs) and the preload u (ndof,): u's
     M-orthogonal remainder beyond T joins the basis as one column (so that the preload is
     held exactly), and the whole is diagonalized again on K_lin. K0r: T^T K T of the
-    structure without the contact's update (T^T K_lin T is K0r plus the update's Gram: no
-    product of K with the n x r basis)."""
+    structure without the contact's update (T^T K_lin T is K0r plus the update's Gram on the
+    rows of T at the interface dofs: T itself, n x r, is never formed)."""
     t0 = time.perf_counter()
     free = np.flatnonzero(~fixed)
+    n = len(basis.omega2)
     with blas.every_core():
-        T = basis.X[free] @ basis.A
-        Kr = K0r + K_lin.update_gram(T)
-        Mu = M @ u
+        Kr = K0r + K_lin.update_gram(_rows_of(basis, free), n)
         r = u.copy()
         for _ in range(2):            # twice, for round-off
             r -= basis.expand(basis.coordinates(M @ r))
         norm = np.sqrt(max(float(r @ (M @ r)), 0.0))
-        extra = norm > 1e-10 * np.sqrt(max(float(u @ Mu), 0.0))
+        extra = norm > 1e-10 * np.sqrt(max(float(u @ (M @ u)), 0.0))
         X, A = basis.X, basis.A
         if extra:
             t = r / norm
-            Kt = K_lin @ t[free]
-            corner = np.array([[t[free] @ Kt]])
-            Kr = np.block([[Kr, (T.T @ Kt)[:, None]], [(Kt @ T)[None, :], corner]])
+            Kt = np.zeros_like(t)
+            Kt[free] = K_lin @ t[free]
+            TKt = basis.coordinates(Kt)
+            Kr = np.block([[Kr, TKt[:, None]], [TKt[None, :], np.array([[t @ Kt]])]])
             X = np.hstack([X, t[:, None]])
-            A = np.block([[A, np.zeros((A.shape[0], 1))], [np.zeros((1, A.shape[1])), 1.0]])
+            A = np.block([[A, np.zeros((A.shape[0], 1))], [np.zeros((1, n)), 1.0]])
         omega2, W = sla.eigh(0.5 * (Kr + Kr.T))
         A = A @ W
     timings = {"rebase": time.perf_counter() - t0}
@@ -223,8 +223,13 @@ def structural_gram(basis, K_lin, fixed):
     """T^T K T of a Basis diagonalized on K_lin (lowrank.TangentStiffness): diag(omega^2)
     without the contact's update (rebase's K0r)."""
     with blas.every_core():
-        T = basis.X[np.flatnonzero(~fixed)] @ basis.A
-        return np.diag(basis.omega2) - K_lin.update_gram(T)
+        rows = _rows_of(basis, np.flatnonzero(~fixed))
+        return np.diag(basis.omega2) - K_lin.update_gram(rows, len(basis.omega2))
+
+
+def _rows_of(basis, free):
+    """rows(idx): the basis T = X A at the free dofs idx (indices among the free dofs)."""
+    return lambda idx: basis.X[free[idx]] @ basis.A
 
 
 def _grams(M, K, S, shared=None):

@@ -81,16 +81,18 @@ class TangentStiffness:
         MX, KX = csr_dot_pair(M, self.K, X, shared)
         return MX, self._updated(X, KX)
 
-    def update_gram(self, X):
-        """X^T U X for the update U = C^T diag(d) C of K, X (n, s) on the free dofs: from the
-        rows' space or the rows' products with X, never U X whole."""
+    def update_gram(self, rows, s):
+        """X^T U X for the update U = C^T diag(d) C of K and a block X (n, s) on the free dofs
+        given by its rows: rows(idx) is X[idx] (only the dofs the update touches are asked:
+        a basis' X A is never formed whole). From the rows' space, or the rows' products."""
         if self.V is not None:
-            B = self.V.T @ X[self.cols]
+            B = self.V.T @ rows(self.cols)
             return B.T @ (self.core @ B)
         if self.C is not None:
-            CX = self.C @ X
+            cols = np.unique(self.C.indices)
+            CX = self.C[:, cols] @ rows(cols)
             return CX.T @ (self.d[:, None] * CX)
-        return np.zeros((X.shape[1], X.shape[1]))
+        return np.zeros((s, s))
 
     def _updated(self, X, out):
         """out = K X plus the update times X."""
