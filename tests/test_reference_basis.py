@@ -73,6 +73,9 @@ def test_the_rebased_model_holds_its_preload_and_one_more_direction():
     assert own.meta["basis_projection_error"] < 1e-6      # its solve's accuracy (1.4e-8)
     assert rebased.meta["reduced_dofs"] == own.meta["reduced_dofs"] + 1
     assert "reference" in rebased.stages and "reference" not in own.stages
+    assert rebased.meta["basis_mu"] == {"pad_disc": 0.3} and "basis_mu" not in own.meta
+    from transient.cli.commands import _model_line
+    assert "made at mu = 0.3 on pad_disc" in _model_line(rebased.meta)
 
 
 def test_a_rebased_run_takes_the_points_and_weights_sampled_at_the_reference():

@@ -21,7 +21,8 @@ from .solve.lowrank import contact_solver
 # (tests/test_sweep.py records each stage's reads and holds it to these): variants equal on
 # them share the stage's result. A path through a table of named specs ("contact.k") reads
 # that field of every one of them. The loads and sensors are each variant's own, applied to
-# the shared model's structure (model.build_model): a pressure sweep shares every stage here.
+# the shared model's structure (model.build_model): a pressure sweep shares the model, the
+# contact and the factorization.
 _MODEL = ("parts", "materials", "constraints", "solver.quadrature", "limits")
 _CONTACT = _MODEL + tuple(f"contact.{name}" for name in GEOMETRY)
 _FACTORIZATION = _CONTACT + ("solver.shift_hz", "solver.linear_solver")
@@ -55,7 +56,8 @@ def stage_key(case, stage):
 class Built:
     """What the first stages built once give each of the variants that share them (a
     campaign's: stage_key): the Model, the contact pairs' geometry, the factorization of
-    K - sigma M with the contact's low-rank update, as far as they go."""
+    K - sigma M with the contact's low-rank update and the basis at a reference friction, as
+    far as they go."""
     model: object
     geometry: list = None        # contact.pair.build_geometry of each pair
     solver: object = None        # solve.lowrank.ContactSolver

@@ -154,6 +154,9 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
                      critical_tangent(contacts, preload.tangent), stages, cs.C, Mf, release,
                      basis, sample)
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
+        if rebased(case):
+            meta["basis_mu"] = {name: c.friction.basis_mu for name, c in case.contact.items()
+                                if c.friction.basis_mu}
         # the rows and operators on the reduced coordinates (0.8 s for the cea's 7734 points)
         system, state = stages.timed("reduced_system", _reduced, case, red, patterns, signals,
                                      sensors, names, not analysis)

@@ -180,6 +180,9 @@ def _model_line(meta):
                      f"({meta.get('normal_modes', '?')} modes and {kept} of {asked} static "
                      "shapes" + ("; the others lie in the span of the rest)" if kept < asked
                                  else ")"))
+    for name, mu in (meta.get("basis_mu") or {}).items():
+        parts.append(f"its basis and sampled points made at mu = {mu:g} on {name}, then given "
+                     "this preload")
     for name, p in (meta.get("pairs") or {}).items():
         of = f" of {p['candidates']}" if p.get("candidates") else ""
         parts.append(f"{name}: {p.get('rule', '?')} rule, {p.get('points', '?')}{of} points")

@@ -38,7 +38,6 @@ class SharedBasis:
     K0r: np.ndarray          # (n, n) T^T K T without the contact's update (rebase)
     sample: object = None    # a sampled rule's points and weights chosen on that basis and
     #                          preload (sampling.Sample), or None
-    seconds: float = 0.0
 
 
 def reference_case(case):
@@ -63,8 +62,6 @@ def rebased(case):
 def reference_basis(case, model, M, pairs, cs, patterns, Mf=None):
     """The SharedBasis of reference_case(case) on the model, its pairs (any friction: their
     geometry is taken) and the factorization cs (lowrank.ContactSolver)."""
-    import time
-    t0 = time.perf_counter()
     ref = reference_case(case)
     pairs = [attach(ref, p) for p in pairs]
     contacts = stack(pairs, model.ndof)
@@ -86,4 +83,4 @@ def reference_basis(case, model, M, pairs, cs, patterns, Mf=None):
         # the points and weights as reduce chooses them on this basis and preload
         sample = sample_on(ref, contacts, mask, basis, basis.coordinates(M @ preload.u),
                            preload).sample
-    return SharedBasis(basis, K0r, sample, time.perf_counter() - t0)
+    return SharedBasis(basis, K0r, sample)
