@@ -363,10 +363,14 @@ def test_a_friction_sweep_at_one_basis_mu_shares_the_basis(tmp_path):
                               capture_output=True, text=True, env=env, timeout=600)
         assert done.returncode == 0, done.stderr
         return done.stdout
-    rows = json.loads(transient("sweep", str(PAD), "--param",
-                                "contact.pad_disc.friction.mu=[0.0,0.2,0.4]", "--kind", "both",
-                                "--workers", "2", "--out", str(out),
-                                "--json").splitlines()[-1])["rows"]
+    def swept(kind, where):
+        return json.loads(transient("sweep", str(PAD), "--param",
+                                    "contact.pad_disc.friction.mu=[0.0,0.2,0.4]", "--kind",
+                                    kind, "--workers", "2", "--out", str(where),
+                                    "--json").splitlines()[-1])["rows"]
+    rows = swept("both", out)
+    # a cea campaign's basis is built as `transient cea` builds it (no points sampled)
+    ceas = swept("cea", tmp_path / "cea")
     saved = json.loads((out / "sweep.json").read_text())
     assert saved["shared"] == {"model": 1, "contact": 1, "factorization": 1, "basis": 1}
     for row, mu in zip(rows, (0.0, 0.2, 0.4)):
@@ -382,9 +386,11 @@ def test_a_friction_sweep_at_one_basis_mu_shares_the_basis(tmp_path):
             assert np.array_equal(got[name], ref[name]), (mu, name)
         cea = json.loads(transient("cea", str(PAD), "--json",
                                    f"--set=contact.pad_disc.friction.mu={mu}"))
-        modes = json.loads((out / row["modes_output"]).read_text())["modes"]
-        assert [(m["frequency_hz"], m["real"]) for m in modes] == [
-            (m["frequency_hz"], m["real"]) for m in cea["modes"]]
+        for modes in (json.loads((out / row["modes_output"]).read_text())["modes"],
+                      json.loads((tmp_path / "cea" / ceas[rows.index(row)]["output"])
+                                 .read_text())["modes"]):
+            assert [(m["frequency_hz"], m["real"]) for m in modes] == [
+                (m["frequency_hz"], m["real"]) for m in cea["modes"]]
         # one by one, the variant makes the basis at 0.2 itself (its own at 0.2)
         assert ("reference" in summary(alone)["meta"]["stages"]) == (mu != 0.2)
     assert rows[2]["growth_rate"] > 500 and rows[2]["unstable"] >= 1

@@ -128,7 +128,7 @@ def _gather(client, case_path, overrides, todo, out, kind, rows, total, progress
                 continue
             future = client.submit(build_shared, str(case_path),
                                    list(overrides) + members[0].overrides(), depth,
-                                   before[members[0].name],
+                                   before[members[0].name], kind,
                                    key=f"{depth}-{counts[depth]}-{time.time_ns()}", pure=False)
             counts[depth] += 1
             for v in members:

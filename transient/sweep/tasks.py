@@ -60,12 +60,15 @@ def run_variant(case_path, overrides, out, kind, built=None):
     return row
 
 
-def build_shared(case_path, overrides, depth, built=None):
+def build_shared(case_path, overrides, depth, built=None, kind="run"):
     """The first stages, to `depth`, of a group of variants that share them (shared.stage_key),
-    built once, going on from a shallower group's `built`."""
+    built once, going on from a shallower group's `built`. A cea campaign's basis is made as
+    its analyses make theirs, on the sampled rules' candidates: no points sampled for it."""
     from ..case.loading import load
+    from ..cea.stage import analysed_case
     from ..shared import build_shared
-    return build_shared(load(case_path, overrides), depth, built)
+    case = load(case_path, overrides)
+    return build_shared(analysed_case(case) if kind == "cea" else case, depth, built)
 
 
 def _run(case, out, built, on_setup=None):
