@@ -105,7 +105,7 @@ def parse_values(text):
 
 
 def _plot_cea(args):
-    from ..cea.stage import analyse
+    from ..cea.stage import analyse, analysed_case
     from ..plots.cea import mode_figure, mu_map_figure, stability_figure
     from ..plots.render import RenderingUnavailable
     case = load(args.case, args.overrides)
@@ -133,13 +133,14 @@ def _plot_cea(args):
     stem = Path(case.path).stem
     # the values of mu share the model, the contact's geometry and the factorization (the
     # full model, a small case's reference, is bounded by analyse before its setup), and the
-    # basis when the case makes it at a basis_mu (those equal on its key)
+    # basis when the case makes it at a basis_mu (those equal on its key), built as transient
+    # cea builds them (the sampled rules on their candidates)
     from ..shared import build_shared, stage_key
     built = basis = None
     if case.solver.reduction.enabled:
-        built = build_shared(case, "factorization")
+        built = build_shared(analysed_case(case), "factorization")
         if any(c.friction.basis_mu for c in case.contact.values()):
-            basis = build_shared(case, "basis", built)
+            basis = build_shared(analysed_case(case), "basis", built)
 
     def shared(v):
         same = basis is not None and stage_key(v, "basis") == stage_key(case, "basis")
