@@ -7,12 +7,12 @@ handed to stages.prepare as a Built.
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from .contact.contactset import stack
 from .contact.pair import GEOMETRY, build_contact, build_geometry
 from .model import build_model
 from .reduce.reference import reference_basis, reference_case
+from .reduce.stage import reduction_mass
 from .solve import blas
 from .solve.lowrank import contact_solver
 
@@ -91,10 +91,9 @@ def shared_basis(case, model, geometry, cs):
     """The reduce.reference.SharedBasis of a case at its reference friction, for the variants
     that share it (on the model's structure with the case's loads)."""
     model = build_model(case, model)
-    M = sp.diags(model.lumped_mass).tocsr() if case.solver.mass == "lumped" else model.M
+    M, Mf = reduction_mass(case, model, cs)
     return reference_basis(case, model, M, build_contact(case, model, geometry=geometry), cs,
-                           [model.load_patterns[name] for name in case.loads],
-                           cs.M if M is model.M else None)
+                           [model.load_patterns[name] for name in case.loads], Mf)
 
 
 def factorization(case, model, contacts):

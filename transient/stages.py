@@ -7,7 +7,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from .case.signals import compile_signals
 from . import heap
@@ -24,7 +23,7 @@ from .kernels.codes import ENERGY_TERMS, NO_CONVERGENCE, NOT_FINITE, OK
 from .model import build_model, constant_load
 from .reduce.basis import rebase
 from .reduce.reference import rebased, reference_basis
-from .reduce.stage import reduce
+from .reduce.stage import reduce, reduction_mass
 from .shared import Built, factorization
 from .solve import blas
 from .solve.linsolve import why
@@ -133,19 +132,18 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
     sensors = model.sensors if case.output.sensors else model.sensors[:0]
     names = tuple(model.sensor_names) if case.output.sensors else ()
     if solver.reduction.enabled:
-        M = sp.diags(model.lumped_mass).tocsr() if solver.mass == "lumped" else model.M
-        Mf = cs.M if M is model.M else None
+        M, Mf = reduction_mass(case, model, cs)
         # the factors freed after the basis' last solve, unless a campaign's variants share them
         release = cs.release if cs is not built.solver else None
-        basis, sample, shared = None, None, built.basis
-        if shared is None and rebased(case):
+        basis, sample, shared, elsewhere = None, None, built.basis, rebased(case)
+        if shared is None and elsewhere:
             shared = stages.timed("reference", reference_basis, case, model, M, pairs, cs,
                                   patterns, Mf)
         if shared is not None:
             # a basis made at another friction (or this case's own, shared by a campaign)
-            basis = (shared.basis if not rebased(case) else stages.timed(
-                "reduction", rebase, shared.basis, shared.K0r, tangent.stiffness, M,
-                model.fixed, preload.u))
+            basis = (stages.timed("reduction", rebase, shared.basis, shared.K0r,
+                                  tangent.stiffness, M, model.fixed, preload.u)
+                     if elsewhere else shared.basis)
             sample = shared.sample
             if release is not None:
                 release()           # the last solve was the preload's
@@ -154,7 +152,7 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
                      critical_tangent(contacts, preload.tangent), stages, cs.C, Mf, release,
                      basis, sample)
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
-        if rebased(case):
+        if elsewhere:
             meta["basis_mu"] = {name: c.friction.basis_mu for name, c in case.contact.items()
                                 if c.friction.basis_mu}
         # the rows and operators on the reduced coordinates (0.8 s for the cea's 7734 points)

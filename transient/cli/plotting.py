@@ -141,10 +141,10 @@ def _plot_cea(args):
         built = build_shared(analysed_case(case), "factorization")
         if any(c.friction.basis_mu for c in case.contact.values()):
             basis = build_shared(analysed_case(case), "basis", built)
+    key = stage_key(case, "basis") if basis is not None else None
 
     def shared(v):
-        same = basis is not None and stage_key(v, "basis") == stage_key(case, "basis")
-        return basis if same else built
+        return basis if key is not None and stage_key(v, "basis") == key else built
     result = analyse(case, built=shared(case))
     mu = case.contact[pair].friction.mu
     paths = [out / f"{stem}_stability.png"]

@@ -5,6 +5,7 @@ integrates (the sampled points' and the preload they hold) instead of editing th
 from dataclasses import dataclass, replace
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..contact.coarse import subset_rule
 from ..errors import CaseError
@@ -92,6 +93,14 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
                                     _sampled_pairs(pairs, contacts, sampled.keep,
                                                    sampled.contacts), held, meta, unsampled),
                        cap)
+
+
+def reduction_mass(case, model, cs):
+    """(M, its free block or None): the reduced model's mass (solver.mass: the lumped diagonal
+    or the consistent M), with the free block the factorization cs holds of the consistent
+    one."""
+    M = sp.diags(model.lumped_mass).tocsr() if case.solver.mass == "lumped" else model.M
+    return M, (cs.M if M is model.M else None)
 
 
 def make_basis(case, model, M, contacts, preload, patterns, solve, kt_crit, rows=None,
