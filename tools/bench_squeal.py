@@ -16,8 +16,8 @@ kernel adds the modal propagation, the energies and the output rows.
 sensors' RMS and dominant frequency over each window of --windows in both, and their changes.
 --history H: times the roofline on an existing history instead of running the case.
 
-    python tools/bench_squeal.py [CASE] [--set KEY=VALUE ...] [--repeat 300] [--compare 0.02]
-        [--windows 0.01:0.016,0.016:0.02] [--keep DIR] [--history H] [--json]
+    python tools/bench_squeal.py [CASE] [--set KEY=VALUE ...] [--repeat 300] [--compare 0.5]
+        [--windows 0.1:0.2,0.2:0.5] [--keep DIR] [--history H] [--json]
 """
 import argparse
 import json
@@ -139,7 +139,7 @@ def main(argv=None):
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     parser.add_argument("--repeat", type=int, default=300)
     parser.add_argument("--compare", type=float, default=0.0, metavar="T_END")
-    parser.add_argument("--windows", default="0.01:0.016,0.016:0.02")
+    parser.add_argument("--windows", default="0.1:0.2,0.2:0.5")
     parser.add_argument("--keep", help="directory for the histories (default: a temporary one)")
     parser.add_argument("--history", help="time the roofline on this history, run nothing")
     parser.add_argument("--json", action="store_true")

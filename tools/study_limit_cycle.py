@@ -55,8 +55,8 @@ window's RMS, or a warning line says so; its trend over the window is printed to
 - kernel: us/step of each run (timings/kernel over its steps; the median per thread count that
   dynamics.chunks.ThreadChoice keeps), slowed by anything else on the machine.
 
-    python tools/study_limit_cycle.py [CASE] [--t-end 0.02] [--dt 3.125e-6 1.5625e-6]
-        [--cycle-from 0.010] [--sub 0.002] [--sensor pad_back] [--drift-tolerance X]
+    python tools/study_limit_cycle.py [CASE] [--t-end 0.106] [--dt 3.125e-6 1.5625e-6]
+        [--cycle-from 0.1] [--sub 0.002] [--sensor pad_back] [--drift-tolerance X]
         [--out /tmp/limit_cycle] [--set key=value ...] [--cycles] [--json]
 """
 import argparse
@@ -413,9 +413,9 @@ def print_report(args, runs, changes):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("case", nargs="?", default=str(ROOT / "cases" / "pad_disc_squeal.toml"))
-    parser.add_argument("--t-end", type=float, default=0.02)
-    parser.add_argument("--dt", type=float, nargs="+", default=[1.5625e-6, 7.8125e-7])
-    parser.add_argument("--cycle-from", type=float, default=0.010,
+    parser.add_argument("--t-end", type=float, default=0.106)
+    parser.add_argument("--dt", type=float, nargs="+", default=[3.125e-6, 1.5625e-6])
+    parser.add_argument("--cycle-from", type=float, default=0.1,
                         help="start of the limit-cycle window [s]")
     parser.add_argument("--sub", type=float, default=0.002, help="sub-window length [s]")
     parser.add_argument("--sensor", default="pad_back", help="the sensor whose up-crossings "
