@@ -140,7 +140,7 @@ def test_bench_refuses_a_cycle_window_outside_the_run(capsys):
 def test_growth_is_fitted_before_a_wandering_limit_cycle():
     """A growth at 2000 1/s over 4 decades, then a limit cycle whose amplitude wanders by a
     third, up by 1.6x over the run's last tenth: the growth is the linear phase's (within 2%),
-    not the limit cycle's wander (pad_disc_squeal's 20 ms read -13 1/s)."""
+    not the limit cycle's wander (pad_disc_squeal's 20 ms at mu = 0.4 read -13 1/s)."""
     from transient.studies.bench import oscillation
     f, sigma = 10e3, 2000.0
     t = np.arange(0.0, 0.02, 1.0 / (8 * f))

@@ -228,6 +228,25 @@ def test_envelope_and_spectrogram_pictures(tmp_path, capsys):
     np.testing.assert_allclose(A[10], 3e-5, rtol=1e-3)
 
 
+def test_a_spectrogram_keeps_a_narrow_tone_where_its_bins_outnumber_the_pixels():
+    """A tone one bin wide among 4097 bins (segments of 8192 samples) drawn on 400 rows: each
+    row holds its group's peak, so every segment's row of the tone reads its amplitude (a 1 s
+    squeal history's limit cycle vanished from the picture when the rows were the bins)."""
+    from transient.plots.signals import peak_pooled, spectrogram
+    dt = 1.25e-5
+    t = np.arange(0, 0.5, dt)
+    f_bin = 757 / (8192 * dt)
+    f, tc, A = spectrogram(2e-6 * np.sin(2 * np.pi * f_bin * t), dt, 8192)
+    fp, Ap = peak_pooled(f, A, 400)
+    assert len(fp) <= 400 and Ap.shape == (len(fp), A.shape[1])
+    row = int(np.argmin(np.abs(fp - f_bin)))
+    np.testing.assert_allclose(Ap[row], 2e-6, rtol=1e-3)
+    assert fp[0] < fp[1] and abs(fp[row] - f_bin) < fp[1] - fp[0]
+    # few bins: drawn as they are
+    few = A[:300]
+    assert peak_pooled(f[:300], few, 400)[1] is few
+
+
 @pytest.mark.parametrize("args, key", [(["envelope", "--window", "0.05"], "--window"),
                                        (["envelope", "--window", "0.05:0.01"], "--window"),
                                        (["envelope", "--band", "a:b"], "--band"),

@@ -10,7 +10,7 @@ import numpy as np
 
 from .pressure import plane_frame, pressure_panels
 from .signals import (MIN_SEGMENT, amplitude_spectrum, default_segment, envelope,
-                      growth_rate, sample_step, spectrogram, transfer_function)
+                      growth_rate, peak_pooled, sample_step, spectrogram, transfer_function)
 
 __all__ = ["MIN_SEGMENT", "select_series", "one_series", "history_figure", "spectrum_figure",
            "frf_figure", "spectrogram_figure", "envelope_figure", "pressure_panels",
@@ -134,6 +134,9 @@ def spectrum_figure(stored, names, path, fmax=None):
     fig.savefig(path, dpi=110)
 
 
+SPECTROGRAM_ROWS = 400   # frequency rows drawn at most: about the map's height in pixels
+
+
 def spectrogram_figure(stored, name, path, segment=None, fmax=None):
     """Time-frequency map of one series: short-time amplitude spectra in dB (Hann segments
     overlapping by three quarters), time in ms, frequency in kHz."""
@@ -147,11 +150,12 @@ def spectrogram_figure(stored, name, path, segment=None, fmax=None):
     f, tc, A = spectrogram(stored.read(name), dt, segment)
     top = min(fmax or np.inf, 0.5 / dt)
     keep = f <= top
+    f, A = peak_pooled(f[keep], A[keep], SPECTROGRAM_ROWS)
     with np.errstate(divide="ignore"):
-        db = 20 * np.log10(A[keep] / max(A.max(), 1e-300))
+        db = 20 * np.log10(A / max(A.max(), 1e-300))
     fig = _figure(10, 5)
     ax = fig.subplots()
-    mesh = ax.pcolormesh((t[0] + tc) * 1e3, f[keep] / 1e3, np.maximum(db, -100.0),
+    mesh = ax.pcolormesh((t[0] + tc) * 1e3, f / 1e3, np.maximum(db, -100.0),
                          shading="nearest", cmap=CMAP, vmin=max(-100.0, db[np.isfinite(db)].min()))
     fig.colorbar(mesh, ax=ax, label="amplitude [dB re peak]")
     ax.set_xlabel("time [ms]")

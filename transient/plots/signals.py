@@ -183,3 +183,16 @@ def spectrogram(x, dt, segment):
                     noverlap=3 * segment // 4, detrend="constant", mode="magnitude",
                     scaling="spectrum")
     return f, tc, 2.0 * S
+
+
+def peak_pooled(f, A, rows):
+    """(f, A) with the frequency bins grouped by as many as make at most `rows` rows, each
+    group drawn at its centre with its peak: a picture rasterizes thousands of bins into a few
+    hundred pixels, where a stationary tone one bin wide (a limit cycle over 0.1 s segments:
+    10 Hz in 40 kHz) falls between pixels and vanishes."""
+    group = -(-len(f) // rows)
+    if group <= 1:
+        return f, A
+    cut = list(range(0, len(f), group))
+    return (np.add.reduceat(f, cut) / np.diff(cut + [len(f)]),
+            np.maximum.reduceat(A, cut, axis=0))

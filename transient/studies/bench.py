@@ -190,9 +190,9 @@ def oscillation(series, cycle_from=None):
     la, lb, lc = np.log(a[k - 1:k + 2] + 1e-300)
     shift = 0.5 * (la - lc) / (la - 2 * lb + lc) if la - 2 * lb + lc < 0 else 0.0
     frequency = (k + shift) / (len(pad) * dt)
-    # the growth on the amplitude over a period of that frequency: pad_disc_squeal grows
-    # 1973 1/s so (CEA 1991), 360 on the Hilbert envelope, which the saturated end's leakage
-    # and the limit cycle's offset swamp
+    # the growth on the amplitude over a period of that frequency: pad_disc_squeal at mu = 0.4
+    # grows 1973 1/s so (CEA 1991), 360 on the Hilbert envelope, which the saturated end's
+    # leakage and the limit cycle's offset swamp
     env = running_amplitude(motion[main], round(1.0 / (frequency * dt)))
     try:
         sigma = growth_rate(t, env, growth_window(t, env))[0]
@@ -219,8 +219,8 @@ def growth_window(t, env):
     arrival = int(np.argmax(inner >= SATURATION * inner[peak]))
     # still growing at its end: from its arrival at SATURATION of its peak on, each quarter's
     # largest amplitude is GROWING times the last's. A limit cycle wanders by a third long
-    # after it saturated, and its last tenth may grow 1.6x (pad_disc_squeal's 20 ms,
-    # saturated by 7 ms, fitted as a growth of -13 1/s on that tenth's test)
+    # after it saturated, and its last tenth may grow 1.6x (pad_disc_squeal's 20 ms at mu =
+    # 0.4, saturated by 7 ms, fitted as a growth of -13 1/s on that tenth's test)
     after = inner[arrival:]
     q = len(after) // 4
     growing = q > 0 and all(after[(k + 1) * q:(k + 2) * q].max()
