@@ -8,8 +8,10 @@ import pytest
 
 from transient.case.loading import load
 from transient.cli import main
+from transient.dynamics.chunks import buffer
 from transient.io.history import summary
 from transient.model.model import build_model
+from transient.stages import prepare, stepper
 from transient.studies.modal import compare
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
@@ -187,8 +189,6 @@ def test_pad_disc_squeal_grows_as_its_complex_modes(tmp_path, capsys):
 def _cycle_run(case, setup, dt, lead, span):
     """(time, pad sensor, energies, q) of the squeal case over [lead, lead + span] at step dt,
     a row a step (the balance below is then the kernel's own sums), after `lead` unstored."""
-    from transient.dynamics.chunks import buffer
-    from transient.stages import stepper
     step = stepper(case, setup.system, dt)
     state = setup.state.copy()
     n_lead, n_span = int(round(lead / dt)), int(round(span / dt))
@@ -208,7 +208,6 @@ def test_pad_disc_squeal_limit_cycle_holds_under_half_the_step():
     slip out) against the input, the work in less the piston's (0.47% measured at the case's
     step, 1.8% at most; 0.05% and 0.4% at half the step). About a minute."""
     case = load(CASES / "pad_disc_squeal.toml", ["output.field=true"])
-    from transient.stages import prepare
     setup = prepare(case)
     piston = setup.system.patterns[list(case.loads).index("piston")]
     rms, balance = [], []
