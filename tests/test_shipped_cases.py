@@ -201,12 +201,12 @@ def _cycle_run(case, setup, dt, lead, span):
 
 
 def test_pad_disc_squeal_limit_cycle_holds_under_half_the_step():
-    """The squeal case's limit cycle (9.42 kHz with the other mode at 10.92 kHz, from 0.1 s):
-    over 0.15-0.17 s the pad's RMS changes by less than 1% when dt is halved (0.34% measured),
-    and cycle by cycle the energy balance closes within 1% of the sliding's input on average:
-    the kernel's own residual dW - dD - dE (work of the loads and the sliding in, damping and
-    slip out) against the input, the work in less the piston's (0.47% measured at the case's
-    step, 1.8% at most; 0.05% and 0.4% at half the step). About a minute."""
+    """The squeal case's limit cycle (9.41 kHz with the other mode at 10.91 kHz, from 0.1 s):
+    over 0.15-0.17 s the pad's RMS changes by less than 1% when dt is halved (0.28% measured),
+    and the energy balance closes within 1% of the sliding's input in every cycle: the
+    kernel's own residual dW - dD - dE (work of the loads and the sliding in, damping and slip
+    out) against the input, the work in less the piston's (0.27% at most measured at the
+    case's step, 0.09% on average; 0.045% and 0.019% at half the step). About a minute."""
     case = load(CASES / "pad_disc_squeal.toml", ["output.field=true"])
     setup = prepare(case)
     piston = setup.system.patterns[list(case.loads).index("piston")]
@@ -222,6 +222,6 @@ def test_pad_disc_squeal_limit_cycle_holds_under_half_the_step():
         residual = (work_in[b] - work_in[a]) - (out_[b] - out_[a]) - (held[b] - held[a])
         sliding = (work_in[b] - work_in[a]) - (q[b] - q[a]) @ piston
         assert len(a) > 150 and np.all(sliding > 0)
-        balance.append(np.mean(np.abs(residual) / sliding))
+        balance.append(np.max(np.abs(residual) / sliding))
     assert abs(rms[0] / rms[1] - 1) < 0.01
     assert balance[0] < 0.01 and balance[1] < balance[0]
