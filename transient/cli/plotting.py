@@ -138,9 +138,10 @@ def _plot_cea(args):
     from ..shared import build_shared, stage_key
     built = basis = None
     if case.solver.reduction.enabled:
-        built = build_shared(analysed_case(case), "factorization")
+        analysed = analysed_case(case)
+        built = build_shared(analysed, "factorization")
         if any(c.friction.basis_mu for c in case.contact.values()):
-            basis = build_shared(analysed_case(case), "basis", built)
+            basis = build_shared(analysed, "basis", built)
     key = stage_key(case, "basis") if basis is not None else None
 
     def shared(v):

@@ -7,10 +7,10 @@ the cores); the Numba cache is shared, its first compile serialized by transient
 --scheduler ADDRESS runs the same tasks on an existing cluster instead (dask-jobqueue on
 SLURM: the README). Variants equal on the fields a first stage reads (shared.READS: the
 model's structure, the contact pairs' geometry, the factorization with the contact's low-rank
-update, the basis at a friction's basis_mu) share its result, built once by a task of its own and sent to each worker once (a
-factorization is made again where it lands: PARDISO's handle does not travel). A task whose
-worker dies is rerun on another by the scheduler; a variant that is refused or aborts is a row
-with its reason. --resume skips the variants whose outputs are complete (their rows are read
+update, the basis at a friction's basis_mu) share its result, built once by a task of its own
+and sent to each worker once (a factorization is made again where it lands: PARDISO's handle
+does not travel). A task whose worker dies is rerun on another by the scheduler; a variant
+that is refused or aborts is a row with its reason. --resume skips the variants whose outputs are complete (their rows are read
 back from them) and reruns the others.
 """
 import csv
