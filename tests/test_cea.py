@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from transient.case.loading import load
+from transient.cea.compare import pair_modes
 from transient.cea.linearize import linearized, preload_pressure
 from transient.cea.stage import analyse, analysed_case
 from transient.cli import main
@@ -147,29 +148,28 @@ def test_linearization_against_finite_differences(full_setup, falling_setup, law
     assert (f.dm < 0).all() if law == "falling" else (f.dm == 0).all()
 
 
-def _match(reference, modes):
-    """For each reference mode, the nearest of modes (in the complex plane)."""
-    return np.array([np.argmin(np.abs(modes.eigenvalues - lam))
-                     for lam in reference.eigenvalues])
+# the issue's pad and disc: the small model's divisions with the shipped case's hex20
+HEX20 = [o for o in SMALL if "element" not in o]
 
 
-def test_reduced_complex_modes_match_the_full_model():
-    """The issue's test: every unstable mode below fmax of the full model's shift-invert
-    Arnoldi is found by the reduced analysis within 0.5% in frequency and 5% of the largest
-    real part; here every mode is held to it (unstable or not)."""
+def test_reduced_complex_modes_match_the_full_model_mode_by_mode():
+    """Every mode below fmax that is unstable in the full model's shift-invert Arnoldi or in
+    the reduced analysis: the frequency within 0.1% and the real part within 5% of its own
+    (or 5 1/s), and the same stability (cea.compare). The default basis reaches 2 fmax; with
+    its modes cut at fmax the weak modes of the band's upper half miss (the issue's figures:
+    -37% to +155%), which the same comparison catches."""
     fmax = 16000.0
-    full = analyse(small("contact.pad_disc.friction.mu=0.4", "solver.reduction.enabled=false"))
-    reduced = analyse(small("contact.pad_disc.friction.mu=0.4"))
+    overrides = HEX20 + ["contact.pad_disc.friction.mu=0.4"]
+    full = analyse(load(PAD, overrides + ["solver.reduction.enabled=false"]))
+    reduced = analyse(load(PAD, overrides))
     assert full.reduced == 0 and 0 < reduced.reduced < full.ndof
-    ref = full.modes.below(0.98 * fmax)
-    assert ref.unstable.sum() >= 2, "the scene must squeal for the test to mean something"
-    red = reduced.modes
-    near = _match(ref, red)
-    assert len(set(near)) == len(near)
-    np.testing.assert_allclose(red.frequency_hz[near], ref.frequency_hz, rtol=5e-3)
-    big = np.abs(ref.real[ref.unstable]).max()
-    assert np.abs(red.real[near] - ref.real).max() <= 0.05 * big
-    assert np.array_equal(red.unstable[near][ref.unstable], ref.unstable[ref.unstable])
+    assert reduced.meta["modes_fmax_hz"] == 2 * fmax
+    pairs = pair_modes(full.modes, reduced.modes, fmax)
+    assert sum(p.unstable for p in pairs) >= 6, "the scene must squeal across its band"
+    assert max(p.frequency_hz for p in pairs if p.unstable) > 0.9 * fmax
+    assert [p for p in pairs if not p.within()] == []
+    cut = analyse(load(PAD, overrides + [f"solver.reduction.cutoff={fmax}"]))
+    assert [p for p in pair_modes(full.modes, cut.modes, fmax) if not p.within()] != []
 
 
 @pytest.mark.parametrize("reduced", [True, False])

@@ -32,7 +32,8 @@ _FACTORIZATION = _CONTACT + ("solver.shift_hz", "solver.linear_solver")
 _BASIS = _FACTORIZATION + ("loads", "motion", "contact.law", "contact.friction",
                            "contact.sampling_tolerance", "solver.newton", "solver.mass",
                            "solver.reduction.enabled",
-                           "solver.reduction.fmax", "solver.reduction.statics",
+                           "solver.reduction.fmax", "solver.reduction.cutoff",
+                           "solver.reduction.statics",
                            "solver.reduction.statics_tolerance")
 READS = {"model": _MODEL, "contact": _CONTACT, "factorization": _FACTORIZATION,
          "basis": _BASIS}

@@ -190,7 +190,8 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
 def _reduced(case, red, patterns, signals, sensors, names, critical=True):
     """(system, initial state) of a ReducedModel; critical: with its critical step."""
     solver = case.solver
-    system = reduced_system(red.X, red.AW, red.omega2, solver.reduction.fmax, solver.damping,
+    system = reduced_system(red.X, red.AW, red.omega2, solver.reduction.modes_fmax,
+                            solver.damping,
                             red.contacts, red.preload.tangent, patterns, signals, sensors,
                             names, case.output.field, red.preload.pressure, critical)
     state = State.zeros(system.n, red.contacts.n_points)

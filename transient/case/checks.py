@@ -170,10 +170,13 @@ def _mass_scaling(case):
     if cap and not reduction.enabled:
         _fail(case, "solver.reduction.mass_scaling_hz", "mass scaling acts on the reduced "
               "model's statics: set solver.reduction.enabled = true")
-    if cap and cap < 2 * reduction.fmax:
-        _fail(case, "solver.reduction.mass_scaling_hz", f"{cap:g} Hz is below 2 fmax "
-              f"({2 * reduction.fmax:g} Hz): the statics must stay quasi-static in the band "
-              "of the modes (0: no mass scaling)")
+    if cap and cap <= reduction.modes_fmax:
+        _fail(case, "solver.reduction.mass_scaling_hz", f"{cap:g} Hz is not above the basis' "
+              f"cutoff ({reduction.modes_fmax:g} Hz): only the statics, above the basis' "
+              "modes, may take mass (0: no mass scaling)")
+    if reduction.cutoff and reduction.cutoff < reduction.fmax:
+        _fail(case, "solver.reduction.cutoff", f"{reduction.cutoff:g} Hz is below fmax "
+              f"({reduction.fmax:g} Hz): the basis must hold the band's modes (0: 2 fmax)")
 
 
 def _sampled(case):

@@ -6,6 +6,10 @@ import os
 from dataclasses import dataclass, fields
 
 SHIFT_HZ = 1.0     # -(2 pi SHIFT_HZ)^2 shifts K so that floating parts stay solvable
+# The reduced basis' normal modes reach CUTOFF_FACTOR times the band (reduction.fmax) by
+# default: the friction couples each mode of the band with the modes above it, and the
+# coupled modes' real parts converge only once those are held (tools/study_cea_band.py)
+CUTOFF_FACTOR = 2.0
 
 
 @dataclass(frozen=True)
@@ -150,6 +154,13 @@ class ReductionSpec:
     statics: bool
     statics_tolerance: float
     mass_scaling_hz: float = 0.0
+    cutoff: float = 0.0
+
+    @property
+    def modes_fmax(self):
+        """The basis' normal modes reach this frequency [Hz]: the cutoff given, or
+        CUTOFF_FACTOR times the band."""
+        return self.cutoff or CUTOFF_FACTOR * self.fmax
 
 
 @dataclass(frozen=True)

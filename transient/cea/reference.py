@@ -9,17 +9,18 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..solve.linsolve import factorize_complex
 from .modes import ComplexModes
 
 
 def _near(M, D, K, sigma, k, v0):
     n = K.shape[0]
-    lu = spla.splu(sp.csc_matrix(K + sigma * D + sigma ** 2 * M, dtype=complex))
+    solve = factorize_complex(sp.csr_matrix(K + sigma * D + sigma ** 2 * M, dtype=complex))
     DM = (D + sigma * M).tocsr()
 
     def op(z):
         b1, b2 = z[:n], M @ z[n:]
-        x = lu.solve(-b2 - DM @ b1)
+        x = solve(-b2 - DM @ b1)
         return np.concatenate([x, b1 + sigma * x])
 
     A = spla.LinearOperator((2 * n, 2 * n), matvec=op, dtype=complex)

@@ -74,8 +74,10 @@ def cmd_cea(args):
                           "total": total}))
         return 0
     friction = {n: c.friction for n, c in case.contact.items() if c.friction.active}
-    what = (f"reduced model {result.reduced} dofs" if result.reduced
-            else "full model (shift-invert Arnoldi)")
+    cutoff = result.meta.get("modes_fmax_hz")
+    what = (f"reduced model {result.reduced} dofs" + (f" (its modes to {cutoff:g} Hz)"
+                                                      if cutoff else "")
+            if result.reduced else "full model (shift-invert Arnoldi)")
     print(f"{case.path}: {result.ndof} free dofs, {what}, complex modes to "
           f"{result.fmax:g} Hz; " + (", ".join(
               f"contact {n}: mu = {f.mu:g}" if not f.speeds else f"contact {n}: mu(v) table"
@@ -176,8 +178,9 @@ def _model_line(meta):
     parts = []
     if meta.get("reduced_dofs"):
         asked, kept = meta.get("static_shapes", (0, 0))
+        to = (f" to {meta['modes_fmax_hz']:g} Hz" if meta.get("modes_fmax_hz") else "")
         parts.append(f"reduced model {meta['reduced_dofs']} dofs "
-                     f"({meta.get('normal_modes', '?')} modes and {kept} of {asked} static "
+                     f"({meta.get('normal_modes', '?')} modes{to} and {kept} of {asked} static "
                      "shapes" + ("; the others lie in the span of the rest)" if kept < asked
                                  else ")"))
     for name, mu in (meta.get("basis_mu") or {}).items():

@@ -81,7 +81,8 @@ def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, si
     omega2. T itself (ndof x n, the setup's largest product at scale: 4x pad_disc's 198 GFLOP)
     is formed only for field output; the contact rows, sensors and loads come from X.
 
-    damping: DampingSpec; modes above fmax [Hz] take the residual ratio on top of the modal.
+    damping: DampingSpec; vectors above fmax [Hz] (the basis' cutoff: its statics) take the
+    residual ratio on top of the modal.
     patterns: load vectors on the model's dofs; sensors (s, ndof) their observation.
     pressure: the preload's at the points, for the friction's explicit step bounds.
     critical_step: False for a system that is only linearized (no CriticalStep).

@@ -124,6 +124,7 @@ ATTRIBUTES = {
               "a table of contact pairs"),
     "reduced_dofs": (_is_count, "a count"),
     "normal_modes": (_is_count, "a count"),
+    "modes_fmax_hz": (lambda v: _is_number(v) and v > 0, "a frequency > 0 [Hz]"),
     "static_shapes": (lambda v: isinstance(v, list) and len(v) == 2 and all(map(_is_count, v)),
                       "two counts"),
     "sampling": (lambda v: _is_table(v) and _is_number(v.get("residual"))

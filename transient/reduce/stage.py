@@ -62,6 +62,7 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
     # T^T (M u): two sparse products with vectors, not one with the n x r basis
     q0, v = basis.coordinates(M @ preload.u), basis.coordinates(M @ v0)
     meta = {"reduced_dofs": len(basis.omega2), "normal_modes": basis.n_modes,
+            "modes_fmax_hz": reduction.modes_fmax,
             "contact_shapes": basis.n_contact_shapes,
             # the static directions asked (contact shapes, load patterns, the preload) and kept
             # beyond the modes: those dropped lie in the span of the rest
@@ -122,7 +123,7 @@ def make_basis(case, model, M, contacts, preload, patterns, solve, kt_crit, rows
                if reduction.statics and contacts.n_points else None)
     coupling = (_friction_loads(contacts, preload, free)
                 if contacts.friction is not None and reduction.statics else None)
-    return reduced_basis(K_lin, M, model.fixed, reduction.fmax, np.hstack(loads), solve,
+    return reduced_basis(K_lin, M, model.fixed, reduction.modes_fmax, np.hstack(loads), solve,
                          case.solver.shift_hz, contact, reduction.statics_tolerance, coupling,
                          Mf, solved)
 
@@ -135,7 +136,7 @@ def mass_scaled(red, cap_hz):
     coordinates q' = alpha^1/2 q keep M = I, with the eigenvalue omega^2 / alpha = omega_c^2 and
     the basis column T / alpha^1/2, so the stiffness, the static response to any load and the
     state's displacement T q are unchanged, and the kernels integrate the scaled system as
-    any other. Only the vectors' inertia changes: those above 2 fmax are the statics (contact
+    any other. Only the vectors' inertia changes: those above the cutoff are the statics (contact
     and loads), whose dynamics the basis does not resolve anyway; in the band of the modes
     their response lags by (f / f_c)^2, the error the complex modes of the scaled model
     measure against the unscaled one's."""
