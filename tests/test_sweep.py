@@ -14,7 +14,7 @@ from transient.cli import main
 from transient.errors import CaseError
 from transient.io.history import summary
 from transient.sweep.campaign import THREAD_ENV
-from transient.sweep.variants import make_variants, parse_parameter
+from transient.sweep.variants import make_variants, parse_parameter, variant_name
 
 ROOT = Path(__file__).resolve().parent.parent
 PAD = ROOT / "cases" / "pad_disc.toml"
@@ -32,8 +32,16 @@ def test_parameters_and_their_variants():
     assert parse_parameter('solver.scheme="implicit"').values == ("implicit",)
     grid = make_variants([mu, p])
     assert len(grid) == 8 and grid[1].values == {mu.key: 0.0, p.key: 2e6}
-    assert grid[5].name == "v005" and grid[5].overrides() == [
+    assert grid[5].overrides() == [
         "contact.pad_disc.friction.mu=0.4", "loads.piston.value=2000000.0"]
+    # named by its values, not its place: the same name from another list, another order of
+    # the parameters, or another spelling of a value
+    assert grid[5].name == variant_name({mu.key: 0.4, p.key: 2e6})
+    assert grid[5].name.startswith("v-") and len(grid[5].name) == 14
+    again = make_variants([parse_parameter("loads.piston.value=[2.0e6]"),
+                           parse_parameter("contact.pad_disc.friction.mu=[0.40, 0.5]")])
+    assert again[0].name == grid[5].name and again[1].name not in {v.name for v in grid}
+    assert len({v.name for v in grid}) == 8
     paired = make_variants([parse_parameter("a.b=[1, 2]"), parse_parameter("c.d=[3, 4]")],
                            "zip")
     assert [v.values for v in paired] == [{"a.b": 1, "c.d": 3}, {"a.b": 2, "c.d": 4}]
@@ -55,7 +63,8 @@ def test_a_bad_variant_is_refused_before_anything_runs(tmp_path, capsys):
             "--out", str(tmp_path / "out")]
     assert main(args) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "variant v001 (contact.pad_disc.friction.mu=-0.4)" in err
+    name = variant_name({"contact.pad_disc.friction.mu": -0.4})
+    assert err.count("\n") == 1 and f"variant {name} (contact.pad_disc.friction.mu=-0.4)" in err
     assert "contact.pad_disc.friction.mu" in err and not (tmp_path / "out").exists()
 
 
@@ -97,7 +106,8 @@ def campaign(tmp_path_factory):
 
 def test_a_sweep_equals_its_variants_run_one_by_one(campaign):
     out, rows, alone = campaign
-    assert [r["variant"] for r in rows] == ["v000", "v001", "v002"]
+    assert [r["variant"] for r in rows] == [variant_name({"contact.pad_disc.friction.mu": mu})
+                                            for mu in (0.0, 0.2, 0.4)]
     assert [r["contact.pad_disc.friction.mu"] for r in rows] == [0.0, 0.2, 0.4]
     for row, path in zip(rows, alone):
         assert row["status"] == "complete" and row["seconds"] > 0
@@ -125,10 +135,10 @@ def test_a_sweep_equals_its_variants_run_one_by_one(campaign):
 
 def test_resume_runs_only_the_missing_variants(campaign, capsys):
     out, rows, _ = campaign
-    (out / "v001.h5").unlink()
-    with h5py.File(out / "v002.h5", "a") as f:
+    (out / rows[1]["output"]).unlink()
+    with h5py.File(out / rows[2]["output"], "a") as f:
         f.attrs["status"] = "aborted: interrupted"           # as a sweep cut off leaves it
-    before = (out / "v000.h5").stat().st_mtime_ns
+    before = (out / rows[0]["output"]).stat().st_mtime_ns
     args = ["sweep", str(PAD), "--param", "contact.pad_disc.friction.mu=[0.0,0.2,0.4]",
             "--workers", "1", "--out", str(out), "--resume", "--json"]
     for o in SMALL:
@@ -136,7 +146,9 @@ def test_resume_runs_only_the_missing_variants(campaign, capsys):
     assert main(args) == 0
     again = json.loads(capsys.readouterr().out.splitlines()[-1])["rows"]
     assert [r["resumed"] for r in again] == [True, False, False]
-    assert (out / "v000.h5").stat().st_mtime_ns == before
+    # the interrupted history goes on from its checkpoint (here its last step: no step again)
+    assert [r["continued"] for r in again] == [False, False, True]
+    assert (out / rows[0]["output"]).stat().st_mtime_ns == before
     assert all(r["status"] == "complete" for r in again)
     # rows read back from a complete history, and rerun ones, say the same
     assert [r["growth_rate"] for r in again] == [r["growth_rate"] for r in rows]
@@ -219,7 +231,7 @@ def test_a_cea_sweep_and_its_stability_map(campaign, tmp_path, capsys):
     rows = _mu_sweep(out, "cea", capsys)
     assert [r["unstable"] for r in rows][0] == 0 and rows[1]["unstable"] >= 1
     assert 11e3 < rows[1]["frequency_hz"] < 12.5e3 and rows[1]["max_real"] > 500
-    modes = json.loads((out / "v001.json").read_text())["modes"]
+    modes = json.loads((out / rows[1]["output"]).read_text())["modes"]
     assert len(modes) > 10 and sum(m["unstable"] for m in modes) == rows[1]["unstable"]
     assert main(["plot", "sweep", str(out), "-o", str(tmp_path / "map.png")]) == 0
     assert (tmp_path / "map.png").stat().st_size > 10_000

@@ -277,9 +277,11 @@ def cmd_sweep(args):
 
     rows = sweep(args.case, variants, args.out, args.kind, args.overrides, args.workers,
                  args.scheduler, args.resume, progress,
-                 None if args.json else lambda text: print(text, flush=True))
+                 None if args.json else lambda text: print(text, flush=True),
+                 command=" ".join(["transient"] + args.argv))
     if bar is not None:
         bar.close()
+    table = Path(args.out) / "sweep.csv"
     if args.json:
         print(json.dumps({"rows": rows}))
     else:
@@ -287,9 +289,33 @@ def cmd_sweep(args):
             print(f"{row['variant']} {row['status']}"
                   + "".join(f" {k}={row[k]}" for k in variants[0].values))
         done = sum(r["status"] == "complete" for r in rows)
-        print(f"{done} of {len(rows)} variants complete; wrote {Path(args.out) / 'sweep.csv'}, "
+        print(f"{done} of {len(rows)} variants complete; wrote {table}, "
               f"{Path(args.out) / 'sweep.json'}")
-    return 0 if all(r["status"] == "complete" for r in rows) else 3
+    return _sweep_code(args, variants, rows, table)
+
+
+def _sweep_code(args, variants, rows, table):
+    """The exit code of a campaign from its rows, its first refused or unfinished variant
+    said in one line: 2 if a variant was refused (bad input), else 3 if one did not complete
+    (a run aborted, a task failed), else 0."""
+    labels = {v.name: v.label() for v in variants}
+    refused = [r for r in rows if r["status"].startswith("refused: ")]
+    others = [r for r in rows if r["status"] != "complete" and r not in refused]
+    if refused:
+        r = refused[0]
+        why = r.get("refusal") or {"file": args.case, "key": "", "message": r["status"]}
+        print(f"error: {why['file']}: " + (f"{why['key']}: " if why["key"] else "")
+              + f"variant {r['variant']} ({labels[r['variant']]}): {why['message']} "
+              f"({len(refused)} of {len(rows)} variants refused; rows in {table})",
+              file=sys.stderr)
+        return 2
+    if others:
+        r = others[0]
+        print(f"error: {len(others)} of {len(rows)} variants did not complete (variant "
+              f"{r['variant']} ({labels[r['variant']]}): {r['status']}); rows in {table}",
+              file=sys.stderr)
+        return 3
+    return 0
 
 
 def bench_directory(out, case):
@@ -345,6 +371,8 @@ COMMANDS = {"run": cmd_run, "info": cmd_info, "modes": cmd_modes, "cea": cmd_cea
 
 def main(argv=None):
     args = build_parser().parse_args(argv)
+    # the command line as given: a campaign's lock names it
+    args.argv = list(sys.argv[1:] if argv is None else argv)
     try:
         return COMMANDS[args.command](args)
     except CaseError as exc:
