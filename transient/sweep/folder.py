@@ -27,11 +27,12 @@ def check_out(out):
         raise CaseError(WHERE, "--out", "an empty name: expected a folder")
     out = Path(out)
     try:
-        kind = None if not out.exists() else "dir" if out.is_dir() else "file"
+        kind = None if not out.exists() else "dir" if out.is_dir() else (
+            "a file" if out.is_file() else "a device, pipe or socket")
     except (OSError, ValueError) as exc:
         raise CaseError(out, "--out", f"not a usable folder name ({exc})") from None
-    if kind == "file":
-        raise CaseError(out, "--out", "is a file: expected a folder")
+    if kind not in (None, "dir"):
+        raise CaseError(out, "--out", f"is {kind}: expected a folder")
     return out
 
 
