@@ -220,6 +220,13 @@ def test_what_resume_makes_of_a_stored_history(tmp_path, capsys):
                 _what(out, v, SHORT, resume=resume)
     # kind both: its complex modes missing, the history is made again with them
     assert _what(out, v, SHORT, "both") == "fresh"
+    # complete, but its rows cannot be read back: made again
+    with h5py.File(path, "a") as f:
+        f.attrs["status"] = "complete"
+    assert _what(out, v, SHORT) == "done"
+    with h5py.File(path, "a") as f:
+        del f["time"]
+    assert _what(out, v, SHORT) == "fresh"
 
 
 def test_what_resume_makes_of_stored_complex_modes(tmp_path):
@@ -233,6 +240,10 @@ def test_what_resume_makes_of_stored_complex_modes(tmp_path):
                                 "case": case.text, "case_path": str(TWO),
                                 "overrides": list(case.overrides)}))
     assert _what(out, v, SHORT + ["solver.dt=1e-8", "solver.t_end=1.0"], "cea") == "done"
+    stored = json.loads(path.read_text())
+    path.write_text(json.dumps({**stored, "modes": [{"real": 1.0}]}))
+    assert _what(out, v, SHORT + ["solver.dt=1e-8"], "cea") == "fresh"     # unreadable
+    path.write_text(json.dumps(stored))
     with pytest.raises(CaseError, match=f"variant {v.name} .*solver.dt differs"):
         _what(out, v, SHORT, "cea")
     assert _what(out, v, SHORT, "cea", resume=False) == "fresh"

@@ -25,7 +25,7 @@ from pathlib import Path
 from ..errors import CaseError
 from .folder import MARK, check_out, holding, write_whole
 from .outputs import is_sweep_csv, is_sweep_json, modes_file, outputs, plan
-from .tasks import KINDS, build_shared, cea_summary, run_variant, summary
+from .tasks import KINDS, build_shared, cea_summary, run_variant
 from .variants import WHERE
 
 THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
@@ -115,7 +115,7 @@ def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, schedul
             held.enter_context(holding(out, command))
         todo = plan(out, variants, cases, kind, resume)
         del cases
-        rows = {name: _restored(paths) for name, paths in todo.done.items()}
+        rows = dict(todo.done)
         if progress:
             progress(len(rows), len(variants), 0)
         shared = {}
@@ -182,15 +182,6 @@ def _gather(client, case_path, overrides, variants, todo, out, kind, rows, progr
         if progress:
             progress(len(rows), len(variants), failed)
     return counts
-
-
-def _restored(paths):
-    """The row of a variant whose outputs are complete, read back from them."""
-    row = {"status": "complete", "resumed": True}
-    for path in paths:
-        row.update(cea_summary(modes_file(path)["modes"]) if path.suffix == ".json"
-                   else summary(path))
-    return row
 
 
 def _row(v, row, kind, out):

@@ -30,7 +30,7 @@ NAME = re.compile(r"v(\d{3,}|-[0-9a-f]{12})")
 class Plan:
     """What to do with each variant: its row read back from complete outputs (done), or
     'fresh' (made anew) or 'continue' (its history resumed; its complex modes, if any, done)."""
-    done: dict               # variant name -> the paths of its complete outputs
+    done: dict               # variant name -> its row read back from its complete outputs
     todo: dict               # variant name -> 'fresh' or 'continue'
 
 
@@ -54,13 +54,29 @@ def plan(out, variants, cases, kind, resume):
                 raise CaseError(path, "--resume", f"variant {v.name} ({v.label()}): {why}: "
                                 "not replaced (remove it, or choose another --out)")
         states = [s for s, _ in states]
-        if all(s == "done" for s in states):
-            done[v.name] = outputs(out, v.name, kind)
+        row = _restored(outputs(out, v.name, kind)) if all(s == "done" for s in states) \
+            else None
+        if row is not None:
+            done[v.name] = row
         elif states[0] == "continue" and all(s == "done" for s in states[1:]):
             todo[v.name] = "continue"
         else:
             todo[v.name] = "fresh"
     return Plan(done, todo)
+
+
+def _restored(paths):
+    """The row of a variant read back from its complete outputs; None if one cannot be read
+    (of this package and the variant's: made again)."""
+    from .tasks import cea_summary, summary
+    row = {"status": "complete", "resumed": True}
+    try:
+        for path in paths:
+            row.update(cea_summary(modes_file(path)["modes"]) if path.suffix == ".json"
+                       else summary(path))
+    except (DamagedHistory, OSError, KeyError, ValueError, TypeError, RuntimeError):
+        return None
+    return row
 
 
 def _state(path, case, resume):
@@ -118,10 +134,11 @@ def _stored_run(path):
     """(root attributes, steps of its checkpoint or None) of a history."""
     import h5py
     from ..io.attributes import read_attrs
-    from ..io.history import CHECKPOINT, load_checkpoint
+    from ..io.history import CHECKPOINT, SYSTEM, load_checkpoint
     with h5py.File(path, "r", locking=False) as f:
         meta = read_attrs(f.attrs)
-        has_checkpoint = CHECKPOINT in f
+        # a resume continues the system the history stores, from its checkpoint
+        has_checkpoint = CHECKPOINT in f and SYSTEM in f
     if not isinstance(meta.get("dt"), float) or not isinstance(meta.get("status"), str):
         raise ValueError("no time step or status")
     step = int(load_checkpoint(path)["step"][0]) if has_checkpoint else None
