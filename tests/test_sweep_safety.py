@@ -243,6 +243,9 @@ def test_what_resume_makes_of_stored_complex_modes(tmp_path):
     stored = json.loads(path.read_text())
     path.write_text(json.dumps({**stored, "modes": [{"real": 1.0}]}))
     assert _what(out, v, SHORT + ["solver.dt=1e-8"], "cea") == "fresh"     # unreadable
+    path.write_text(json.dumps({**stored, "overrides": [1], "case": ["x"]}))
+    with pytest.raises(CaseError, match="its stored case does not load"):
+        _what(out, v, SHORT + ["solver.dt=1e-8"], "cea")
     path.write_text(json.dumps(stored))
     with pytest.raises(CaseError, match=f"variant {v.name} .*solver.dt differs"):
         _what(out, v, SHORT, "cea")

@@ -152,6 +152,9 @@ def _differs(path, stored, case):
         keys = changed(run_case(path, stored), case)
     except CaseError as exc:
         return f"its stored case does not load ({exc.message})"
+    except (TypeError, ValueError, AttributeError, RecursionError) as exc:
+        # complex modes whose stored case, path or overrides are not text (edited by hand)
+        return f"its stored case does not load ({type(exc).__name__}: {exc})"
     if keys:
         return (f"made with another case ({', '.join(keys[:5])}"
                 + (", ..." if len(keys) > 5 else "")
