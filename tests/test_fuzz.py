@@ -84,3 +84,43 @@ def test_fixed_seed_has_no_failure(tmp_path):
     assert report["outcomes"].get("0", 0) > MUTANTS // 20
     assert not report["failures"], fuzz.format_report(report)
     assert set(report["outcomes"]) <= {"0", "2", "3"}
+
+
+SWEEP_MUTANTS = 20
+
+
+def test_sweep_mutants_leave_the_other_mutants_as_they_were(tmp_path):
+    # a share of sweep mutants is drawn apart: every other mutant of the seed is unchanged
+    for i in range(12):
+        if fuzz.random.Random(f"{SEED}:{i}:sweep").random() < 0.5:
+            continue
+        old = fuzz.make_mutant(SEED, i, ["two_bars"], tmp_path / f"a{i}", None)
+        new = fuzz.make_mutant(SEED, i, ["two_bars"], tmp_path / f"b{i}", None, sweeps=0.5)
+        assert new.notes == old.notes and new.argv[0] == old.argv[0] and new.folder is None
+
+
+def test_what_a_sweep_must_not_do_is_a_failure(tmp_path):
+    import json
+    assert fuzz.classify({"code": 2, "stderr": "error: /o: --out: x\n", "replaced": ["/o/a"]}
+                         )[0] == "FAILURE"
+    assert fuzz.classify({"code": 0, "stderr": "", "mislabelled": ["v-1: v-1.json"]}
+                         )[0] == "FAILURE"
+    # a row whose output was made with other values is found
+    (tmp_path / "v-1.json").write_text(json.dumps({"overrides": ["a.b=5e13", "c=1"]}))
+    (tmp_path / "v-2.json").write_text(json.dumps({"overrides": ["c=1", "a.b=1.0"]}))
+    (tmp_path / "sweep.json").write_text(json.dumps({"parameters": ["a.b"], "rows": [
+        {"variant": "v-1", "status": "complete", "a.b": 1.0, "output": "v-1.json"},
+        {"variant": "v-2", "status": "complete", "a.b": 1.0, "output": "v-2.json"}]}))
+    assert fuzz.mislabelled(tmp_path) == ["v-1: v-1.json"]
+
+
+def test_sweep_mutants_have_no_failure(tmp_path):
+    """A fixed seed of sweep mutants (a campaign's command line mutated, files of the user in
+    its folder, a second campaign, a resume after a changed --param list or a killed sweep):
+    each ends in exit 0 or 2 with no FAILURE, leaves the files it did not write as they were,
+    and names each row's own output."""
+    report = fuzz.fuzz(SWEEP_MUTANTS, SEED, keep=tmp_path, timeout=fuzz.TIMEOUT_S,
+                       interrupts=False, sweeps=1.0)
+    assert not report["failures"], fuzz.format_report(report)
+    assert set(report["outcomes"]) <= {"0", "2", "3"}
+    assert report["outcomes"].get("0", 0) >= 3 and report["outcomes"].get("2", 0) >= 3

@@ -14,7 +14,7 @@ from transient.cli import main
 from transient.errors import CaseError
 from transient.io.history import summary
 from transient.sweep.campaign import THREAD_ENV
-from transient.sweep.variants import make_variants, parse_parameter
+from transient.sweep.variants import make_variants, parse_parameter, variant_name
 
 ROOT = Path(__file__).resolve().parent.parent
 PAD = ROOT / "cases" / "pad_disc.toml"
@@ -32,8 +32,16 @@ def test_parameters_and_their_variants():
     assert parse_parameter('solver.scheme="implicit"').values == ("implicit",)
     grid = make_variants([mu, p])
     assert len(grid) == 8 and grid[1].values == {mu.key: 0.0, p.key: 2e6}
-    assert grid[5].name == "v005" and grid[5].overrides() == [
+    assert grid[5].overrides() == [
         "contact.pad_disc.friction.mu=0.4", "loads.piston.value=2000000.0"]
+    # named by its values, not its place: the same name from another list, another order of
+    # the parameters, or another spelling of a value
+    assert grid[5].name == variant_name({mu.key: 0.4, p.key: 2e6})
+    assert grid[5].name.startswith("v-") and len(grid[5].name) == 14
+    again = make_variants([parse_parameter("loads.piston.value=[2.0e6]"),
+                           parse_parameter("contact.pad_disc.friction.mu=[0.40, 0.5]")])
+    assert again[0].name == grid[5].name and again[1].name not in {v.name for v in grid}
+    assert len({v.name for v in grid}) == 8
     paired = make_variants([parse_parameter("a.b=[1, 2]"), parse_parameter("c.d=[3, 4]")],
                            "zip")
     assert [v.values for v in paired] == [{"a.b": 1, "c.d": 3}, {"a.b": 2, "c.d": 4}]
@@ -55,7 +63,8 @@ def test_a_bad_variant_is_refused_before_anything_runs(tmp_path, capsys):
             "--out", str(tmp_path / "out")]
     assert main(args) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "variant v001 (contact.pad_disc.friction.mu=-0.4)" in err
+    name = variant_name({"contact.pad_disc.friction.mu": -0.4})
+    assert err.count("\n") == 1 and f"variant {name} (contact.pad_disc.friction.mu=-0.4)" in err
     assert "contact.pad_disc.friction.mu" in err and not (tmp_path / "out").exists()
 
 
@@ -97,7 +106,8 @@ def campaign(tmp_path_factory):
 
 def test_a_sweep_equals_its_variants_run_one_by_one(campaign):
     out, rows, alone = campaign
-    assert [r["variant"] for r in rows] == ["v000", "v001", "v002"]
+    assert [r["variant"] for r in rows] == [variant_name({"contact.pad_disc.friction.mu": mu})
+                                            for mu in (0.0, 0.2, 0.4)]
     assert [r["contact.pad_disc.friction.mu"] for r in rows] == [0.0, 0.2, 0.4]
     for row, path in zip(rows, alone):
         assert row["status"] == "complete" and row["seconds"] > 0
@@ -125,10 +135,10 @@ def test_a_sweep_equals_its_variants_run_one_by_one(campaign):
 
 def test_resume_runs_only_the_missing_variants(campaign, capsys):
     out, rows, _ = campaign
-    (out / "v001.h5").unlink()
-    with h5py.File(out / "v002.h5", "a") as f:
+    (out / rows[1]["output"]).unlink()
+    with h5py.File(out / rows[2]["output"], "a") as f:
         f.attrs["status"] = "aborted: interrupted"           # as a sweep cut off leaves it
-    before = (out / "v000.h5").stat().st_mtime_ns
+    before = (out / rows[0]["output"]).stat().st_mtime_ns
     args = ["sweep", str(PAD), "--param", "contact.pad_disc.friction.mu=[0.0,0.2,0.4]",
             "--workers", "1", "--out", str(out), "--resume", "--json"]
     for o in SMALL:
@@ -136,7 +146,9 @@ def test_resume_runs_only_the_missing_variants(campaign, capsys):
     assert main(args) == 0
     again = json.loads(capsys.readouterr().out.splitlines()[-1])["rows"]
     assert [r["resumed"] for r in again] == [True, False, False]
-    assert (out / "v000.h5").stat().st_mtime_ns == before
+    # the interrupted history goes on from its checkpoint (here its last step: no step again)
+    assert [r["continued"] for r in again] == [False, False, True]
+    assert (out / rows[0]["output"]).stat().st_mtime_ns == before
     assert all(r["status"] == "complete" for r in again)
     # rows read back from a complete history, and rerun ones, say the same
     assert [r["growth_rate"] for r in again] == [r["growth_rate"] for r in rows]
@@ -203,23 +215,40 @@ def test_the_run_sweeps_pictures(campaign, capsys):
     assert "--x" in capsys.readouterr().err
 
 
-def _mu_sweep(out, kind, capsys):
-    args = ["sweep", str(PAD), "--param", "contact.pad_disc.friction.mu=[0.0,0.4]", "--kind",
+def _mu_args(out, kind, values="[0.0,0.4]", *more):
+    args = ["sweep", str(PAD), "--param", f"contact.pad_disc.friction.mu={values}", "--kind",
             kind, "--workers", "1", "--out", str(out), "--json"]
     for o in SMALL:
         args += ["--set", o]
-    assert main(args) == 0
+    return args + list(more)        # after SMALL: its overrides win
+
+
+def _mu_sweep(out, kind, capsys, values="[0.0,0.4]", *more):
+    assert main(_mu_args(out, kind, values, *more)) == 0
     return json.loads(capsys.readouterr().out.splitlines()[-1])["rows"]
 
 
-def test_a_cea_sweep_and_its_stability_map(campaign, tmp_path, capsys):
+@pytest.fixture(scope="module")
+def cea_campaign(tmp_path_factory):
+    """A cea sweep of mu 0, 0.2 and 0.4 on one worker: its folder and rows."""
+    out = tmp_path_factory.mktemp("cea") / "cea"
+    assert main(_mu_args(out, "cea", "[0.0,0.2,0.4]")) == 0
+    return out, json.loads((out / "sweep.json").read_text())["rows"]
+
+
+def _modes(path):
+    return [(m["frequency_hz"], m["real"]) for m in json.loads(path.read_text())["modes"]]
+
+
+def test_a_cea_sweep_and_its_stability_map(campaign, cea_campaign, tmp_path, capsys):
     """mu 0 and 0.4 on the small pad and disc: no unstable mode, then its flutter pair's
     growing member (11-12.5 kHz); the map of every mode against mu."""
-    out = tmp_path / "cea"
-    rows = _mu_sweep(out, "cea", capsys)
+    out, rows = cea_campaign
+    assert [r["contact.pad_disc.friction.mu"] for r in rows] == [0.0, 0.2, 0.4]
+    rows = [rows[0], rows[2]]                           # mu 0 and 0.4
     assert [r["unstable"] for r in rows][0] == 0 and rows[1]["unstable"] >= 1
     assert 11e3 < rows[1]["frequency_hz"] < 12.5e3 and rows[1]["max_real"] > 500
-    modes = json.loads((out / "v001.json").read_text())["modes"]
+    modes = json.loads((out / rows[1]["output"]).read_text())["modes"]
     assert len(modes) > 10 and sum(m["unstable"] for m in modes) == rows[1]["unstable"]
     assert main(["plot", "sweep", str(out), "-o", str(tmp_path / "map.png")]) == 0
     assert (tmp_path / "map.png").stat().st_size > 10_000
@@ -239,6 +268,141 @@ def test_a_cea_sweep_and_its_stability_map(campaign, tmp_path, capsys):
     picture = tmp_path / "both.png"
     assert main(["plot", "sweep", str(tmp_path / "both"), "-o", str(picture)]) == 0
     assert all((tmp_path / f"both_{k}.png").stat().st_size > 10_000 for k in ("cea", "run"))
+
+
+def _fds(pid, path):
+    """How many of the process's file descriptors are open on the file at path."""
+    try:
+        return sum(os.readlink(fd) == str(path) for fd in Path(f"/proc/{pid}/fd").iterdir())
+    except OSError:
+        return 0
+
+
+def _status(path):
+    """(status, rows of its checkpoint or None) of a history no one is writing."""
+    with h5py.File(path, "r", locking=False) as f:
+        return f.attrs["status"], (int(f["checkpoint"].attrs["rows"]) if "checkpoint" in f
+                                   else None)
+
+
+def _kill_once_a_variant_is_half_way(child, out, timeout=300.0):
+    """SIGKILL the sweep in child and its workers (its process group) once one variant's
+    history is complete and another's is running before 400 of its 481 rows: that worker is
+    stopped (SIGSTOP) between two writes to its history (its only descriptor on the file is
+    the lock's, not HDF5's), so the kill leaves that history as a killed run leaves it,
+    whatever the machine's speed. Returns the stopped history's path."""
+    import signal
+    import time
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        assert child.poll() is None, "the sweep ended before it was killed"
+        histories = sorted(p.resolve() for p in out.glob("v-*.h5")) if out.exists() else []
+        for pid in _group(child.pid) - {child.pid}:
+            for path in [p for p in histories if _fds(pid, p)]:
+                os.kill(pid, signal.SIGSTOP)
+                try:
+                    if _fds(pid, path) == 1 and path.stat().st_size:
+                        status, rows = _status(path)
+                        others = [_status(p)[0] for p in histories if p != path]
+                        if (status == "running" and rows is not None and 0 < rows < 400
+                                and "complete" in others):
+                            os.killpg(child.pid, signal.SIGKILL)
+                            return path
+                except (OSError, KeyError):
+                    pass
+                os.kill(pid, signal.SIGCONT)
+        time.sleep(0.002)
+    raise AssertionError("no variant seen half way")
+
+
+def _group(group):
+    """The live (not zombie) processes of a process group."""
+    pids = set()
+    for proc in Path("/proc").iterdir():
+        try:
+            if proc.name.isdigit() and os.getpgid(int(proc.name)) == group and (
+                    (proc / "stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"):
+                pids.add(int(proc.name))
+        except (OSError, IndexError):
+            continue
+    return pids
+
+
+def test_a_killed_sweep_resumes_to_the_fresh_outputs(campaign, cea_campaign, tmp_path, capsys):
+    """A sweep of both kinds killed (SIGKILL, its workers with it) with one variant complete
+    and the other's run half way, then resumed: the complete one read back, the other's
+    history continued from its checkpoint; every history bit for bit the run alone, every
+    complex mode the cea sweep's. Resumed again with another list of values: the value kept
+    is read back, the new one computed, equal to fresh ones; the value left out keeps its
+    files untouched."""
+    import time
+    out = tmp_path / "killed"
+    env = {**os.environ, **THREAD_ENV, "PYTHONPATH": str(ROOT)}
+    # two steps a chunk (a chunk changes where the run is cut, never its numbers): the run
+    # stored at many points, one of which the kill finds
+    child = subprocess.Popen([sys.executable, "-m", "transient"]
+                             + _mu_args(out, "both", "[0.0,0.4]", "--set", "solver.chunk=2"),
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
+                             start_new_session=True)
+    stopped = _kill_once_a_variant_is_half_way(child, out)
+    child.communicate(timeout=60)
+    deadline = time.monotonic() + 60
+    while _group(child.pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not _group(child.pid)
+    assert _status(stopped)[0] == "running"          # as a killed run leaves it
+    fresh = {0.0: (campaign[2][0], cea_campaign[1][0]), 0.2: (campaign[2][1],
+                                                              cea_campaign[1][1]),
+             0.4: (campaign[2][2], cea_campaign[1][2])}
+
+    def check(rows):
+        for row in rows:
+            alone, cea_row = fresh[row["contact.pad_disc.friction.mu"]]
+            assert row["status"] == "complete"
+            got, ref = _arrays(out / row["output"]), _arrays(alone)
+            assert set(got) == set(ref) and len(got) > 5
+            for name in ref:
+                assert np.array_equal(got[name], ref[name]), (row["variant"], name)
+            assert _modes(out / row["modes_output"]) == _modes(cea_campaign[0]
+                                                               / cea_row["output"])
+    rows = _mu_sweep(out, "both", capsys, "[0.0,0.4]", "--resume")
+    check(rows)
+    assert {r["output"]: (r["resumed"], r["continued"]) for r in rows}[stopped.name] == (
+        False, True)
+    assert sorted(r["resumed"] for r in rows) == [False, True]
+    kept = {p.name: p.read_bytes() for p in out.iterdir() if p.name.startswith("v-")}
+    again = _mu_sweep(out, "both", capsys, "[0.2,0.4]", "--resume")
+    check(again)
+    assert [(r["resumed"], r["continued"]) for r in again] == [(False, False), (True, False)]
+    assert [r["variant"] for r in again][1] == rows[1]["variant"]
+    for name, data in kept.items():                  # mu 0 and 0.4: untouched
+        assert (out / name).read_bytes() == data, name
+    saved = json.loads((out / "sweep.json").read_text())["rows"]
+    assert [r["contact.pad_disc.friction.mu"] for r in saved] == [0.2, 0.4]
+
+
+def test_a_sweep_resumed_to_a_longer_t_end_continues_its_histories(campaign, tmp_path,
+                                                                   capsys):
+    """Stopped at half the time, then resumed to the whole: each history continues from its
+    checkpoint, bit for bit the run alone to the whole; to a shorter time than stored, the
+    campaign is refused (the longer run would be lost)."""
+    out = tmp_path / "half"
+    half = ["--set", "solver.t_end=1.5e-3"]
+    rows = _mu_sweep(out, "run", capsys, "[0.0,0.4]", *half)
+    assert all(r["steps"] == 480 for r in rows)
+    rows = _mu_sweep(out, "run", capsys, "[0.0,0.4]", "--resume")
+    assert [(r["resumed"], r["continued"]) for r in rows] == [(False, True)] * 2
+    for row, alone in zip(rows, (campaign[2][0], campaign[2][2])):
+        got, ref = _arrays(out / row["output"]), _arrays(alone)
+        assert set(got) == set(ref)
+        for name in ref:
+            assert np.array_equal(got[name], ref[name]), (row["variant"], name)
+    assert rows[1]["growth_rate"] == campaign[1][2]["growth_rate"]
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert main(_mu_args(out, "run", "[0.0,0.4]", "--resume", *half)) == 2
+    err = capsys.readouterr().err
+    assert "holds a longer run" in err and f"variant {rows[0]['variant']}" in err
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
 
 
 def test_plot_sweep_needs_a_sweep(tmp_path, capsys):

@@ -13,7 +13,11 @@ random moment (--no-interrupts leaves it out: where SIGINT lands depends on the 
 speed, every other outcome does not). Most mutants are `run`, some `modes` and `compat`;
 others damage a copy of a history (truncated, bytes overwritten, datasets or attributes
 deleted or retyped, the stored case text broken) and give it to `info`, `plot`, `export` or
-`run --resume`.
+`run --resume`. With `--sweeps SHARE`, that share of the mutants run `transient sweep` (a
+mutated command line, files of the user at the names it writes, a second campaign on its
+folder, a resume after a changed --param list or a killed sweep: sweep_mutant); a file the
+package did not write that it replaced, or a row naming an output of other values, is a
+FAILURE.
 
 Mutants run in-process through `transient.cli.main` in a worker subprocess (many in sequence)
 with an address-space limit (RLIMIT_AS) and a per-mutant timeout; a crash, a timeout or a
@@ -30,7 +34,7 @@ files so its command line reruns as printed. The exit code is 1 when a FAILURE o
 
     python tools/fuzz_cases.py [--mutants N] [--seed S] [--cases a,b] [--json] [--keep DIR]
                                [--only I,J] [--no-interrupts] [--timeout SECONDS]
-                               [--memory-gb GB]
+                               [--memory-gb GB] [--sweeps SHARE]
 """
 import argparse
 import copy
@@ -951,6 +955,253 @@ def history_mutant(d, base_history, base_case_file):
     return argv
 
 
+# ----------------------------------------------------------------------------- sweeps
+
+# Sweep mutants (opt-in, `--sweeps SHARE`: without them every seed makes the mutants it made
+# before): `transient sweep` of two_bars with its command line mutated, files in its --out at
+# the names it writes, a second campaign holding the folder, a resume with a changed --param
+# list or --set, a resume after a killed sweep (a history left running, interrupted or empty,
+# a stale lock, the tables missing, a history cut mid-write). Judged as any mutant, and
+# beyond: every file of the folder the package did not write is as it was, and each row of
+# a sweep that ends 0 names the output its own values made.
+SWEEP_CASE = "two_bars"
+SWEEP_KEY = "contact.impact.k"
+SWEEP_VALUES = [1e14, 5e13]             # the base campaign's, made once per fuzz session
+SWEEP_SETS = ["solver.t_end=2e-5", "limits.memory=1.0", "limits.steps=50000"]
+SWEEP_FAULTS = [("options", 30), ("user file", 25), ("second campaign", 10),
+                ("changed list", 20), ("killed", 15)]
+SWEEP_PARAMS = [f"{SWEEP_KEY}=0:1e14:1000000000", f"{SWEEP_KEY}=0:inf:3",
+                f"{SWEEP_KEY}=nan:1:2", f"{SWEEP_KEY}=1:2:x", f"{SWEEP_KEY}=1:2:-3",
+                f"{SWEEP_KEY}=[]", f"{SWEEP_KEY}=[1e14,", f"{SWEEP_KEY}=", "=1",
+                f"{SWEEP_KEY}=[1e14, 1.0e14]", f"{SWEEP_KEY}=5e13:5e13:3",
+                f"{SWEEP_KEY}={{a = 1}}", f"{SWEEP_KEY}=1979-05-27", f"{SWEEP_KEY}=-1.0",
+                f"{SWEEP_KEY}=\"abc\"", "contact.impact.kk=[1.0]", "solver.t_end=[1e-5]",
+                f"{SWEEP_KEY}=[" + ",".join(["1e14"] * 20000) + "]",
+                f"{SWEEP_KEY}=1:2:" + "9" * 5000, "x" * 5000 + "=[1]", "a\nb=[1]"]
+SWEEP_OPTIONS = [["--kind", "CEA"], ["--kind", ""], ["--workers", "0"], ["--workers", "-1"],
+                 ["--scheduler", "not an address"], ["--scheduler", ""],
+                 ["--scheduler", "tcp://host:port"], ["--scheduler", "foo://bar:1"],
+                 ["--scheduler", "tcp://h:99999"], ["--scheduler", "inproc://x"],
+                 ["--zip"], ["--resume"], ["--json"]]
+SWEEP_OUTS = ["", "CASE", "CASE/out", "/proc/sweep", "/dev/null", "/sys/sweep",
+              "DIR/out\x00x", "DIR/" + "x" * 300, "DIR/deeper/out", "DIR/out\n"]
+USER_FILES = ["csv", "text", "foreign hdf5", "directory", "json", "empty json list"]
+
+
+def sweep_argv(d, values, out, kind="run", more=()):
+    """The command line of a sweep of two_bars over SWEEP_KEY."""
+    argv = ["sweep", str(d.case_file), "--param", f"{SWEEP_KEY}=[{', '.join(map(repr, values))}]",
+            "--kind", kind, "--workers", "1", "--out", str(out)]
+    for o in SWEEP_SETS + list(more):
+        argv += ["--set", o]
+    return argv
+
+
+def sweep_names(values, kind, keys=None):
+    """The files a sweep of these values writes (a variant's are named by its values)."""
+    from transient.sweep.variants import variant_name
+    suffixes = {"run": [".h5"], "cea": [".json"], "both": [".h5", ".json"]}[kind]
+    return [variant_name({SWEEP_KEY: v, **(keys or {})}) + s for v in values for s in suffixes]
+
+
+def user_file(path, what):
+    """A file the package did not write, at path."""
+    import h5py
+    if what == "csv":
+        path.write_text("name,value\nmine,1\n")
+    elif what == "text":
+        path.write_text("notes that are mine\n")
+    elif what == "foreign hdf5":
+        with h5py.File(path, "w") as f:
+            f["time"] = [0.0, 1.0]
+            f.attrs["rows"] = 2
+    elif what == "directory":
+        path.mkdir()
+        (path / "inside.txt").write_text("mine")
+    elif what == "json":
+        path.write_text(json.dumps({"status": "complete", "modes": []}))
+    else:
+        path.write_text("[]")
+
+
+def sweep_mutant(d, campaign):
+    """A sweep mutant of d (its directory made, d.case_file written): its argv, the files to
+    find unchanged (path -> content), the folder whose rows must name their outputs, and the
+    lock the parent holds while it runs (None: none)."""
+    fault = d.rng.choices(*zip(*SWEEP_FAULTS))[0]
+    d.note(f"sweep: {fault}")
+    out = d.directory / "out"
+    values, kind, more = list(SWEEP_VALUES), "run", []
+    if fault in ("changed list", "killed") or (fault == "second campaign"
+                                               and d.rng.random() < 0.5):
+        shutil.copytree(campaign(), out)
+        d.note("the base campaign copied to --out")
+    if fault == "options":
+        argv = sweep_argv(d, d.rng.sample(SWEEP_VALUES + [2e13], d.rng.randint(1, 2)), out)
+        for _ in range(d.rng.randint(1, 2)):
+            what = d.pick(["param", "param", "option", "out", "set"])
+            if what == "param":
+                i = argv.index("--param") + 1
+                argv[i] = d.pick(SWEEP_PARAMS + ["sixteen"])
+                if argv[i] == "sixteen":
+                    argv[i:i + 1] = [a for j in range(16) for a in (f"k{j}.x=0:1:16", "--param")
+                                     ][:-1]
+                d.note(f"--param {short(argv[i])}")
+            elif what == "option":
+                option = d.pick(SWEEP_OPTIONS)
+                argv += option
+                d.note(" ".join(option))
+            elif what == "out":
+                target = resolve(d.pick(SWEEP_OUTS), d)
+                argv[argv.index("--out") + 1] = target
+                d.note(f"--out {short(target)}")
+            else:
+                argv += ["--set", d.pick(MALFORMED_SETS[:12])]
+                d.note(f"--set {short(argv[-1])}")
+        return argv, {}, out, None
+    if fault == "user file":
+        kind = d.pick(["run", "cea", "both"])
+        names = ["sweep.csv", "sweep.json", "sweep.lock"] + sweep_names(values, kind)
+        name = d.pick(names)
+        out.mkdir(exist_ok=True)
+        what = d.pick(USER_FILES)
+        user_file(out / name, what)
+        d.note(f"--kind {kind}; {what} at {name}")
+        return sweep_argv(d, values, out, kind), guard(out), out, None
+    if fault == "second campaign":
+        out.mkdir(exist_ok=True)
+        d.note("another campaign holds the folder")
+        return sweep_argv(d, values, out), guard(out), out, out / "sweep.lock"
+    if fault == "changed list":
+        values = d.rng.sample(SWEEP_VALUES + [2e13, 1.0e14, 8e13], d.rng.randint(1, 3))
+        if len(set(values)) < len(values):
+            values = sorted(set(values))
+        if d.rng.random() < 0.4:
+            more = [d.pick(["solver.t_end=4e-5", "solver.t_end=1e-5", "solver.chunk=7",
+                            "materials.steel.rho=7000.0", "title='other'"])]
+        d.note(f"--resume with {SWEEP_KEY} = {values}" + (f", --set {more[0]}" if more else ""))
+        return sweep_argv(d, values, out, kind, more) + ["--resume"], {}, out, None
+    histories = sorted(out.glob("v-*.h5"))
+    damage = d.pick(["running", "interrupted", "empty", "stale lock", "no tables", "cut",
+                     "temporary"])
+    path = d.pick(histories)
+    if damage in ("running", "interrupted"):
+        import h5py
+        with h5py.File(path, "a", locking=False) as f:
+            f.attrs["status"] = "running" if damage == "running" else "aborted: interrupted"
+    elif damage == "empty":
+        path.write_bytes(b"")
+    elif damage == "stale lock":
+        (out / "sweep.lock").write_text(json.dumps({"lock": "transient sweep", "pid": 999999,
+                                                    "host": "gone", "started": "before",
+                                                    "command": "killed"}) + "\n")
+    elif damage == "no tables":
+        for table in ("sweep.csv", "sweep.json"):
+            (out / table).unlink()
+    elif damage == "cut":
+        data = path.read_bytes()
+        path.write_bytes(data[: len(data) // 2])
+    else:
+        (out / ".sweep.json.999999.1").write_text('{"kind": "ru')
+    d.note(f"killed: {damage}" + (f" ({path.name})" if damage in ("running", "interrupted",
+                                                                  "empty", "cut") else ""))
+    if d.rng.random() < 0.3:
+        values.append(2e13)
+        d.note(f"and {SWEEP_KEY} = 2e13 added")
+    return sweep_argv(d, values, out) + ["--resume"], {}, out, None
+
+
+def make_sweep_mutant(seed, index, directory, campaign):
+    """Sweep mutant `index` of `seed` (sweep_mutant), its files written; campaign() gives the
+    base campaign's folder, made on first use."""
+    d = Draft(random.Random(f"{seed}:{index}:sweep mutant"), directory, SWEEP_CASE)
+    directory.mkdir(parents=True)
+    d.case_file = directory / "case.toml"
+    d.case_file.write_text(dumps(tomllib.loads((CASES / f"{SWEEP_CASE}.toml").read_text())))
+    argv, guarded, folder, lock = sweep_mutant(d, campaign)
+    return Mutant(index, SWEEP_CASE, argv, d.notes, directory, lock=lock, guarded=guarded,
+                  folder=folder)
+
+
+def guard(folder):
+    """Path -> content (bytes, or the sorted names of a folder) of every file in folder: what
+    the package did not write must stay as it is."""
+    out = {}
+    for p in sorted(Path(folder).rglob("*")):
+        out[str(p)] = sorted(x.name for x in p.iterdir()) if p.is_dir() else p.read_bytes()
+    return out
+
+
+def changed_files(guarded):
+    """The guarded paths whose content changed or went away."""
+    out = []
+    for path, content in guarded.items():
+        p = Path(path)
+        now = (sorted(x.name for x in p.iterdir()) if p.is_dir() else p.read_bytes()) \
+            if p.exists() or p.is_symlink() else None
+        if now != content:
+            out.append(path)
+    return out
+
+
+def mislabelled(folder):
+    """The rows of a sweep's sweep.json whose output was made with other values than the
+    row's (the stored overrides of each output lack the row's key=literal)."""
+    import h5py
+    from transient.case.loading import literal
+    try:
+        saved = json.loads((Path(folder) / "sweep.json").read_text())
+    except (OSError, ValueError):
+        return []
+    wrong = []
+    for row in saved.get("rows", []):
+        want = {f"{k}={literal(row[k])}" for k in saved.get("parameters", [])}
+        for key in ("output", "modes_output"):
+            path = Path(folder) / row.get(key, "")
+            if key not in row or not path.is_file() or row.get("status") != "complete":
+                continue
+            if path.suffix == ".json":
+                stored = json.loads(path.read_text()).get("overrides") or []
+            else:
+                with h5py.File(path, "r", locking=False) as f:
+                    stored = json.loads(f.attrs.get("overrides", "[]"))
+            if not want <= set(stored):
+                wrong.append(f"{row.get('variant')}: {path.name}")
+    return wrong
+
+
+def _run_sweep_mutant(worker_, mutant, timeout):
+    """The worker's result of a sweep mutant (the folder's lock held meanwhile if it asks),
+    with what it changed of the files the package did not write (replaced) and the rows that
+    name an output of other values (mislabelled)."""
+    import fcntl
+    job = {"id": mutant.id, "argv": mutant.argv, "cwd": str(mutant.directory),
+           "interrupt": None}
+    if mutant.lock is None:
+        result = worker_.run(job, timeout)
+    else:
+        with open(mutant.lock, "wb") as held:
+            fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            result = worker_.run(job, timeout)
+    result["replaced"] = changed_files(mutant.guarded or {})
+    result["mislabelled"] = mislabelled(mutant.folder) if result.get("code") == 0 else []
+    return result
+
+
+def _make_sweep(worker_, directory, timeout):
+    """The base campaign of the sweep mutants, made once: its folder."""
+    directory.mkdir(parents=True, exist_ok=True)
+    d = Draft(random.Random(0), directory, SWEEP_CASE)
+    d.case_file = directory / "sweep_case.toml"
+    d.case_file.write_text(dumps(tomllib.loads((CASES / f"{SWEEP_CASE}.toml").read_text())))
+    out = directory / "campaign"
+    result = worker_.run({"id": "sweep", "argv": sweep_argv(d, SWEEP_VALUES, out),
+                          "cwd": str(directory), "interrupt": None}, timeout)
+    if result.get("code") != 0:
+        raise RuntimeError(f"the base campaign could not be made: {json.dumps(result)[:2000]}")
+    return out
+
+
 # ----------------------------------------------------------------------------- mutants
 
 
@@ -964,6 +1215,8 @@ class Mutant:
     directory: Path
     interrupt: float = None
     lock: Path = None
+    guarded: dict = None      # sweeps: path -> content of the files the package did not write
+    folder: Path = None       # sweeps: the --out whose rows must name their own outputs
 
 
 def case_mutant(d):
@@ -991,7 +1244,8 @@ def case_mutant(d):
     return argv
 
 
-def make_mutant(seed, index, bases, directory, histories, interrupts=True):
+def make_mutant(seed, index, bases, directory, histories, interrupts=True, sweeps=0.0,
+                campaign=None):
     """Mutant `index` of `seed`, its files written: the same on every machine, whatever ran
     before it.
 
@@ -1006,11 +1260,17 @@ def make_mutant(seed, index, bases, directory, histories, interrupts=True):
         The base histories of HISTORY_RUNS, made on first use.
     interrupts : bool
         Allow Ctrl-C mutations (without them no outcome depends on the machine's speed).
+    sweeps : float
+        The share of sweep mutants, drawn apart: 0 leaves every other mutant as it was.
+    campaign : callable() -> Path
+        The base campaign of the sweep mutants, made on first use.
 
     Returns
     -------
     Mutant
     """
+    if sweeps and random.Random(f"{seed}:{index}:sweep").random() < sweeps:
+        return make_sweep_mutant(seed, index, directory, campaign)
     rng = random.Random(f"{seed}:{index}")
     base = rng.choice(bases)
     directory.mkdir(parents=True)
@@ -1310,6 +1570,10 @@ def classify(result):
         # ignored (and printed); the package cannot catch it
         if not (u.startswith("KeyboardInterrupt ") and interrupted):
             failures.append(f"unraisable exception: {u.split(' ')[0]}")
+    if result.get("replaced"):
+        failures.append("a file the package did not write was replaced or removed")
+    if result.get("mislabelled"):
+        failures.append("a sweep's row names an output of other values")
     lines = stderr.splitlines()
     if code in (2, 3) and not exception:
         if len(lines) != 1:
@@ -1355,7 +1619,7 @@ def example(mutant, result):
 
 
 def fuzz(mutants=200, seed=0, cases=None, keep=None, only=None, timeout=TIMEOUT_S,
-         memory_gb=MEMORY_GB, progress=None, interrupts=True):
+         memory_gb=MEMORY_GB, progress=None, interrupts=True, sweeps=0.0):
     """Generate and run mutants; the outcome classes and one example per failure class.
 
     Parameters
@@ -1380,6 +1644,9 @@ def fuzz(mutants=200, seed=0, cases=None, keep=None, only=None, timeout=TIMEOUT_
     interrupts : bool
         Include Ctrl-C mutations. Where SIGINT lands depends on the machine's speed, so
         without them every outcome is the same on every machine.
+    sweeps : float
+        The share of sweep mutants (sweep_mutant), 0 by default: the other mutants of a seed
+        are the same whatever it is.
 
     Returns
     -------
@@ -1404,13 +1671,19 @@ def fuzz(mutants=200, seed=0, cases=None, keep=None, only=None, timeout=TIMEOUT_
             made[name] = _make_history(worker_, root / "histories", name, timeout)
         return made[name]
 
+    def campaign():
+        if "sweep" not in made:
+            made["sweep"] = _make_sweep(worker_, root / "histories", timeout)
+        return made["sweep"]
+
     outcomes, failures, slowest = {}, {}, (0.0, -1)
     try:
         for n, i in enumerate(ids, 1):
             directory = root / f"m{i:05d}"
             if directory.exists():
                 shutil.rmtree(directory)
-            mutant = make_mutant(seed, i, bases, directory, histories, interrupts)
+            mutant = make_mutant(seed, i, bases, directory, histories, interrupts, sweeps,
+                                 campaign)
             result = _run_mutant(worker_, mutant, timeout)
             outcome, classes = classify(result)
             outcomes[outcome] = outcomes.get(outcome, 0) + 1
@@ -1443,6 +1716,8 @@ def fuzz(mutants=200, seed=0, cases=None, keep=None, only=None, timeout=TIMEOUT_
 def _run_mutant(worker_, mutant, timeout):
     """The worker's result of mutant, with the lock on its output held meanwhile if it
     asks for one."""
+    if mutant.folder is not None:
+        return _run_sweep_mutant(worker_, mutant, timeout)
     job = {"id": mutant.id, "argv": mutant.argv, "cwd": str(mutant.directory),
            "interrupt": mutant.interrupt}
     if mutant.lock is None:
@@ -1517,6 +1792,9 @@ def main(argv=None):
     parser.add_argument("--memory-gb", type=float, default=MEMORY_GB, metavar="GB")
     parser.add_argument("--no-interrupts", action="store_true", help="no Ctrl-C mutations "
                         "(then no outcome depends on the machine's speed)")
+    parser.add_argument("--sweeps", type=float, default=0.0, metavar="SHARE",
+                        help="share of sweep mutants (default 0: the mutants of a seed are "
+                        "those it made before they existed)")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -1527,7 +1805,7 @@ def main(argv=None):
         report = fuzz(args.mutants, args.seed, [c for c in args.cases.split(",") if c],
                       args.keep, only, args.timeout, args.memory_gb,
                       lambda line: print(line, file=sys.stderr, flush=True),
-                      not args.no_interrupts)
+                      not args.no_interrupts, args.sweeps)
     except (ValueError, RuntimeError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -10,6 +10,7 @@ from ..case.loading import load
 from ..errors import CaseError, FactorizationError, stop_reason
 from .parser import build_parser
 from .plotting import cmd_export, cmd_plot
+from .sweeping import cmd_sweep
 
 
 def cmd_modes(args):
@@ -263,38 +264,6 @@ def _numbers(text, key, kind):
                         f"'{text}'") from None
 
 
-def cmd_sweep(args):
-    from ..sweep.campaign import sweep
-    from ..sweep.variants import make_variants, parse_parameter
-    variants = make_variants([parse_parameter(t) for t in args.param], args.mode or "grid")
-    bar = None
-    if not args.json and sys.stderr.isatty() and not os.environ.get("CI"):
-        from tqdm import tqdm
-        bar = tqdm(total=len(variants), unit="variant", desc="sweep")
-
-    def progress(done, total, failed):
-        if bar is not None:
-            bar.n = done
-            bar.set_postfix(failed=failed)
-            bar.refresh()
-
-    rows = sweep(args.case, variants, args.out, args.kind, args.overrides, args.workers,
-                 args.scheduler, args.resume, progress,
-                 None if args.json else lambda text: print(text, flush=True))
-    if bar is not None:
-        bar.close()
-    if args.json:
-        print(json.dumps({"rows": rows}))
-    else:
-        for row in rows:
-            print(f"{row['variant']} {row['status']}"
-                  + "".join(f" {k}={row[k]}" for k in variants[0].values))
-        done = sum(r["status"] == "complete" for r in rows)
-        print(f"{done} of {len(rows)} variants complete; wrote {Path(args.out) / 'sweep.csv'}, "
-              f"{Path(args.out) / 'sweep.json'}")
-    return 0 if all(r["status"] == "complete" for r in rows) else 3
-
-
 def bench_directory(out, case):
     """The bench's output directory, made and checked writable before the sweep: --out, or
     <case name>_bench in the working directory (not next to a shipped case)."""
@@ -348,6 +317,8 @@ COMMANDS = {"run": cmd_run, "info": cmd_info, "modes": cmd_modes, "cea": cmd_cea
 
 def main(argv=None):
     args = build_parser().parse_args(argv)
+    # the command line as given: a campaign's lock names it
+    args.argv = list(sys.argv[1:] if argv is None else argv)
     try:
         return COMMANDS[args.command](args)
     except CaseError as exc:

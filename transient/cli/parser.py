@@ -64,6 +64,12 @@ def build_parser():
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
     p = sub.add_parser("sweep", help="a campaign: the case run (or analysed) for every "
                        "combination of parameter values, on Dask")
+    p.epilog = ("Each variant's outputs are named by its values (DIR/v-<hash>.h5, .json); "
+                "sweep.csv and sweep.json list them with their values. The folder is held by "
+                "one campaign at a time, and a file there that this package did not write is "
+                "never replaced. Exit code: 0 when every variant completes, 2 when a variant "
+                "is refused (bad input: the first one is said), 3 when none is refused but "
+                "one did not complete (a run aborted).")
     _case_args(p)
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUES",
                    help="a case key and its values: a TOML list ([0.2,0.4]) or "
@@ -81,8 +87,10 @@ def build_parser():
                    "(tcp://HOST:PORT) instead of the embedded cluster")
     p.add_argument("--out", metavar="DIR", required=True, help="directory of the variants' "
                    "outputs, sweep.csv and sweep.json")
-    p.add_argument("--resume", action="store_true", help="skip the variants whose outputs "
-                   "in DIR are complete")
+    p.add_argument("--resume", action="store_true", help="keep the variants whose outputs "
+                   "in DIR are complete and made with the same case and overrides (as run "
+                   "--resume checks), continue the histories stopped short of solver.t_end, "
+                   "make the others; an output of another case is refused")
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
     _plot_parser(sub)
     p = sub.add_parser("export", help="a history as time series for ParaView: the contact "

@@ -10,17 +10,22 @@ model's structure, the contact pairs' geometry, the factorization with the conta
 update, the basis at a friction's basis_mu) share its result, built once by a task of its own
 and sent to each worker once (a factorization is made again where it lands: PARDISO's handle
 does not travel). A task whose worker dies is rerun on another by the scheduler; a variant
-that is refused or aborts is a row with its reason. --resume skips the variants whose outputs are complete (their rows are read
-back from them) and reruns the others.
+that is refused or aborts is a row with its reason. The folder is held by one campaign at a
+time (folder.holding), and every path it writes is checked before any work (outputs.plan):
+--resume reads back the variants whose outputs are complete and the variant's own, continues
+the histories stopped short, and makes the others again.
 """
 import csv
+import io
 import json
 import time
+from contextlib import ExitStack
 from pathlib import Path
 
 from ..errors import CaseError
-from .tasks import (KINDS, build_shared, cea_summary, complete, output_path, outputs,
-                    run_variant, summary)
+from .folder import MARK, check_out, holding, write_whole
+from .outputs import is_sweep_csv, is_sweep_json, modes_file, outputs, plan
+from .tasks import KINDS, build_shared, cea_summary, run_variant
 from .variants import WHERE
 
 THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
@@ -30,12 +35,13 @@ FIRST = ("variant", "status", "seconds")
 
 def check_variants(case_path, overrides, variants, kind):
     """Load every variant (and, for runs, check what the transient refuses) before anything
-    runs: the first bad one is a CaseError naming it. Returns each variant's keys of the
-    shareable stages (shared.stage_key, by stage): variants with equal keys share them."""
+    runs: the first bad one is a CaseError naming it. Returns each variant's Case and its keys
+    of the shareable stages (shared.stage_key, by stage: variants with equal keys share
+    them), by name."""
     from ..case.checks import check_transient
     from ..case.loading import load
     from ..shared import SHARED, stage_key
-    keys = {}
+    cases, keys = {}, {}
     for v in variants:
         try:
             case = load(case_path, list(overrides) + v.overrides())
@@ -44,8 +50,32 @@ def check_variants(case_path, overrides, variants, kind):
         except CaseError as exc:
             raise CaseError(exc.path, exc.key, f"variant {v.name} ({v.label()}): "
                             f"{exc.message}") from None
+        cases[v.name] = case
         keys[v.name] = {stage: stage_key(case, stage) for stage in SHARED}
-    return keys
+    return cases, keys
+
+
+def check_cluster(scheduler, workers):
+    """Refuse a scheduler address that is not one, or fewer than one worker, before any work
+    (a Client would raise its own ValueError only once the variants are checked)."""
+    if scheduler is None:
+        if workers < 1:
+            raise CaseError(WHERE, "--workers", f"expected at least 1, got {workers}")
+        return
+    try:
+        from distributed.comm import get_address_host_port
+    except ImportError:
+        raise CaseError(WHERE, "sweep", "needs dask.distributed: pip install "
+                        "\"transient[sweep]\" (or dask[distributed])") from None
+    if scheduler.partition("://")[0] == "ucx":       # its own host and port rules
+        return
+    try:
+        _, port = get_address_host_port(scheduler)
+        if not 0 < port < 65536:
+            raise ValueError(f"port {port} out of range")
+    except ValueError as exc:
+        raise CaseError(WHERE, "--scheduler", f"expected an address such as "
+                        f"tcp://HOST:PORT, got '{scheduler}' ({exc})") from None
 
 
 def client_for(scheduler, workers):
@@ -55,72 +85,70 @@ def client_for(scheduler, workers):
     except ImportError:
         raise CaseError(WHERE, "sweep", "needs dask.distributed: pip install "
                         "\"transient[sweep]\" (or dask[distributed])") from None
-    if scheduler:
+    if scheduler is not None:
         try:
             return Client(scheduler, timeout="30s"), None
-        except (OSError, TimeoutError) as exc:
+        except (OSError, TimeoutError, ValueError) as exc:
             raise CaseError(WHERE, "--scheduler", f"cannot reach {scheduler}: {exc}") from None
-    if workers < 1:
-        raise CaseError(WHERE, "--workers", f"expected at least 1, got {workers}")
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                            env=THREAD_ENV, dashboard_address=":0", silence_logs=50)
     return Client(cluster), cluster
 
 
 def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, scheduler=None,
-          resume=False, progress=None, announce=print):
+          resume=False, progress=None, announce=print, command=None):
     """Run the variants; returns their rows (in variant order) and writes the campaign's
-    files in out. progress(done, total, failed) after each variant; announce(text) says
-    where the dashboard is."""
+    files in out, which it holds meanwhile (command: what the lock says holds it).
+    progress(done, total, failed) after each variant; announce(text) says where the dashboard
+    is."""
     if kind not in KINDS:
         raise CaseError(WHERE, "--kind", f"expected one of {', '.join(KINDS)}, got '{kind}'")
-    keys = check_variants(case_path, overrides, variants, kind)
-    out = Path(out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise CaseError(out, "--out", f"cannot write: {exc.strerror or exc}") from None
-    rows = {}
-    todo = []
-    for v in variants:
-        paths = outputs(out, v.name, kind)
-        if resume and all(complete(p) for p in paths):
-            rows[v.name] = _restored(paths)
-        else:
-            for path in paths:
-                path.unlink(missing_ok=True)    # a partial output from an interrupted sweep
-            todo.append(v)
-    if progress:
-        progress(len(rows), len(variants), 0)
-    shared = {}
-    if todo:
-        client, cluster = client_for(scheduler, workers)
-        try:
-            if announce:
-                announce(f"dask dashboard: {client.dashboard_link}")
-            shared = _gather(client, case_path, overrides, todo, out, kind, rows,
-                             len(variants), progress, keys)
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
-    table = [_row(v, rows[v.name], kind, out) for v in variants]
-    write(table, out, list(variants[0].values), kind, shared)
+    check_cluster(scheduler, workers)
+    out = check_out(out)
+    with ExitStack() as held:
+        # a folder that exists is held at once: a second campaign is refused before its checks
+        existed = out.is_dir()
+        if existed:
+            held.enter_context(holding(out, command))
+        cases, keys = check_variants(case_path, overrides, variants, kind)
+        if not existed:
+            held.enter_context(holding(out, command))
+        todo = plan(out, variants, cases, kind, resume)
+        del cases
+        rows = dict(todo.done)
+        if progress:
+            progress(len(rows), len(variants), 0)
+        shared = {}
+        if todo.todo:
+            client, cluster = client_for(scheduler, workers)
+            try:
+                if announce:
+                    announce(f"dask dashboard: {client.dashboard_link}")
+                shared = _gather(client, case_path, overrides, variants, todo.todo, out, kind,
+                                 rows, progress, keys)
+            finally:
+                client.close()
+                if cluster is not None:
+                    cluster.close()
+        table = [_row(v, rows[v.name], kind, out) for v in variants]
+        write(table, out, list(variants[0].values), kind, shared)
     return table
 
 
-def _gather(client, case_path, overrides, todo, out, kind, rows, total, progress, keys):
-    """Submit the variants and collect their rows; returns how many results of each stage were
-    built to be shared. Variants equal on a stage's key (two or more) take its result from a
-    task of its own, which goes on from the shallower stage's shared result: a future that is
-    an argument of theirs, so it is built once and travels to each worker once (the
-    scheduler keeps it where it is needed)."""
+def _gather(client, case_path, overrides, variants, todo, out, kind, rows, progress, keys):
+    """Submit the variants to do (name -> 'fresh' or 'continue') and collect their rows;
+    returns how many results of each stage were built to be shared. Fresh variants equal on a
+    stage's key (two or more) take its result from a task of its own, which goes on from the
+    shallower stage's shared result: a future that is an argument of theirs, so it is built
+    once and travels to each worker once (the scheduler keeps it where it is needed). A
+    continued history needs no setup."""
     from dask.distributed import as_completed
     from ..shared import SHARED
-    built, counts, before = {}, {}, {v.name: None for v in todo}
+    fresh = [v for v in variants if todo.get(v.name) == "fresh"]
+    built, counts, before = {}, {}, {v.name: None for v in fresh}
     for depth in SHARED:
         groups = {}
-        for v in todo:
+        for v in fresh:
             groups.setdefault(keys[v.name][depth], []).append(v)
         counts[depth] = 0
         for key, members in groups.items():
@@ -134,8 +162,10 @@ def _gather(client, case_path, overrides, todo, out, kind, rows, total, progress
             for v in members:
                 built[v.name] = before[v.name] = future
     futures = {client.submit(run_variant, str(case_path), list(overrides) + v.overrides(),
-                             str(output_path(out, v.name, kind)), kind, built.get(v.name),
-                             key=f"{v.name}-{time.time_ns()}", pure=False): v for v in todo}
+                             str(outputs(out, v.name, kind)[0]), kind, built.get(v.name),
+                             todo[v.name] == "continue",
+                             key=f"{v.name}-{time.time_ns()}", pure=False): v
+               for v in variants if v.name in todo}
     failed = 0
     for future in as_completed(futures):
         v = futures[future]
@@ -143,43 +173,47 @@ def _gather(client, case_path, overrides, todo, out, kind, rows, total, progress
             row = future.result()
         except Exception as exc:       # the task itself failed (a worker lost too often)
             row = {"status": f"failed: {type(exc).__name__}: {exc}"}
+        if todo[v.name] == "continue":
+            row["continued"] = True
+            if kind == "both":         # its complex modes are complete: read back
+                row.update(cea_summary(modes_file(outputs(out, v.name, kind)[1])["modes"]))
         rows[v.name] = row
         failed += row["status"] != "complete"
         if progress:
-            progress(len(rows), total, failed)
+            progress(len(rows), len(variants), failed)
     return counts
-
-
-def _restored(paths):
-    """The row of a variant whose outputs are complete, read back from them."""
-    row = {"status": "complete", "resumed": True}
-    for path in paths:
-        row.update(cea_summary(json.loads(Path(path).read_text())["modes"])
-                   if path.suffix == ".json" else summary(path))
-    return row
 
 
 def _row(v, row, kind, out):
     paths = outputs(out, v.name, kind)
-    return {"variant": v.name, **v.values, **{k: row.get(k) for k in row if k != "resumed"},
-            "resumed": bool(row.get("resumed")), "output": paths[0].name,
-            **({"modes_output": paths[1].name} if len(paths) > 1 else {})}
+    return {"variant": v.name, **v.values,
+            **{k: row.get(k) for k in row if k not in ("resumed", "continued")},
+            "resumed": bool(row.get("resumed")), "continued": bool(row.get("continued")),
+            "output": paths[0].name, **({"modes_output": paths[1].name} if len(paths) > 1
+                                        else {})}
 
 
 def write(table, out, parameters, kind, shared=None):
     """sweep.json (every row, the parameters' keys, the kind and the count of each stage's
-    results built to be shared) and sweep.csv (its scalar columns)."""
+    results built to be shared) and sweep.csv (its scalar columns), each replaced whole, and
+    only if it is absent or a campaign's."""
     out = Path(out)
-    (out / "sweep.json").write_text(json.dumps({"kind": kind, "parameters": parameters,
-                                                "shared": shared or {}, "rows": table},
-                                               indent=1))
     columns = list(FIRST)
     for row in table:
         columns += [k for k, x in row.items()
                     if k not in columns and not isinstance(x, (list, dict))]
-    with open(out / "sweep.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=columns, extrasaction="ignore")
-        w.writeheader()
-        for row in table:
-            w.writerow({k: row.get(k) for k in columns})
+    for name, check in (("sweep.json", is_sweep_json), ("sweep.csv", is_sweep_csv)):
+        path = out / name
+        if path.exists() and path.stat().st_size and not check(path):
+            raise CaseError(path, "--out", "exists and is not a table written by transient "
+                            "sweep: not overwritten")
+    write_whole(out / "sweep.json", json.dumps(
+        {"written_by": MARK, "kind": kind, "parameters": parameters, "shared": shared or {},
+         "rows": table}, indent=1))
+    text = io.StringIO(newline="")
+    w = csv.DictWriter(text, fieldnames=columns, extrasaction="ignore")
+    w.writeheader()
+    for row in table:
+        w.writerow({k: row.get(k) for k in columns})
+    write_whole(out / "sweep.csv", text.getvalue())
     return [out / "sweep.csv", out / "sweep.json"]

@@ -3,10 +3,12 @@
 Kinds: 'run' integrates the variant to its own history (the ordinary file `transient run`
 writes, readable by `transient info`), then sums up its oscillation from the sensors (the
 growth rate, the limit cycle's RMS and dominant frequency: studies.bench.oscillation);
-'cea' computes its complex modes, written as JSON next to the histories, and sums up the
-unstable ones; 'both' does the two from one setup (the complex modes from the run's stages
-before its sampling: what `transient cea` analyses). A variant refused, or a run that
-aborts, is a row with its reason: the campaign goes on.
+'cea' computes its complex modes, written as JSON next to the histories with the case that
+made them, and sums up the unstable ones; 'both' does the two from one setup (the complex
+modes from the run's stages before its sampling: what `transient cea` analyses). A history
+is written under the lock and the checks `transient run` makes (io.lock), or continued from
+its checkpoint as `transient run --resume` does. A variant refused, or a run that aborts, is
+a row with its reason: the campaign goes on.
 """
 import json
 import time
@@ -17,43 +19,22 @@ from ..errors import CaseError
 KINDS = ("run", "cea", "both")
 
 
-def complete(path):
-    """Whether a variant's output at path is complete (resume skips it)."""
-    path = Path(path)
-    if path.suffix == ".json":
-        try:
-            return json.loads(path.read_text()).get("status") == "complete"
-        except (OSError, ValueError):
-            return False
-    try:
-        import h5py
-        with h5py.File(path, "r") as f:
-            return f.attrs.get("status") == "complete"
-    except (OSError, ValueError):
-        return False
-
-
-def outputs(out, name, kind):
-    """A variant's files: its history (run), its complex modes (cea), or both, history first."""
-    history, modes = Path(out) / f"{name}.h5", Path(out) / f"{name}.json"
-    return {"run": [history], "cea": [modes], "both": [history, modes]}[kind]
-
-
-def output_path(out, name, kind):
-    return outputs(out, name, kind)[0]
-
-
-def run_variant(case_path, overrides, out, kind, built=None):
+def run_variant(case_path, overrides, out, kind, built=None, resume=False):
     """The row of one variant: status, seconds, the stages it ran and the summary numbers of
-    its kind. built: the first stages' results it shares with others (shared.Built), or
-    None to build them."""
+    its kind. out: its history (run, both) or its complex modes (cea). built: the first
+    stages' results it shares with others (shared.Built), or None to build them. resume:
+    continue its history (its complex modes, if any, are complete already)."""
     t0 = time.perf_counter()
     try:
         from ..case.loading import load
         case = load(case_path, overrides)
-        row = {"run": _run, "cea": _cea, "both": _both}[kind](case, out, built)
+        if resume:
+            row = _run(case, out, None, resume=True)
+        else:
+            row = {"run": _run, "cea": _cea, "both": _both}[kind](case, out, built)
     except CaseError as exc:
-        row = {"status": f"refused: {exc.key}: {exc.message}"}
+        row = {"status": f"refused: {exc.key}: {exc.message}",
+               "refusal": {"file": exc.path, "key": exc.key, "message": exc.message}}
     row["seconds"] = time.perf_counter() - t0
     # what its shared stages took to build, once for all the variants that share them
     row["shared_s"] = dict(built.seconds) if built is not None else {}
@@ -71,12 +52,9 @@ def build_shared(case_path, overrides, depth, built=None, kind="run"):
     return build_shared(analysed_case(case) if kind == "cea" else case, depth, built)
 
 
-def _run(case, out, built, on_setup=None):
+def _run(case, out, built, on_setup=None, resume=False):
     from ..run import run
-    # the campaign runs this variant afresh: what a worker killed mid-run left is dropped (a
-    # history cut off in a write may not open as one)
-    Path(out).unlink(missing_ok=True)
-    result = run(case, Path(out), progress=False, key="--out", built=built,
+    result = run(case, Path(out), resume=resume, progress=False, key="--out", built=built,
                  on_setup=on_setup)
     return {"status": result.status, "steps": result.steps, "dt": result.dt,
             "kernel_s": result.timings.get("kernel"), "energy_drift": result.energy_drift,
@@ -101,26 +79,38 @@ def _cea(case, out, built):
     from ..cea.stage import analyse
     result = analyse(case, built=built)
     return {"status": "complete", "stages": sorted(result.stages),
-            **_modes_written(result, out)}
+            **_modes_written(result, case, out)}
 
 
 def _both(case, out, built):
     """The run, and the complex modes from its setup before the time integration."""
     from ..cea.stage import analysis_of
     modes = Path(out).with_suffix(".json")
-    modes.unlink(missing_ok=True)
     found = {}
 
     def analyse(setup):
-        found.update(_modes_written(analysis_of(case, setup.unsampled or setup), modes))
+        found.update(_modes_written(analysis_of(case, setup.unsampled or setup), case, modes))
     return {**_run(case, out, built, analyse), **found}
 
 
-def _modes_written(analysis, path):
-    """The complex modes of an Analysis written as JSON at path; their summary."""
+def _modes_written(analysis, case, path):
+    """The complex modes of an Analysis of case written as JSON at path, with what made them
+    (the case's text, path and overrides: a resumed campaign compares them with its variant's,
+    as a history's); their summary. The file is replaced whole (a killed writer leaves the
+    old one or none), and only if it is absent or the modes of a campaign."""
+    from .. import __version__
+    from .folder import MARK, write_whole
+    from .outputs import modes_file
+    path = Path(path)
+    if path.exists() and path.stat().st_size and modes_file(path) is None:
+        raise CaseError(path, "--out", "exists and is not complex modes written by transient "
+                        "sweep: not overwritten")
     modes = analysis.modes.table()
-    Path(path).write_text(json.dumps({"status": "complete", "modes": modes,
-                                      "ndof": analysis.ndof, "reduced": analysis.reduced}))
+    text = json.dumps({"written_by": MARK, "version": __version__, "status": "complete",
+                       "case": case.text, "case_path": str(Path(case.path).resolve()),
+                       "overrides": list(case.overrides), "modes": modes,
+                       "ndof": analysis.ndof, "reduced": analysis.reduced})
+    write_whole(path, text)
     return cea_summary(modes)
 
 
