@@ -16,7 +16,8 @@ import scipy.sparse as sp
 from ..solve import blas
 from .linearize import linearized
 from .modes import complex_modes
-from .reference import full_complex_modes
+from .reference import Unresolved, full_complex_modes
+from .rigid import rigid_motions
 from .shapes import describe, part_modes, still_parts
 
 FULL_DOFS = 60_000    # free dofs above which the full model's complex LU per shift is refused
@@ -97,7 +98,7 @@ def analysis_of(case, setup, stages=None):
         if system.reduced:
             modes = complex_modes(M, D, K).below(fmax)
         else:
-            modes = full_complex_modes(M, D, K, fmax)
+            modes = _full_modes(case, model, system, (M, D, K), fmax)
         stages["complex_modes"] = time.perf_counter() - t0
         ndof = setup.meta.get("free_dofs", system.n)
         basis = (setup.basis if system.reduced else
@@ -116,6 +117,17 @@ def _alone(model, part, fmax):
     """part_modes on one thread of Numba and MKL, whatever thread runs it."""
     with blas.this_thread_alone():
         return part_modes(model, part, fmax)
+
+
+def _full_modes(case, model, system, MDK, fmax):
+    """full_complex_modes with the floating parts' rigid modes deflated, its bounds' failure
+    a CaseError."""
+    try:
+        return full_complex_modes(*MDK, fmax, rigid_motions(model, system.free))
+    except Unresolved as exc:
+        raise case.error("solver.reduction.enabled", f"the full model's complex modes: {exc}: "
+                         "analyse the reduced model (solver.reduction.enabled = true) or "
+                         "lower solver.modes.fmax") from None
 
 
 def _full_basis(ndof, free):
