@@ -262,7 +262,7 @@ SOLVER = Table("solution settings", {
     "modes": Table("modal analysis", {
         "count": Value("int", "number of modes (when fmax is 0)", 20, minimum=1),
         "fmax": Value("float", "compute all modes up to this frequency (0: use count)", 0.0,
-                      "Hz", minimum=0.0),
+                      "Hz", minimum=0.0, maximum=1e150),  # (2 pi f)^2 finite; model.band
         "shift": Value("float", "shift of shift-invert Lanczos, below the first frequency; a "
                        "negative value keeps free parts' rigid modes solvable", -1.0, "Hz"),
         "tie": Value("choice", "how contact pairs enter the modes: penalty (springs of density "
@@ -321,7 +321,7 @@ SOLVER = Table("solution settings", {
     "reduction": Table("reduced model: normal modes up to fmax plus static responses", {
         "enabled": Value("bool", "integrate a reduced model (false: the full model)", False),
         "fmax": Value("float", "normal modes of the preloaded structure up to this frequency",
-                      16000.0, "Hz", open_min=0.0),
+                      16000.0, "Hz", open_min=0.0, maximum=1e150),  # as modes.fmax
         "statics": Value("bool", "add static responses to the contact point loads and the load "
                          "patterns", True),
         "statics_tolerance": Value("float", "keep the contact static shapes whose structural "
@@ -376,7 +376,7 @@ LIMITS = Table("bounds on the work of a case, checked before it starts (raise th
 
 INITIAL = Table("initial velocity of a part (impact)", {
     "part": Value("str", "part set in motion"),
-    "velocity": _vec3("velocity", "m/s"),
+    "velocity": Value("floats", "velocity", unit="m/s", length=3, minimum=-1e6, maximum=1e6),
 })
 
 CASE = Table("a case", {

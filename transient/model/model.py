@@ -189,6 +189,10 @@ def _fixed(case, parts, ndof):
                             f"selection '{spec.set}' matches no node")
         for d in spec.dofs:
             fixed[3 * nodes + AXES[d]] = True
+        if fixed.all():
+            raise CaseError(case.path, f"constraints.{cname}.set", f"'{spec.set}' clamps the "
+                            "last free dofs of the model: expected constraints that leave "
+                            "something to move")
     return fixed
 
 
