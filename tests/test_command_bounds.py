@@ -69,6 +69,10 @@ def no_setup(monkeypatch):
     ("run", BAR, ["contact.wall.wall_point=[-1e300,0,0]"], "contact.wall.wall_point"),
     ("run", BAR, ["contact.wall.wall_point=[0.10001,1e160,0]"], "contact.wall.wall_point"),
     ("run", BAR, ["initial.impact.velocity=[1e300,0,0]"], "initial.impact.velocity"),
+    # a mass rule of fewer points than nodes: a singular M, a traceback of the cea's eigh
+    ("cea", PAD, SMALL_PAD + ["contact.pad_disc.friction.mu=0.4", "solver.quadrature.mass=1"],
+     "solver.quadrature.mass"),
+    ("modes", BAR, ["solver.quadrature.mass=1"], "solver.quadrature.mass"),
     # every dof clamped: a traceback of the eigensolver
     ("run", BAR, ['parts.bar.sets.s.kind="box"', "parts.bar.sets.s.min=[-1,-1,-1]",
                   "parts.bar.sets.s.max=[1,1,1]", 'constraints.c.set="bar.s"'],
