@@ -179,6 +179,7 @@ def test_a_wait_for_the_lock_says_who_holds_it_and_a_signal_ends_it(tmp_path, mo
     SIGINT ends it with the command line's codes (a blocking flock never reached the run's
     check of its stop requests)."""
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv("TRANSIENT_LOCK_NOTICE_S", str(jit.NOTICE_S))
     args = [sys.executable, "-m", "transient", command, str(BAR)]
     if command == "run":
         args += ["-o", str(tmp_path / "out.h5"), "--quiet"]
