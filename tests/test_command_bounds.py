@@ -59,6 +59,9 @@ def no_setup(monkeypatch):
      "solver.reduction.fmax"),
     ("run", BAR, ["solver.reduction.enabled=true", "solver.reduction.fmax=1e12"],
      "solver.reduction.fmax"),
+    # the full model's Arnoldi among the modes a heavy beta spreads about its shifts
+    ("cea", BAR, ["solver.damping.beta=1e-3"], "solver.damping.beta"),
+    ("cea", BAR, ["solver.damping.beta=1e-5"], "solver.damping.beta"),
     # a rotation about an axis 1e300 m away: an overflow, then "nodes without sliding"
     ("cea", PAD, SMALL_PAD + ["contact.pad_disc.friction.mu=0.4", "motion.disc.point=[1e300,0,0]"],
      "motion.disc.point"),

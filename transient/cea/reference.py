@@ -21,11 +21,26 @@ MAX_RESTARTS = 100
 MAX_NEAR = 96
 
 
+SHIFTS = 8          # shifts spread over [0, fmax]
+
+
+# the damping ratio that a stiffness-proportional damping beta gives the band's top,
+# beta pi fmax, beyond which the Arnoldi is not asked: the modes above it, overdamped from
+# 1/(pi beta) Hz, spread into a cloud about the shifts in which ARPACK stalls (bar_impact
+# resolved at 0.25, not within its bounds at 0.5)
+MAX_TOP_DAMPING = 0.3
+
+
+def top_damping(beta, fmax):
+    """The damping ratio beta pi fmax of a stiffness-proportional damping at fmax [Hz]."""
+    return beta * np.pi * fmax
+
+
 class Unresolved(Exception):
     """The Arnoldi did not resolve the modes near a shift within its bounds."""
 
 
-def full_complex_modes(M, D, K, fmax, rigid=(), shifts=8, k=12):
+def full_complex_modes(M, D, K, fmax, rigid=(), shifts=SHIFTS, k=12):
     """Every complex mode with 0 <= frequency <= fmax [Hz] of sparse (n, n) M, D, K.
 
     Shifts i 2 pi f at `shifts` frequencies spread over [0, fmax]; each asks for the k nearest

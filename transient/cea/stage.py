@@ -16,7 +16,7 @@ import scipy.sparse as sp
 from ..solve import blas
 from .linearize import linearized
 from .modes import complex_modes
-from .reference import Unresolved, full_complex_modes
+from .reference import MAX_TOP_DAMPING, Unresolved, full_complex_modes, top_damping
 from .rigid import rigid_motions
 from .shapes import describe, part_modes, still_parts
 
@@ -137,8 +137,17 @@ def _full_basis(ndof, free):
 
 
 def _bounded(case, dofs):
-    """One complex LU per shift: the full model is the reference for small cases."""
+    """One complex LU per shift: the full model is the reference for small cases, and its
+    Arnoldi does not resolve the modes a heavy Rayleigh beta spreads about the shifts."""
     if dofs > FULL_DOFS:
         raise case.error("solver.reduction.enabled", f"the full model's complex modes "
                          f"({dofs} free dofs, above {FULL_DOFS}) take a complex factorization per "
                          "shift: analyse the reduced model (solver.reduction.enabled = true)")
+    beta = case.solver.damping.beta
+    ratio = top_damping(beta, fmax_of(case))
+    if ratio > MAX_TOP_DAMPING:
+        raise case.error("solver.damping.beta", f"{beta:g} s damps the band's top at a ratio "
+                         f"of {ratio:.3g} (beta pi fmax; its modes overdamped from "
+                         f"{1 / (np.pi * beta):.3g} Hz), a cloud of eigenvalues the full "
+                         f"model's Arnoldi does not resolve: expected at most {MAX_TOP_DAMPING}, "
+                         "or the reduced model (solver.reduction.enabled = true)")
