@@ -124,3 +124,24 @@ def test_sweep_mutants_have_no_failure(tmp_path):
     assert not report["failures"], fuzz.format_report(report)
     assert set(report["outcomes"]) <= {"0", "2", "3"}
     assert report["outcomes"].get("0", 0) >= 3 and report["outcomes"].get("2", 0) >= 3
+
+
+def test_a_wait_for_the_compile_lock_is_not_the_mutants():
+    # another process compiling the same kernels makes a command say so on stderr (jit)
+    wait = "waiting for the Numba compile lock /tmp/numba/.compile.lock, held by pid 1\n"
+    assert fuzz.classify({"code": 0, "stderr": wait}) == (0, [])
+    error = "error: /c.toml: x: expected y\n"
+    assert fuzz.classify({"code": 2, "stderr": wait + error}) == (2, [])
+    assert fuzz.classify({"code": 0, "stderr": wait + "more\n"})[0] == "FAILURE"
+
+
+def test_analyses_are_among_the_mutants(tmp_path):
+    """cea and plot cea (--mu ranges bad, huge or infinite) come with the case mutants."""
+    # (two_bars makes no base history: every mutant of it is a case mutant)
+    made = [fuzz.make_mutant(SEED, i, ["two_bars"], tmp_path / f"m{i}", None)
+            for i in range(200)]
+    cea = [m for m in made if m.argv[0] == "cea"]
+    plots = [m for m in made if m.argv[:2] == ["plot", "cea"]]
+    assert len(cea) > 10 and len(plots) > 5
+    assert all("--out" in m.argv for m in plots)
+    assert any(a.startswith("--mu=") for m in plots for a in m.argv)

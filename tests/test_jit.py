@@ -1,9 +1,16 @@
 """The compile lock: exclusive across processes, reentrant within one, taken only to compile."""
 import os
+import signal
 import subprocess
 import sys
+from pathlib import Path
+
+import pytest
 
 from transient import jit
+
+ROOT = Path(__file__).resolve().parent.parent
+BAR = ROOT / "cases" / "bar_impact.toml"
 
 # the child says where it is at each step, so the test waits on what it says, not on time
 CHILD = """
@@ -146,3 +153,53 @@ def test_numpy_arrays_on_small_pages_unless_the_user_says():
     assert child("import transient, numpy") == ["False", "0"]
     assert child("import numpy, transient") == ["False", "0"]
     assert child("import numpy, transient", "1") == ["True", "1"]
+
+
+def _lines(stream):
+    """A queue of the stream's lines, read by a thread (None at its end): the test waits on
+    what the child says, with a bound that only a hang reaches."""
+    import queue
+    import threading
+    out = queue.Queue()
+
+    def read():
+        for line in stream:
+            out.put(line)
+        out.put(None)
+    threading.Thread(target=read, daemon=True).start()
+    return out
+
+
+@pytest.mark.parametrize("command, sig, code", [
+    ("modes", signal.SIGTERM, 143), ("run", signal.SIGTERM, 143), ("run", signal.SIGINT, 130)])
+def test_a_wait_for_the_lock_says_who_holds_it_and_a_signal_ends_it(tmp_path, monkeypatch,
+                                                                     command, sig, code):
+    """A command whose kernels are not compiled waits for the lock another process holds:
+    after a moment one line on stderr names the lock file and its holder, and SIGTERM or
+    SIGINT ends it with the command line's codes (a blocking flock never reached the run's
+    check of its stop requests)."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv("TRANSIENT_LOCK_NOTICE_S", str(jit.NOTICE_S))
+    args = [sys.executable, "-m", "transient", command, str(BAR)]
+    if command == "run":
+        args += ["-o", str(tmp_path / "out.h5"), "--quiet"]
+    with jit.compile_lock():
+        holder = (tmp_path / "cache" / ".compile.lock").read_text()
+        assert holder.startswith(f"pid {os.getpid()} on ")
+        child = subprocess.Popen(args, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                                 text=True, env=dict(os.environ), cwd=ROOT)
+        try:
+            lines = _lines(child.stderr)
+            line = lines.get(timeout=600)
+            assert line is not None and line.startswith("waiting for the Numba compile lock "
+                                                         f"{jit.lock_path()}, held by {holder}")
+            child.send_signal(sig)
+            assert child.wait(timeout=600) == code
+        finally:
+            child.kill()
+    rest = []
+    while (line := lines.get(timeout=60)) is not None:
+        rest.append(line)
+    assert rest == [("terminated (SIGTERM)" if sig == signal.SIGTERM else "interrupted") + "\n"]
+    # released: the file says no holder
+    assert (tmp_path / "cache" / ".compile.lock").read_text() == ""

@@ -10,7 +10,8 @@ a mesh file that is missing, a directory, a /proc file or a truncated copy of te
 deep nesting, control characters in strings and table names, damaged TOML text, malformed
 `--set` literals, outputs that cannot be written, valid but unusual settings, Ctrl-C at a
 random moment (--no-interrupts leaves it out: where SIGINT lands depends on the machine's
-speed, every other outcome does not). Most mutants are `run`, some `modes` and `compat`;
+speed, every other outcome does not). Most mutants are `run`, some `modes`, `compat`, `cea`
+and `plot cea` (friction turned on, --mu ranges bad, huge or infinite, --out unwritable);
 others damage a copy of a history (truncated, bytes overwritten, datasets or attributes
 deleted or retyped, the stored case text broken) and give it to `info`, `plot`, `export` or
 `run --resume`. With `--sweeps SHARE`, that share of the mutants run `transient sweep` (a
@@ -96,7 +97,7 @@ OUTPUT_CHARS = 4000       # of stdout kept per mutant (stdout is not judged, onl
 STDERR_CHARS = 100000     # of stderr kept (judged: one line 'error: ...' is far shorter)
 RESTART_VM_GB = 2.0       # a worker grown beyond this is restarted before the next mutant
 SUCCESS_CODES = (0, 2, 3, 130)
-CASE_COMMANDS = (("run", 78), ("modes", 12), ("compat", 10))
+CASE_COMMANDS = (("run", 78), ("modes", 12), ("compat", 10), ("cea", 10), ("plot cea", 5))
 HISTORY_SHARE = 0.15      # mutants that damage a history instead of a case
 
 # ----------------------------------------------------------------------------- TOML writing
@@ -790,6 +791,48 @@ def resolve(target, d):
             if target else target)
 
 
+# ----------------------------------------------------------------------------- analyses
+
+# `plot cea --mu`: good ranges, and bad, huge, infinite or malformed ones
+MU_TEXTS = ["0:0.4:2", "0.1,0.3", "0.2", "0:0.6:1", "a:b:c", "0:1", "0:1:2:3", "0:inf:3",
+            "-1e308:1e308:3", "0:0.5:100000", "0:0.5:0", "0:0.5:" + "9" * 30, "-1:0:2",
+            "0:20:2", "0.1,nan", "1,2,x", "", ",", ",".join(["0.1"] * 20001), "1e300",
+            "0:0.4:1e3"]
+PLOT_TARGETS = ["DIR/plots", "DIR/plots", "DIR/plots", "DIR", "/proc/plots", "CASE", "/dev/null",
+                "DIR/" + "x" * 300, "DIR/a\x00b", "/"]
+
+
+def analysis_case(d):
+    """Before the mutations of a cea or plot cea: friction on a pair some of the time (the
+    coarse pad_disc's disc turns; elsewhere no motion gives the sliding, which is refused)."""
+    pairs = d.names("contact")
+    if pairs and d.rng.random() < 0.7:
+        pair = d.pick(pairs)
+        mu = d.pick([0.0, 0.2, 0.4, 0.6])
+        put(d.data, ("contact", pair, "friction", "mu"), mu)
+        d.note(f"analysis: contact.{pair}.friction.mu = {mu}")
+
+
+def analysis_argv(d):
+    """The command line of a cea or plot cea of d's case: plot cea's --out, --mu, --pair."""
+    if d.command == "cea":
+        return ["cea", str(d.case_file)] + d.options + (["--json"] if d.rng.random() < 0.3
+                                                          else [])
+    out = d.pick(PLOT_TARGETS)
+    argv = ["plot", "cea", str(d.case_file), "--out", resolve(out, d)] + d.options
+    notes = [f"--out {short(out)}"]
+    if d.rng.random() < 0.6:
+        mu = d.pick(MU_TEXTS)
+        argv.append(f"--mu={mu}")
+        notes.append(f"--mu {short(mu)}")
+    if d.rng.random() < 0.2:
+        pair = d.pick(["nosuch", "", "pad_disc", "impact", "wall", "interface"])
+        argv += ["--pair", pair]
+        notes.append(f"--pair {short(pair)}")
+    d.note("plot cea: " + ", ".join(notes))
+    return argv
+
+
 # ----------------------------------------------------------------------------- histories
 
 # histories made once per fuzz session, from a base case: name -> (base, extra keys, exit)
@@ -1222,6 +1265,8 @@ class Mutant:
 def case_mutant(d):
     """Mutate the case dict (and the command line) of d, write the case file, give argv."""
     d.command = d.rng.choices(*zip(*CASE_COMMANDS))[0]
+    if d.command in ("cea", "plot cea"):
+        analysis_case(d)
     for _ in range(d.rng.choices([1, 2, 3], [5, 3, 2])[0]):
         mutations, weights = zip(*CASE_MUTATIONS)
         while not d.rng.choices(mutations, weights)[0](d):
@@ -1231,13 +1276,15 @@ def case_mutant(d):
         text = d.text_edit(text)
     d.case_file.write_bytes(text)
     argv = [d.command, str(d.case_file)] + d.options
-    if d.command == "run":
+    if d.command in ("cea", "plot cea"):
+        argv = analysis_argv(d)
+    elif d.command == "run":
         if d.output is not None:
             argv += ["-o", resolve(d.output, d)]
         argv += ["--quiet"]
     elif d.command == "compat" and d.rng.random() < 0.2:
         argv += ["--pair", d.pick(["nosuch", "wall", "impact", "interface", "pad_disc"])]
-    if d.rng.random() < 0.2:
+    if d.rng.random() < 0.2 and d.command != "plot cea":
         argv += ["--json"]
     if d.command != "run":
         d.notes.insert(0, f"command: {d.command}")
@@ -1523,6 +1570,14 @@ class Worker:
 # ----------------------------------------------------------------------------- outcomes
 
 
+def without_lock_waits(stderr):
+    """stderr without the lines that say a wait for the Numba compile lock (transient.jit):
+    whether another process compiles the same kernels meanwhile is the machine's, not the
+    mutant's."""
+    return "".join(line for line in stderr.splitlines(keepends=True)
+                   if not line.startswith("waiting for the Numba compile lock "))
+
+
 def classify(result):
     """What a worker result says of the contract.
 
@@ -1558,7 +1613,7 @@ def classify(result):
     code = result.get("code")
     if not exception and code not in SUCCESS_CODES:
         failures.append(f"exit code {code!r}")
-    stderr = result.get("stderr", "")
+    stderr = without_lock_waits(result.get("stderr", ""))
     if "Traceback (most recent call last)" in stderr:
         failures.append("traceback on stderr")
     # an interrupted stdlib iterator (glob's scandir) warns when collected; Python shows no

@@ -4,15 +4,22 @@ Two processes compiling the same kernels at once can leave mismatched cache file
 crash on load (numba#10128: a stability study or a CI run starting several `transient run`
 together). Compilation, and the cache lookup that precedes it, therefore hold a file lock in
 the cache directory; calls of an already compiled kernel never touch it. The lock is
-reentrant within a process, since compiling a kernel compiles the kernels it calls.
+reentrant within a process, since compiling a kernel compiles the kernels it calls. Every
+checkout with the same kernels shares it, and a compile on a busy machine can hold it for
+minutes: its holder writes who it is into the file, and a process waiting for it says so and
+can be stopped (SIGINT, SIGTERM).
 
 `spinning` keeps Numba's OpenMP threads awake between the parallel regions of a kernel call.
 """
 import ctypes
 import fcntl
 import os
+import signal
+import socket
+import sys
 import tempfile
 import threading
+import time
 from contextlib import contextmanager
 
 import numba
@@ -26,6 +33,10 @@ def lock_path():
     return os.path.join(base, ".compile.lock")
 
 
+POLL_S = 0.1        # between tries of a lock held elsewhere
+NOTICE_S = 1.5      # of waiting before the wait is said on stderr (TRANSIENT_LOCK_NOTICE_S)
+
+
 @contextmanager
 def compile_lock():
     """Exclusive across processes (flock), reentrant within one."""
@@ -33,8 +44,12 @@ def compile_lock():
         if _held["depth"] == 0:
             path = lock_path()
             os.makedirs(os.path.dirname(path), exist_ok=True)
-            f = open(path, "a")
-            fcntl.flock(f, fcntl.LOCK_EX)
+            f = open(path, "a+", encoding="utf-8", errors="replace")
+            try:
+                _acquire(f, path)
+            except BaseException:
+                f.close()
+                raise
             _held["file"] = f
         _held["depth"] += 1
         try:
@@ -44,8 +59,77 @@ def compile_lock():
             if _held["depth"] == 0:
                 f = _held.pop("file")
                 _held["file"] = None
+                f.truncate(0)
                 fcntl.flock(f, fcntl.LOCK_UN)
                 f.close()
+
+
+def _acquire(f, path):
+    """flock f, polled: a wait past NOTICE_S is one line on stderr naming the holder, and
+    SIGINT or SIGTERM end it (a blocking flock never returned to the signal's flag). Then the
+    holder's pid, host and command go into the file for the next one waiting."""
+    if not _took(f):
+        with _stoppable():
+            waited, told, notice = time.monotonic(), False, _notice_s()
+            while not _took(f):
+                if not told and time.monotonic() - waited >= notice:
+                    f.seek(0)
+                    holder = _one_line(f.read()) or "a process that does not say"
+                    print(f"waiting for the Numba compile lock {path}, held by {holder} "
+                          "(compiling the same kernels; SIGINT or SIGTERM stops)",
+                          file=sys.stderr, flush=True)
+                    told = True
+                time.sleep(POLL_S)
+    f.truncate(0)
+    f.write(f"pid {os.getpid()} on {socket.gethostname()}: "
+            f"{_one_line(' '.join(sys.argv))[:200]}")
+    f.flush()
+
+
+def _notice_s():
+    """NOTICE_S, or the environment's TRANSIENT_LOCK_NOTICE_S (the test suite's 'inf': its two
+    workers compile the same kernels, and its tests hold a command's stderr to one line)."""
+    try:
+        return float(os.environ.get("TRANSIENT_LOCK_NOTICE_S", NOTICE_S))
+    except ValueError:
+        return NOTICE_S
+
+
+def _took(f):
+    try:
+        fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return True
+    except BlockingIOError:
+        return False
+
+
+def _one_line(text):
+    return " ".join(str(text).split())
+
+
+@contextmanager
+def _stoppable():
+    """SIGINT and SIGTERM raise KeyboardInterrupt('interrupted' or 'terminated (SIGTERM)',
+    the reasons the command line maps to 130 and 143) over the block, after the handler in
+    place (a run's, which records the stop) has run. Off the main thread: nothing to take."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def stop(signum, frame):
+        handler = previous[signum]
+        if handler == signal.SIG_IGN:
+            return
+        if callable(handler):
+            handler(signum, frame)
+        raise KeyboardInterrupt("interrupted" if signum == signal.SIGINT else
+                                f"terminated ({signal.Signals(signum).name})")
+    previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 def _locked(**flags):

@@ -21,6 +21,7 @@ from .dynamics.system import full_system, reduced_system
 from .errors import CaseError
 from .kernels.codes import ENERGY_TERMS, NO_CONVERGENCE, NOT_FINITE, OK
 from .model import build_model, constant_load
+from .model.band import check_band
 from .reduce.basis import rebase
 from .reduce.reference import rebased, reference_basis
 from .reduce.stage import reduce, reduction_mass
@@ -85,10 +86,21 @@ def prepare(case, check=None, built=None, unsampled=False, analysis=False):
         return _prepare(case, Stages(check), built or Built(None), unsampled, analysis)
 
 
+def _band_keys(case, analysis):
+    """The frequency keys the setup (and the cea of an analysis) solves modes to."""
+    solver = case.solver
+    if solver.reduction.enabled:
+        return [("solver.reduction.fmax", solver.reduction.fmax)]
+    if analysis and solver.modes.fmax:
+        return [("solver.modes.fmax", solver.modes.fmax)]
+    return [("solver.reduction.fmax", solver.reduction.fmax)] if analysis else []
+
+
 def _prepare(case, stages, built, want_unsampled=False, analysis=False):
     solver = case.solver
     model = (stages.timed("loads", build_model, case, built.model) if built.model is not None
              else stages.timed("model", build_model, case))
+    check_band(case, model, _band_keys(case, analysis))
     if setup_bytes(parts_cells(model.parts)) <= case.limits.memory_bytes / 2:
         heap.retain_freed()     # freed blocks reused, not faulted in afresh (heap's docstring)
     if built.geometry is not None:

@@ -285,7 +285,7 @@ LIMITS = Table("bounds on the work of a case, checked before it starts (raise th
 
 INITIAL = Table("initial velocity of a part (impact)", {
     "part": Value("str", "part set in motion"),
-    "velocity": _vec3("velocity", "m/s"),
+    "velocity": Value("floats", "velocity", unit="m/s", length=3, minimum=-1e6, maximum=1e6),
 })
 
 CASE = Table("a case", {

@@ -6,7 +6,7 @@ SOLVER = Table("solution settings", {
     "modes": Table("modal analysis", {
         "count": Value("int", "number of modes (when fmax is 0)", 20, minimum=1),
         "fmax": Value("float", "compute all modes up to this frequency (0: use count)", 0.0,
-                      "Hz", minimum=0.0),
+                      "Hz", minimum=0.0, maximum=1e150),  # (2 pi f)^2 finite; model.band
         "shift": Value("float", "shift of shift-invert Lanczos, below the first frequency; a "
                        "negative value keeps free parts' rigid modes solvable", -1.0, "Hz"),
         "tie": Value("choice", "how contact pairs enter the modes: penalty (springs of density "
@@ -68,11 +68,11 @@ SOLVER = Table("solution settings", {
         "fmax": Value("float", "the band of the answer: the complex modes `transient cea` "
                       "reports, the contact stiffness a sampled rule reproduces, and the "
                       "exponential scheme's default step (20 steps a period) are to this "
-                      "frequency", 16000.0, "Hz", open_min=0.0),
+                      "frequency", 16000.0, "Hz", open_min=0.0, maximum=1e150),  # as modes.fmax
         "cutoff": Value("float", "the basis' normal modes reach this frequency (0: 2 fmax); "
                         "friction couples the band's modes with those above it, whose "
                         "truncation moves the real parts of the band's complex modes", 0.0,
-                        "Hz", minimum=0.0),
+                        "Hz", minimum=0.0, maximum=1e150),  # as modes.fmax
         "statics": Value("bool", "add static responses to the contact point loads and the load "
                          "patterns", True),
         "statics_tolerance": Value("float", "keep the contact static shapes whose structural "

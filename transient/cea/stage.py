@@ -16,7 +16,8 @@ import scipy.sparse as sp
 from ..solve import blas
 from .linearize import linearized
 from .modes import complex_modes
-from .reference import full_complex_modes
+from .reference import MAX_TOP_DAMPING, Unresolved, full_complex_modes, top_damping
+from .rigid import rigid_motions
 from .shapes import describe, part_modes, still_parts
 
 FULL_DOFS = 60_000    # free dofs above which the full model's complex LU per shift is refused
@@ -97,7 +98,7 @@ def analysis_of(case, setup, stages=None):
         if system.reduced:
             modes = complex_modes(M, D, K).below(fmax)
         else:
-            modes = full_complex_modes(M, D, K, fmax)
+            modes = _full_modes(case, model, system, (M, D, K), fmax)
         stages["complex_modes"] = time.perf_counter() - t0
         ndof = setup.meta.get("free_dofs", system.n)
         basis = (setup.basis if system.reduced else
@@ -118,6 +119,17 @@ def _alone(model, part, fmax):
         return part_modes(model, part, fmax)
 
 
+def _full_modes(case, model, system, MDK, fmax):
+    """full_complex_modes with the floating parts' rigid modes deflated, its bounds' failure
+    a CaseError."""
+    try:
+        return full_complex_modes(*MDK, fmax, rigid_motions(model, system.free))
+    except Unresolved as exc:
+        raise case.error("solver.reduction.enabled", f"the full model's complex modes: {exc}: "
+                         "analyse the reduced model (solver.reduction.enabled = true) or "
+                         "lower solver.modes.fmax") from None
+
+
 def _full_basis(ndof, free):
     """The free dofs' injection in the model's dofs (sparse)."""
     return sp.csr_matrix((np.ones(len(free)), (free, np.arange(len(free)))),
@@ -125,8 +137,17 @@ def _full_basis(ndof, free):
 
 
 def _bounded(case, dofs):
-    """One complex LU per shift: the full model is the reference for small cases."""
+    """One complex LU per shift: the full model is the reference for small cases, and its
+    Arnoldi does not resolve the modes a heavy Rayleigh beta spreads about the shifts."""
     if dofs > FULL_DOFS:
         raise case.error("solver.reduction.enabled", f"the full model's complex modes "
                          f"({dofs} free dofs, above {FULL_DOFS}) take a complex factorization per "
                          "shift: analyse the reduced model (solver.reduction.enabled = true)")
+    beta = case.solver.damping.beta
+    ratio = top_damping(beta, fmax_of(case))
+    if ratio > MAX_TOP_DAMPING:
+        raise case.error("solver.damping.beta", f"{beta:g} s damps the band's top at a ratio "
+                         f"of {ratio:.3g} (beta pi fmax; its modes overdamped from "
+                         f"{1 / (np.pi * beta):.3g} Hz), a cloud of eigenvalues the full "
+                         f"model's Arnoldi does not resolve: expected at most {MAX_TOP_DAMPING}, "
+                         "or the reduced model (solver.reduction.enabled = true)")

@@ -16,6 +16,7 @@ from .sweeping import cmd_sweep
 def cmd_modes(args):
     from ..contact.pair import build_contact
     from ..mesh.meshfile import write_vtu
+    from ..model.band import check_modes_band
     from ..model.model import build_model
     from ..solve.tied import contact_modes
     t0 = time.perf_counter()
@@ -24,6 +25,7 @@ def cmd_modes(args):
         from ..io.lock import check_writable
         check_writable(case.directory / case.output.vtu, "output.vtu")
     model = build_model(case)
+    check_modes_band(case, model)
     pairs = build_contact(case, model)
     modes, tie = contact_modes(case, model, pairs)
     stage_times = {f"contact.{p.name}.{k}": v for p in pairs for k, v in p.timings.items()}

@@ -92,16 +92,45 @@ def _plot_envelope(args):
 
 
 def parse_values(text):
-    """'START:STOP:COUNT' (COUNT values, ends included) or 'A,B,...' -> floats."""
+    """'START:STOP:COUNT' (COUNT values, ends included) or 'A,B,...' -> finite floats, at most
+    a sweep's MAX_VARIANTS of them (each is one analysis), counted before any list is built;
+    ValueError saying what was expected."""
+    from ..sweep.variants import MAX_VARIANTS
     if ":" in text:
         parts = text.split(":")
-        if len(parts) != 3:
-            raise ValueError(f"expected START:STOP:COUNT, got '{text}'")
-        start, stop, count = float(parts[0]), float(parts[1]), int(parts[2])
-        if count < 1:
-            raise ValueError(f"expected a COUNT >= 1, got {count}")
+        try:
+            start, stop = (_finite(x) for x in parts[:2]) if len(parts) == 3 else (None, None)
+            count = int(parts[2]) if len(parts) == 3 else None
+            _finite(stop - start)
+        except (ValueError, TypeError, OverflowError):
+            count = None
+        if count is None:
+            raise ValueError(f"expected START:STOP:COUNT (two finite numbers and an integer "
+                             f"count), got {_quoted(text)}")
+        if not 1 <= count <= MAX_VARIANTS:
+            raise ValueError(f"expected a COUNT from 1 to {MAX_VARIANTS} (each value is one "
+                             f"analysis), got {_quoted(parts[2])}")
         return [float(x) for x in np.linspace(start, stop, count)]
-    return [float(x) for x in text.split(",") if x.strip()]
+    if text.count(",") >= MAX_VARIANTS:
+        raise ValueError(f"expected at most {MAX_VARIANTS} values (each is one analysis), got "
+                         f"{text.count(',') + 1}")
+    try:
+        return [_finite(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise ValueError(f"expected finite numbers separated by commas, or START:STOP:COUNT, "
+                         f"got {_quoted(text)}") from None
+
+
+def _quoted(text, most=60):
+    """'text' in a message, its middle cut when long."""
+    return f"'{text}'" if len(text) <= most else f"'{text[:most // 2]}...{text[-most // 4:]}'"
+
+
+def _finite(text):
+    value = float(text)
+    if not np.isfinite(value):
+        raise ValueError(text)
+    return value
 
 
 def _plot_cea(args):

@@ -40,6 +40,7 @@ from ..kernels.codes import ATAN, FRICTIONLESS, TANH
 from ..mesh.mesh import unit
 
 CODES = {"tanh": TANH, "atan": ATAN}
+MAX_SPEED = 1e6     # m/s: the sliding's, as motion.NAME.velocity's bound in the schema
 
 
 def rigid_velocity(motion, x):
@@ -53,10 +54,28 @@ def rigid_velocity(motion, x):
 
 def _part_velocity(case, part, x):
     v = np.zeros((len(x), 3))
-    for motion in case.motion.values():
+    for name, motion in case.motion.items():
         if motion.part == part:
+            _check_reach(case, name, motion, x)
             v += rigid_velocity(motion, x)
     return v
+
+
+def _check_reach(case, name, motion, x):
+    """A rotation's speed at x, |omega| times the largest coordinate of x's arm (within
+    sqrt(3) of it), within MAX_SPEED (a translation's bound), checked before it is formed: a
+    point of the axis 1e300 m away overflowed the product, then the sliding's norm."""
+    if motion.kind != "rotation" or not len(x) or motion.omega == 0.0:
+        return
+    axis = unit(motion.axis)
+    with np.errstate(over="ignore", invalid="ignore"):
+        r = np.asarray(x, float) - np.asarray(motion.point, float)
+        arm = float(np.abs(r - (r @ axis)[:, None] * axis).max())
+    if not abs(motion.omega) <= MAX_SPEED / max(arm, 1e-300):
+        raise CaseError(case.path, f"motion.{name}.point", f"{list(motion.point)} turns the "
+                        f"contact of part '{motion.part}' at up to {abs(motion.omega) * arm:.3g}"
+                        f" m/s (omega {motion.omega:g} rad/s, {arm:.3g} m from the axis): "
+                        f"expected a point of the axis that keeps it within {MAX_SPEED:g} m/s")
 
 
 def _in_plane(v, normals):

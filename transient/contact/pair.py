@@ -22,6 +22,7 @@ from ..model.model import resolve_set
 from .regularize import (dual_factors, factor_projectors, factored_rows, primal_basis,
                          regularized_rule, row_factors)
 from .rules import centre_rule, gauss_rule
+from ..mesh.mesh import unit
 from ..mesh.selections import set_faces
 
 DENSE_FILL = 0.1   # fill of the rows above which C^T diag(k w) C is formed dense
@@ -65,6 +66,33 @@ def _surface(case, model, ref, key):
     return part, faces
 
 
+def _check_wall(case, key, part, faces, spec):
+    """A wall point that the surface's round-off can see: not past the whole part (a
+    penetration deeper than the part, whose forces overflow), nor so far along the wall that
+    the faces projected about it lose their areas."""
+    nodes = np.unique(np.concatenate([np.ravel(c) for c in faces.values()]))
+    x, n = part.mesh.points[nodes], unit(spec.wall_normal)
+    with np.errstate(over="ignore", invalid="ignore"):
+        offset = np.asarray(spec.wall_point, float) - x.mean(axis=0)
+        depth = float(np.max(-(x - np.asarray(spec.wall_point, float)) @ n))
+        along = offset - (offset @ n) * n
+        # (scaled: its square overflows past 1e154 m)
+        along = float(np.abs(along).max() * np.linalg.norm(along / max(np.abs(along).max(),
+                                                                          1e-300)))
+    along_n = part.mesh.points @ n
+    thick = float(along_n.max() - along_n.min())
+    size = float(np.linalg.norm(x.max(axis=0) - x.min(axis=0)))
+    if not depth <= thick:
+        raise CaseError(case.path, key, f"{list(spec.wall_point)} puts surface "
+                        f"'{spec.surface1}' up to {depth:.3g} m behind the wall, through the "
+                        f"part ({thick:.3g} m along the normal): expected a wall at or near "
+                        "the surface")
+    if not along <= 1e6 * size:
+        raise CaseError(case.path, key, f"{list(spec.wall_point)} lies {along:.3g} m along the "
+                        f"wall from surface '{spec.surface1}' ({size:.3g} m across): expected a "
+                        "point of the wall nearer it")
+
+
 # The spec fields the pair's geometry reads (interface, compatibility, regularization, rule):
 # variants equal on them share it (shared.READS); the law and the friction are the variant's
 GEOMETRY = ("surface1", "surface2", "wall", "wall_point", "wall_normal", "order", "k", "rule",
@@ -95,6 +123,7 @@ def build_geometry(case, model, name, need_compatibility=False):
     p1, faces1 = _surface(case, model, spec.surface1, f"{key}.surface1")
     try:
         if spec.wall:
+            _check_wall(case, f"{key}.wall_point", p1, faces1, spec)
             interface = build_wall_interface(name, p1.mesh.points, faces1, p1.offset,
                                              spec.wall_point, spec.wall_normal, spec.order)
         else:

@@ -111,20 +111,24 @@ def resolve_set(case, parts, ref, key, surface=False):
 def _check_quadrature(case, ctypes):
     """A stiffness rule too coarse for an element leaves K with zero-energy (hourglass) modes,
     which no loss damps: each point gives 6 strains, and K needs 3 nen - 6 (one point on hex8
-    made the mode search of drilled_cube run past fmax for minutes)."""
-    degree = case.solver.quadrature.stiffness
-    for ctype in sorted(ctypes) if degree else ():
-        element = ELEMENTS[ctype]
-        need = 3 * element.nen - 6
+    made the mode search of drilled_cube run past fmax for minutes). A mass rule of fewer
+    points than nodes leaves M singular (a dense eigensolver's traceback in the cea)."""
+    quad = case.solver.quadrature
+    for key, degree, per_point, need, what in (
+            ("stiffness", quad.stiffness, 6, lambda e: 3 * e.nen - 6, "deformation modes "
+             "(zero-energy modes)"),
+            ("mass", quad.mass, 1, lambda e: e.nen, "nodes (a singular mass)")):
+        for ctype in sorted(ctypes) if degree else ():
+            element = ELEMENTS[ctype]
 
-        def enough(d):
-            return 6 * len(element.rule(d)[0]) >= need
-        if not enough(degree):
-            least = next(d for d in range(degree + 1, 20) if enough(d))
-            raise CaseError(case.path, "solver.quadrature.stiffness", f"degree {degree} gives "
-                            f"{ctype} {len(element.rule(degree)[0])} point(s), too few for its "
-                            f"{need} deformation modes (zero-energy modes): at least {least}, "
-                            "or 0 for the element's default")
+            def enough(d):
+                return per_point * len(element.rule(d)[0]) >= need(element)
+            if not enough(degree):
+                least = next(d for d in range(degree + 1, 20) if enough(d))
+                raise CaseError(case.path, f"solver.quadrature.{key}", f"degree {degree} gives "
+                                f"{ctype} {len(element.rule(degree)[0])} point(s), too few for "
+                                f"its {need(element)} {what}: expected at least {least}, or 0 "
+                                "for the element's default")
 
 
 def _cell_blocks(case, parts):
@@ -189,6 +193,10 @@ def _fixed(case, parts, ndof):
                             f"selection '{spec.set}' matches no node")
         for d in spec.dofs:
             fixed[3 * nodes + AXES[d]] = True
+        if fixed.all():
+            raise CaseError(case.path, f"constraints.{cname}.set", f"'{spec.set}' clamps the "
+                            "last free dofs of the model: expected constraints that leave "
+                            "something to move")
     return fixed
 
 

@@ -11,6 +11,7 @@ import numpy as np
 from ..contact.pair import build_contact
 from ..errors import CaseError
 from ..model import build_model
+from ..model.band import check_modes_band
 from ..solve.modes import mac_pairs, receptance
 from ..solve.tied import contact_modes
 from ..shared import stage_key
@@ -50,6 +51,8 @@ def compare(case_a, case_b, sensor_in, sensor_out, damping, fmax=None):
     model_b = build_model(case_b, model_a if shared else None)
     rows = [(sensor_row(c, m, sensor_in, "--input"), sensor_row(c, m, sensor_out, "--output"))
             for c, m in ((case_a, model_a), (case_b, model_b))]
+    for case, model in ((case_a, model_a), (case_b, model_b)):
+        check_modes_band(case, model)
     results = []
     for case, model in ((case_a, model_a), (case_b, model_b)):
         pairs = build_contact(case, model)
