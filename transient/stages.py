@@ -90,7 +90,8 @@ def _band_keys(case, analysis):
     """The frequency keys the setup (and the cea of an analysis) solves modes to."""
     solver = case.solver
     if solver.reduction.enabled:
-        return [("solver.reduction.fmax", solver.reduction.fmax)]
+        return [("solver.reduction.fmax", solver.reduction.fmax),
+                ("solver.reduction.cutoff", solver.reduction.cutoff)]
     if analysis and solver.modes.fmax:
         return [("solver.modes.fmax", solver.modes.fmax)]
     return [("solver.reduction.fmax", solver.reduction.fmax)] if analysis else []
