@@ -2,10 +2,24 @@
 OpenCASCADE kernel with the physical groups a case names, and sampled for the size integrals
 of its node model. A module of its own so the meshing and its command line stay short."""
 import math
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 GEOMETRY_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Shape:
+    """What cuts the pad's lining [m], zeros for none: a radial slot at mid-arc, slot_width
+    wide between parallel walls and slot_depth deep from the friction face (None: the lining's
+    thickness, down to the backplate, which stays whole); and at both ends a chamfer whose
+    plane runs parallel to the end, chamfer_length from it on the friction face (along the
+    arc, to (length / radius)^2 / 6 at a radius) and chamfer_depth up the end face."""
+    slot_width: float = 0.0
+    slot_depth: float = None
+    chamfer_length: float = 0.0
+    chamfer_depth: float = 0.0
 
 
 class Disc:
@@ -47,7 +61,7 @@ class Disc:
 class Pad:
     """The lining and backplate of a `brake_pad` mesh spec: an annular sector, two layers."""
 
-    def __init__(self, params):
+    def __init__(self, params, shape=Shape()):
         self.inner, self.outer = params["inner_radius"], params["outer_radius"]
         self.angle = math.radians(params["angle"])
         self.mid = math.radians(params["center_angle"])
@@ -55,6 +69,30 @@ class Pad:
         self.z0 = params["z0"]
         self.center = tuple(params["center"]) + (0.0,)
         self.thickness = self.lining + self.backplate
+        if shape.slot_width and shape.slot_depth is None:
+            shape = replace(shape, slot_depth=self.lining)
+        self.shape = shape
+
+    def shape_error(self):
+        """(option, what was expected) when the shape does not fit the pad, else None."""
+        s = self.shape
+        if s.slot_width and not 0 < s.slot_depth <= self.lining:
+            return "--slot", (f"a depth in (0, {self.lining:g}] m (the lining's thickness), "
+                              f"got {s.slot_depth:g}")
+        if s.chamfer_length and not 0 < s.chamfer_depth < self.lining:
+            return "--chamfer", (f"a depth in (0, {self.lining:g}) m (below the lining's "
+                                 f"thickness), got {s.chamfer_depth:g}")
+        # the friction face's pieces reach from the inner arc to the outer one: a slot wall
+        # and the chamfer's line on the face (or the two chamfers' lines) meet inside the
+        # core, at the radius where they cross
+        half = 0.5 * self.angle
+        x = (s.chamfer_length + 0.5 * s.slot_width * math.cos(half)) / math.sin(half)
+        if math.hypot(x, 0.5 * s.slot_width) >= self.inner:
+            return "--slot, --chamfer", (
+                f"a slot and chamfers that leave the friction face whole from the inner arc "
+                f"to the outer one: they meet at radius {math.hypot(x, 0.5 * s.slot_width):.4g} "
+                f"m, the pad's inner radius is {self.inner:g} m")
+        return None
 
     def build(self, gmsh):
         occ = gmsh.model.occ
@@ -65,25 +103,86 @@ class Pad:
             sector = occ.addCylinder(cx, cy, z, 0, 0, dz, self.outer, angle=self.angle)
             core = occ.addCylinder(cx, cy, z - dz, 0, 0, 3 * dz, self.inner)
             cut, _ = occ.cut([(3, sector)], [(3, core)])
+            if z == self.z0 and self.shape != Shape():
+                cut = self.cut_lining(occ, cut)
             occ.rotate(cut, cx, cy, 0, 0, 0, 1, self.mid - 0.5 * self.angle)
             layers.append(cut)
         # fragment: one conforming mesh, the layers share the nodes of their common face
         _, children = occ.fragment(layers[0], layers[1])
         occ.synchronize()
-        lining = [t for _, t in children[0]]
-        backplate = [t for _, t in children[1]]
+        # one list of children per volume given, the lining's first (a slot down to the
+        # backplate parts the lining in two)
+        n = len(layers[0])
+        lining = [t for c in children[:n] for _, t in c]
+        backplate = [t for c in children[n:] for _, t in c]
         # the internal face (z0 + lining) is in no group; the radial end faces are 'ends'
         levels = {"friction": self.z0, None: self.z0 + self.lining,
                   "back": self.z0 + self.lining + self.backplate}
+        if self.shape.slot_width and self.shape.slot_depth < self.lining:
+            levels["slot"] = self.z0 + self.shape.slot_depth
         radii = {"inner": self.inner, "outer": self.outer}
-        names = classify(gmsh, self.center, levels, radii, other="ends")
-        check_surfaces(names, ("friction", "back", "ends", "inner", "outer"), "pad")
+        names = classify(gmsh, self.center, levels, radii, other=self.side_name)
+        # a slot down to the backplate bares a strip of its face: a face of one volume only
+        bared = [t for t in names.get(None, []) if len(gmsh.model.getAdjacencies(2, t)[0]) == 1]
+        if bared:
+            names[None] = [t for t in names[None] if t not in bared]
+            names.setdefault("slot", []).extend(bared)
+        expected = ["friction", "back", "ends", "inner", "outer"]
+        expected += ["slot"] * bool(self.shape.slot_width)
+        expected += ["chamfer"] * bool(self.shape.chamfer_length)
+        check_surfaces(names, expected, "pad")
+        unexpected = set(names) - set(expected)
+        if unexpected:
+            raise RuntimeError(f"pad: surfaces classified as {', '.join(sorted(unexpected))}")
         if len(names["ends"]) != 4:
             raise RuntimeError(f"pad: {len(names['ends'])} end faces, expected 4 (2 per layer)")
         groups = {"lining": (3, lining), "backplate": (3, backplate),
                   "all": (3, lining + backplate)}
         groups.update({k: (2, v) for k, v in names.items()})
         return groups
+
+    def cut_lining(self, occ, lining):
+        """The lining (a sector from the x axis, before its turn) less its slot and chamfers:
+        its volumes' tags."""
+        cx, cy, _ = self.center
+        s, half = self.shape, 0.5 * self.angle
+        # every tool spans the radii from inside the core to past the outer arc
+        x0, length = 0.5 * self.inner, 2 * self.outer
+        tools = []
+        if s.slot_width:
+            # past the lining's top when the slot goes down to the backplate: no face of the
+            # box coincides with the lining's, so OpenCASCADE cuts it cleanly
+            top = s.slot_depth if s.slot_depth < self.lining else 2 * self.lining
+            box = occ.addBox(cx + x0, cy - 0.5 * s.slot_width, self.z0 - self.lining, length,
+                             s.slot_width, top + self.lining)
+            occ.rotate([(3, box)], cx, cy, 0, 0, 0, 1, half)
+            tools.append((3, box))
+        if s.chamfer_length:
+            # a wedge at each end: a triangle in (y, z) whose long side is the chamfer's plane,
+            # through (L, z0) and (0, z0 + D), the others outside the lining; y points into
+            # the pad from the end on the x axis, away from it at the other end (a mirror
+            # image would make the planes B-splines: the second wedge is built, then turned)
+            L, D = s.chamfer_length, s.chamfer_depth
+            for side, turn in ((1, 0.0), (-1, self.angle)):
+                corners = [(2 * L, self.z0 - D), (-L, self.z0 + 2 * D), (-L, self.z0 - D)]
+                points = [occ.addPoint(cx + x0, cy + side * y, z) for y, z in corners]
+                lines = [occ.addLine(a, b) for a, b in zip(points, points[1:] + points[:1])]
+                face = occ.addPlaneSurface([occ.addCurveLoop(lines)])
+                wedge = [d for d in occ.extrude([(2, face)], length, 0, 0) if d[0] == 3]
+                occ.rotate(wedge, cx, cy, 0, 0, 0, 1, turn)
+                tools += wedge
+        cut, _ = occ.cut(lining, tools)
+        return cut
+
+    def side_name(self, kind, point, normal):
+        """The name of a face neither flat nor cylindrical: a plane through the axis is an
+        end, a vertical plane off it a slot wall, a sloping one a chamfer."""
+        if kind != "Plane":
+            return kind
+        if abs(normal[2]) > GEOMETRY_TOL:
+            return "chamfer"
+        offset = (point[0] - self.center[0]) * normal[0] + (point[1] - self.center[1]) * normal[1]
+        return "ends" if abs(offset) < GEOMETRY_TOL else "slot"
 
     def distance(self, x, y, z):
         """Distance to the friction face, for a point of the pad (above it)."""
@@ -116,7 +215,8 @@ class Pad:
 
 def classify(gmsh, center, levels, radii, other):
     """Surface tags by name: faces of constant z at a level of `levels` (name -> z), cylinders
-    about the axis through center of a radius of `radii`, the rest under `other`."""
+    about the axis through center of a radius of `radii`, the rest under `other`: a name, or
+    a function of the face's kind, a point of it and its normal there that gives one."""
     names = {}
     for _, tag in gmsh.model.getEntities(2):
         lo, hi = gmsh.model.getParametrizationBounds(2, tag)
@@ -129,6 +229,8 @@ def classify(gmsh, center, levels, radii, other):
         elif kind == "Cylinder":
             r = math.hypot(x - center[0], y - center[1])
             name = [n for n, radius in radii.items() if abs(r - radius) < GEOMETRY_TOL]
+        elif callable(other):
+            name = [other(kind, (x, y, z), gmsh.model.getNormal(tag, uv))]
         else:
             name = [other]
         if len(name) != 1:

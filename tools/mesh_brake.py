@@ -12,6 +12,15 @@ fragmented into one conforming mesh.
 
     python tools/mesh_brake.py OUTDIR [--dofs N] [--interface H] [--size H0] [--case CASE]
                                [--growth G] [--tolerance F] [--high-order-optimize K]
+                               [--set KEY=VALUE ...] [--slot W[,D]] [--chamfer L,D]
+
+--set overrides the mirrored case as transient's --set does: the parts' sizes (the disc's
+`outer_radius`, `inner_radius`, `thickness`; the pad's radii, angle, layers and `z0`, which
+must stay on the disc's top face) and any key the written case carries. --slot cuts a radial
+slot at mid-arc through the lining, W wide and D deep from the friction face (default: down to
+the backplate, which stays whole); --chamfer cuts both ends of the lining, L along the arc and
+D up the end. The cuts are surfaces of their own, `slot` (walls and roof) and `chamfer`:
+`friction` is what is left of the lining's face, `ends` the radial end faces only.
 
 writes OUTDIR/disc.msh, OUTDIR/pad.msh (Gmsh 4.1 binary, tet10) and OUTDIR/brake.toml (or
 --case-out), and prints the nodes, elements and dofs of each mesh against the prediction.
@@ -210,30 +219,77 @@ def mesh_part(gmsh, name, part, size, path, high_order_optimize):
     return counts + (time.perf_counter() - t0,)
 
 
-def parts_of(case):
-    """{part name: Disc or Pad} of the mirrored case's annular_disc and brake_pad parts."""
+def parts_of(case, shape):
+    """{part name: Disc or Pad} of the mirrored case's annular_disc and brake_pad parts, the
+    pad cut to `shape` (a geometry.Shape)."""
+    from transient.errors import CaseError
     kinds = {name: part.mesh.kind for name, part in case.parts.items()}
     discs = [n for n, k in kinds.items() if k == "annular_disc"]
     pads = [n for n, k in kinds.items() if k == "brake_pad"]
     if len(discs) != 1 or len(pads) != 1 or len(kinds) != 2:
-        sys.exit(f"{case.path}: expected one annular_disc part and one brake_pad part, "
-                 f"got {kinds}")
-    pad = geometry.Pad(case.parts[pads[0]].mesh.params)
-    return {discs[0]: geometry.Disc(case.parts[discs[0]].mesh.params, pad), pads[0]: pad}
+        raise CaseError(case.path, "parts", "expected one annular_disc part and one brake_pad "
+                        f"part, got {kinds}")
+    pad = geometry.Pad(case.parts[pads[0]].mesh.params, shape)
+    disc = geometry.Disc(case.parts[discs[0]].mesh.params, pad)
+    # the disc's size may be set: the pad must follow it onto its top face
+    top = disc.center[2] + disc.thickness
+    if abs(pad.z0 - top) > geometry.GEOMETRY_TOL:
+        raise CaseError(case.path, f"parts.{pads[0]}.mesh.z0", f"expected the disc's top face, "
+                        f"z = {top:g} m (the pad's friction face lies on it), got {pad.z0:g}")
+    wrong = pad.shape_error()
+    if wrong:
+        raise CaseError("command line", wrong[0], f"expected {wrong[1]}")
+    return {discs[0]: disc, pads[0]: pad}
 
 
-def write_case(source, target, files, summary):
-    """The mirrored case's tables, its generator meshes replaced by the files (paths relative
-    to the target's directory)."""
+def shape_of(args):
+    """The pad's Shape from --slot WIDTH[,DEPTH] and --chamfer LENGTH,DEPTH."""
+    slot = numbers(args.slot, "--slot", (1, 2)) if args.slot else [0.0]
+    chamfer = numbers(args.chamfer, "--chamfer", (2,)) if args.chamfer else [0.0, 0.0]
+    return geometry.Shape(slot_width=slot[0], slot_depth=slot[1] if len(slot) > 1 else None,
+                          chamfer_length=chamfer[0], chamfer_depth=chamfer[1])
+
+
+def numbers(text, option, counts):
+    """Positive lengths [m] given as comma-separated numbers, as many as one of `counts`."""
+    from transient.errors import CaseError
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) not in counts or not all(0 < v < math.inf for v in values):
+        raise CaseError("command line", option, f"expected {' or '.join(map(str, counts))} "
+                        f"positive lengths in metres separated by commas, got {text!r}")
+    return values
+
+
+def shape_summary(shape):
+    """The pad's cuts in words, for the case's title ('' for none)."""
+    words = []
+    if shape.slot_width:
+        words.append(f"slot {1e3 * shape.slot_width:g} mm wide, {1e3 * shape.slot_depth:g} mm "
+                     "deep")
+    if shape.chamfer_length:
+        words.append(f"chamfers {1e3 * shape.chamfer_length:g} x "
+                     f"{1e3 * shape.chamfer_depth:g} mm")
+    return "".join(f", {w}" for w in words)
+
+
+def write_case(source, overrides, target, files, summary):
+    """The mirrored case's tables with the overrides applied, its generator meshes replaced by
+    the files (paths relative to the target's directory)."""
     import os
     import tomllib
-    data = tomllib.loads(Path(source).read_text())
+    from transient.case.loading import apply_overrides
+    data = apply_overrides(tomllib.loads(Path(source).read_text()), overrides, source)
     for name, path in files.items():
         data["parts"][name]["mesh"] = {"kind": "file", "path": Path(
             os.path.relpath(path.resolve(), target.resolve().parent)).as_posix()}
     data["title"] = data.get("title", "") + f" (tet10 meshes by gmsh, {summary})"
-    header = (f"# Written by tools/mesh_brake.py from {Path(source).name}, its generator meshes "
-              f"replaced by gmsh tet10 meshes\n# ({summary}); regenerate rather than edit.\n")
+    changed = "".join(f" --set {o}" for o in overrides)
+    header = (f"# Written by tools/mesh_brake.py from {Path(source).name}{changed}, its "
+              f"generator meshes replaced by gmsh tet10 meshes\n# ({summary}); regenerate "
+              "rather than edit.\n")
     target.write_text(header + fuzz_dumps()(data))
 
 
@@ -277,11 +333,30 @@ def main(argv=None):
                         "move nodes differently from run to run)")
     parser.add_argument("--calibrate", help="comma-separated uniform sizes [m]: fit the node "
                         "model to the meshes' counts")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="override a key of the mirrored case, as transient's --set (the "
+                        "parts' generator sizes: the disc's radii and thickness, the pad's)")
+    parser.add_argument("--slot", metavar="WIDTH[,DEPTH]", help="a radial slot at mid-arc "
+                        "through the lining [m]: WIDTH wide, DEPTH deep from the friction face "
+                        "(default: the lining's thickness, down to the backplate)")
+    parser.add_argument("--chamfer", metavar="LENGTH,DEPTH", help="a chamfer at both ends of "
+                        "the lining [m]: LENGTH along the friction face, DEPTH up the end")
     args = parser.parse_args(argv)
+    from transient.errors import CaseError
+    try:
+        build(args)
+    except CaseError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)
+
+
+def build(args):
+    """The meshes (and the case) main's arguments ask for."""
     from transient.case.loading import load
     from transient.mesh.meshfile import jacobian_check, read_mesh
 
-    parts = parts_of(load(args.case))
+    parts = parts_of(load(args.case, args.set), shape_of(args))
+    shape = next(p.shape for p in parts.values() if isinstance(p, geometry.Pad))
     args.outdir.mkdir(parents=True, exist_ok=True)
     if args.calibrate:
         gmsh = start_gmsh()
@@ -338,7 +413,8 @@ def main(argv=None):
     print(f"total: {total} dofs{target}; h = {h:.5g} m{refined}")
     if args.case_out != "none":
         target = Path(args.case_out) if args.case_out else args.outdir / "brake.toml"
-        write_case(args.case, target, files, f"{total} dofs, h = {h:.4g} m{refined}")
+        write_case(args.case, args.set, target, files,
+                   f"{total} dofs, h = {h:.4g} m{refined}{shape_summary(shape)}")
         print(f"wrote {target}")
 
 
