@@ -145,7 +145,12 @@ SLOTTED_SHAPE = ["--set", "parts.disc.mesh.outer_radius=0.12",
                  "--set", "parts.pad.mesh.outer_radius=0.1125",
                  "--set", "parts.pad.mesh.angle=52.0", "--set", "parts.pad.mesh.z0=0.011",
                  "--slot", "0.004", "--chamfer", "0.005,0.003"]
-SLOTTED = SLOTTED_SHAPE + ["--size", "0.03", "--interface", "0.012", "--growth", "0.8"]
+SLOTTED_SIZE = ["--size", "0.03", "--interface", "0.012", "--growth", "0.8"]
+# pad_disc's sensors and tap moved onto the smaller parts
+SLOTTED_POINTS = ["--set", "sensors.disc_rim.point=[0.12,0.0,0.011]",
+                  "--set", "sensors.pad_back.point=[0.0,0.09,0.026]",
+                  "--set", "loads.tap.point=[0.0,0.09,0.026]"]
+SLOTTED = SLOTTED_SHAPE + SLOTTED_SIZE + SLOTTED_POINTS
 
 
 @pytest.fixture(scope="module")
@@ -199,9 +204,21 @@ def test_slotted_pad_has_its_two_materials(slotted):
     assert x @ (model.M @ x) == pytest.approx(mass, rel=1e-4)
 
 
-def test_slotted_pad_same_arguments_same_files(slotted, tmp_path):
+def test_points_the_new_sizes_leave_off_their_parts_are_told(slotted, tmp_path, capsys):
+    # pad_disc's points are off the smaller disc and pad; the case would take their nearest
+    # nodes without a word
+    mesh_brake.main([str(tmp_path)] + SLOTTED_SHAPE + SLOTTED_SIZE)
+    notes = [line for line in capsys.readouterr().out.splitlines() if line.startswith("note:")]
+    assert [n.split()[1] for n in notes] == ["sensors.disc_rim.point", "sensors.pad_back.point",
+                                             "loads.tap.point"]
+    # and the case written carries the points set
+    assert slotted[1].sensors["disc_rim"].point == (0.12, 0.0, 0.011)
+
+
+def test_slotted_pad_same_arguments_same_files(slotted, tmp_path, capsys):
     out, _, _ = slotted
     mesh_brake.main([str(tmp_path)] + SLOTTED)
+    assert "note:" not in capsys.readouterr().out
     for name in ("disc.msh", "pad.msh", "brake.toml"):
         assert (tmp_path / name).read_bytes() == (out / name).read_bytes(), name
 

@@ -52,6 +52,13 @@ class Disc:
         """Distance to the pad's friction face as it lies on the disc's top face."""
         return self.pad.footprint_distance(x, y, z)
 
+    def outside(self, x, y, z):
+        """Distance from a point to the annulus (0 inside or on it)."""
+        r = math.hypot(x - self.center[0], y - self.center[1])
+        plane = max(self.inner - r, r - self.outer, 0.0)
+        height = max(self.center[2] - z, z - self.center[2] - self.thickness, 0.0)
+        return math.hypot(plane, height)
+
     def samples(self, spacing):
         cz = self.center[2]
         return polar_samples(self.center[:2], self.inner, self.outer, 0.0, 2 * math.pi,
@@ -204,6 +211,11 @@ class Pad:
             along = min(max(dx * ux + dy * uy, self.inner), self.outer)
             plane = math.hypot(dx - along * ux, dy - along * uy)
         return math.hypot(plane, max(self.z0 - z, 0.0))
+
+    def outside(self, x, y, z):
+        """Distance from a point to the pad's two layers, uncut (0 inside or on them)."""
+        height = max(self.z0 - z, z - self.z0 - self.thickness, 0.0)
+        return math.hypot(self.footprint_distance(x, y, self.z0), height)
 
     def samples(self, spacing):
         half = 0.5 * self.angle

@@ -73,6 +73,7 @@ GROWTH = 0.4       # size increase per unit distance from the contact faces: 1.4
 SEED = 2026        # Mesh.RandomSeed: the same arguments give the same meshes
 MAX_REMESH = 2     # meshes made again at most, to meet --dofs within --tolerance
 SAMPLES = 3e5      # at most this many volume samples of the size integrals, per part
+POINT_TOL = 1e-6   # a sensor's or a force's point farther off its part is told [m]
 
 
 def tool_module(name):
@@ -355,7 +356,8 @@ def build(args):
     from transient.case.loading import load
     from transient.mesh.meshfile import jacobian_check, read_mesh
 
-    parts = parts_of(load(args.case, args.set), shape_of(args))
+    case = load(args.case, args.set)
+    parts = parts_of(case, shape_of(args))
     shape = next(p.shape for p in parts.values() if isinstance(p, geometry.Pad))
     args.outdir.mkdir(parents=True, exist_ok=True)
     if args.calibrate:
@@ -399,6 +401,16 @@ def build(args):
     if args.interface is not None and interface is None:
         print(f"note: --interface {args.interface:g} is not below h = {h:.4g}: a uniform size")
 
+    # the case takes a point's nearest node: a point that new sizes (--set of a radius) left
+    # off its part would measure or load somewhere else without a word
+    points = {f"sensors.{k}.point": (s.part, s.point) for k, s in case.sensors.items()}
+    points.update({f"loads.{k}.point": (f.part, f.point) for k, f in case.loads.items()
+                   if f.kind == "force"})
+    for key, (name, point) in points.items():
+        off = parts[name].outside(*point) if name in parts else 0.0
+        if off > POINT_TOL:
+            print(f"note: {key} {list(point)} lies {off:.3g} m off the {name}: set it "
+                  f"(--set {key}=[x,y,z])")
     for name, (n, e, sec) in counts.items():
         # read back as the package reads it: the counts and Jacobians the case will see
         mesh = read_mesh(files[name])
