@@ -14,8 +14,9 @@ class Shape:
     """What cuts the pad's lining [m], zeros for none: a radial slot at mid-arc, slot_width
     wide between parallel walls and slot_depth deep from the friction face (None: the lining's
     thickness, down to the backplate, which stays whole); and at both ends a chamfer whose
-    plane runs parallel to the end, chamfer_length from it on the friction face (along the
-    arc, to (length / radius)^2 / 6 at a radius) and chamfer_depth up the end face."""
+    plane runs parallel to the end, chamfer_length from it on the friction face (the arc to it
+    at radius r, r asin(length / r), is longer by a fraction (length / r)^2 / 6) and
+    chamfer_depth up the end face."""
     slot_width: float = 0.0
     slot_depth: float = None
     chamfer_length: float = 0.0

@@ -282,12 +282,14 @@ def write_case(source, overrides, target, files, summary):
     import os
     import tomllib
     from transient.case.loading import apply_overrides
+    from transient.errors import one_line
     data = apply_overrides(tomllib.loads(Path(source).read_text()), overrides, source)
     for name, path in files.items():
         data["parts"][name]["mesh"] = {"kind": "file", "path": Path(
             os.path.relpath(path.resolve(), target.resolve().parent)).as_posix()}
     data["title"] = data.get("title", "") + f" (tet10 meshes by gmsh, {summary})"
-    changed = "".join(f" --set {o}" for o in overrides)
+    # (a value's newline would end the comment: control characters escaped)
+    changed = "".join(f" --set {one_line(o)}" for o in overrides)
     header = (f"# Written by tools/mesh_brake.py from {Path(source).name}{changed}, its "
               f"generator meshes replaced by gmsh tet10 meshes\n# ({summary}); regenerate "
               "rather than edit.\n")
@@ -358,6 +360,16 @@ def build(args):
 
     case = load(args.case, args.set)
     parts = parts_of(case, shape_of(args))
+    # the case takes a point's nearest node: a point that new sizes (--set of a radius) left
+    # off its part would measure or load somewhere else without a word
+    points = {f"sensors.{k}.point": (s.part, s.point) for k, s in case.sensors.items()}
+    points.update({f"loads.{k}.point": (f.part, f.point) for k, f in case.loads.items()
+                   if f.kind == "force"})
+    for key, (name, point) in points.items():
+        away = parts[name].outside(*point) if name in parts else 0.0
+        if away > POINT_TOL:
+            print(f"note: {key} {list(point)} lies {away:.3g} m off the {name}: set it "
+                  f"(--set {key}=[x,y,z])")
     shape = next(p.shape for p in parts.values() if isinstance(p, geometry.Pad))
     args.outdir.mkdir(parents=True, exist_ok=True)
     if args.calibrate:
@@ -401,16 +413,6 @@ def build(args):
     if args.interface is not None and interface is None:
         print(f"note: --interface {args.interface:g} is not below h = {h:.4g}: a uniform size")
 
-    # the case takes a point's nearest node: a point that new sizes (--set of a radius) left
-    # off its part would measure or load somewhere else without a word
-    points = {f"sensors.{k}.point": (s.part, s.point) for k, s in case.sensors.items()}
-    points.update({f"loads.{k}.point": (f.part, f.point) for k, f in case.loads.items()
-                   if f.kind == "force"})
-    for key, (name, point) in points.items():
-        off = parts[name].outside(*point) if name in parts else 0.0
-        if off > POINT_TOL:
-            print(f"note: {key} {list(point)} lies {off:.3g} m off the {name}: set it "
-                  f"(--set {key}=[x,y,z])")
     for name, (n, e, sec) in counts.items():
         # read back as the package reads it: the counts and Jacobians the case will see
         mesh = read_mesh(files[name])
