@@ -38,7 +38,7 @@ def test_every_case_is_tested():
     # second of squeal, 1.1 min: tools/bench_squeal.py and the README)
     assert sorted(p.name for p in CASES.glob("*.toml")) == [
         "bar_impact.toml", "drilled_cube.toml", "pad_disc.toml", "pad_disc_long.toml",
-        "pad_disc_squeal.toml", "pad_disc_tet10.toml", "two_bars.toml"]
+        "pad_disc_squeal.toml", "pad_disc_tet10.toml", "slotted_pad.toml", "two_bars.toml"]
 
 
 def test_pad_disc_tet10_locks_tied_exactly_with_the_rich_rule_only():
@@ -61,6 +61,51 @@ def test_pad_disc_tet10_locks_tied_exactly_with_the_rich_rule_only():
     soft = compare(load(path, penalty), load(path, penalty + rich), "disc_rim", "pad_back",
                    0.01)
     assert np.abs(soft.by_order[:50]).max() < 0.5 and np.abs(soft.shifts[:50]).max() < 0.5
+
+
+# cases/slotted_pad.toml's own meshes, and the same tool arguments at a coarser size
+# (tests/data/slotted_pad: --size 0.03 --interface 0.012): the small model for the tests
+SLOTTED_SMALL = ['parts.disc.mesh.path="../tests/data/slotted_pad/disc.msh"',
+                 'parts.pad.mesh.path="../tests/data/slotted_pad/pad.msh"']
+
+
+@pytest.mark.parametrize("overrides, ndof", [([], 27678), (SLOTTED_SMALL, 7287)])
+def test_slotted_pad_sets_and_mass(overrides, ndof):
+    """The slotted pad's sets as its case names them, at both sizes: the friction face is the
+    lining's face less the slot and the chamfers, and the parts weigh their volumes at their
+    materials' densities (the lining's 2500, the backplate's and the disc's 7850)."""
+    from brake_shapes import pad_geometry
+    from transient.mesh.selections import set_faces
+    from transient.model.loads import face_area
+    case = load(CASES / "slotted_pad.toml", overrides)
+    model = build_model(case)
+    assert model.ndof == ndof
+    pad = model.parts["pad"].mesh
+    shape = pad_geometry(0.0675, 0.1125, np.radians(52.0), 0.01, 0.004, 0.01, 0.005, 0.003)
+    assert {"friction", "slot", "chamfer", "ends", "back"} <= set(pad.face_sets)
+    assert face_area(pad.points, set_faces(pad, "friction")) == pytest.approx(
+        shape["friction"], rel=1e-4)
+    assert face_area(pad.points, set_faces(pad, "back")) == pytest.approx(shape["sector"],
+                                                                           rel=1e-4)
+    disc = np.pi * (0.12 ** 2 - 0.06 ** 2) * 0.011 * 7850.0
+    lining = shape["lining"] * 2500.0
+    backplate = shape["sector"] * 0.005 * 7850.0
+    assert total_mass(model) == pytest.approx(disc + lining + backplate, rel=1e-4)
+
+
+def test_slotted_pad_contact_carries_the_piston(tmp_path):
+    """A short run of the small slotted pad: the pad is held in its plane only, so at the
+    preload the contact carries the whole piston force, 1 MPa on the backplate's whole back
+    (the slot and the chamfers cut the lining only)."""
+    out = tmp_path / "slotted.h5"
+    assert main(["run", str(CASES / "slotted_pad.toml"), "-o", str(out), "--quiet",
+                 "--set", "solver.t_end=2e-4"]
+                + [a for o in SLOTTED_SMALL for a in ("--set", o)]) == 0
+    assert summary(out)["status"] == "complete"
+    with h5py.File(out, "r") as f:
+        force = json.loads(f.attrs["preload_contact_force"])["pad_disc"]
+    sector = 0.5 * (0.1125 ** 2 - 0.0675 ** 2) * np.radians(52.0)
+    assert force == pytest.approx(1.0e6 * sector, rel=1e-4)
 
 
 def test_drilled_cube_mass_and_modes(capsys):

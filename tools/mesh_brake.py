@@ -12,6 +12,15 @@ fragmented into one conforming mesh.
 
     python tools/mesh_brake.py OUTDIR [--dofs N] [--interface H] [--size H0] [--case CASE]
                                [--growth G] [--tolerance F] [--high-order-optimize K]
+                               [--set KEY=VALUE ...] [--slot W[,D]] [--chamfer L,D]
+
+--set overrides the mirrored case as transient's --set does: the parts' sizes (the disc's
+`outer_radius`, `inner_radius`, `thickness`; the pad's radii, angle, layers and `z0`, which
+must stay on the disc's top face) and any key the written case carries. --slot cuts a radial
+slot at mid-arc through the lining, W wide and D deep from the friction face (default: down to
+the backplate, which stays whole); --chamfer cuts both ends of the lining, L along the arc and
+D up the end. The cuts are surfaces of their own, `slot` (walls and roof) and `chamfer`:
+`friction` is what is left of the lining's face, `ends` the radial end faces only.
 
 writes OUTDIR/disc.msh, OUTDIR/pad.msh (Gmsh 4.1 binary, tet10) and OUTDIR/brake.toml (or
 --case-out), and prints the nodes, elements and dofs of each mesh against the prediction.
@@ -62,198 +71,25 @@ DEFAULT_CASE = ROOT / "cases" / "pad_disc.toml"
 NODES_PER_MEASURE = (5.534, 2.561, 14.04)
 GROWTH = 0.4       # size increase per unit distance from the contact faces: 1.4 per layer
 SEED = 2026        # Mesh.RandomSeed: the same arguments give the same meshes
-GEOMETRY_TOL = 1e-9
 MAX_REMESH = 2     # meshes made again at most, to meet --dofs within --tolerance
 SAMPLES = 3e5      # at most this many volume samples of the size integrals, per part
+POINT_TOL = 1e-6   # a sensor's or a force's point farther off its part is told [m]
+
+
+def tool_module(name):
+    """A sibling module of tools/ (not a package), loaded from its file."""
+    spec = importlib.util.spec_from_file_location(name, ROOT / "tools" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def fuzz_dumps():
-    """The TOML writer of tools/fuzz_cases.py (stdlib only; tools/ is not a package)."""
-    spec = importlib.util.spec_from_file_location("fuzz_cases", ROOT / "tools" / "fuzz_cases.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.dumps
+    """The TOML writer of tools/fuzz_cases.py (stdlib only)."""
+    return tool_module("fuzz_cases").dumps
 
 
-# ----------------------------------------------------------------------------- geometry
-
-
-class Disc:
-    """The annulus of an `annular_disc` mesh spec; its contact face is the pad's footprint on
-    its top face."""
-
-    def __init__(self, params, pad):
-        self.inner, self.outer = params["inner_radius"], params["outer_radius"]
-        self.thickness = params["thickness"]
-        self.center = tuple(params["center"])
-        self.pad = pad
-
-    def build(self, gmsh):
-        """The OCC solid and its physical groups: name -> (dim, entity tags)."""
-        occ = gmsh.model.occ
-        cx, cy, cz = self.center
-        outer = occ.addCylinder(cx, cy, cz, 0, 0, self.thickness, self.outer)
-        inner = occ.addCylinder(cx, cy, cz, 0, 0, self.thickness, self.inner)
-        occ.cut([(3, outer)], [(3, inner)])
-        occ.synchronize()
-        levels = {"zmin": cz, "zmax": cz + self.thickness}
-        radii = {"hub": self.inner, "outer": self.outer}
-        names = classify(gmsh, self.center, levels, radii, other=None)
-        check_surfaces(names, ("hub", "outer", "zmin", "zmax"), "disc")
-        groups = {"all": (3, [v for _, v in gmsh.model.getEntities(3)])}
-        groups.update({k: (2, v) for k, v in names.items()})
-        return groups
-
-    def distance(self, x, y, z):
-        """Distance to the pad's friction face as it lies on the disc's top face."""
-        return self.pad.footprint_distance(x, y, z)
-
-    def samples(self, spacing):
-        cz = self.center[2]
-        return polar_samples(self.center[:2], self.inner, self.outer, 0.0, 2 * math.pi,
-                             [cz, cz + self.thickness], spacing, periodic=True)
-
-
-class Pad:
-    """The lining and backplate of a `brake_pad` mesh spec: an annular sector, two layers."""
-
-    def __init__(self, params):
-        self.inner, self.outer = params["inner_radius"], params["outer_radius"]
-        self.angle = math.radians(params["angle"])
-        self.mid = math.radians(params["center_angle"])
-        self.lining, self.backplate = params["lining_thickness"], params["backplate_thickness"]
-        self.z0 = params["z0"]
-        self.center = tuple(params["center"]) + (0.0,)
-        self.thickness = self.lining + self.backplate
-
-    def build(self, gmsh):
-        occ = gmsh.model.occ
-        cx, cy, _ = self.center
-        layers = []
-        for z, dz in ((self.z0, self.lining), (self.z0 + self.lining, self.backplate)):
-            # a cylinder sector from the x axis, hollowed, then turned to its centre angle
-            sector = occ.addCylinder(cx, cy, z, 0, 0, dz, self.outer, angle=self.angle)
-            core = occ.addCylinder(cx, cy, z - dz, 0, 0, 3 * dz, self.inner)
-            cut, _ = occ.cut([(3, sector)], [(3, core)])
-            occ.rotate(cut, cx, cy, 0, 0, 0, 1, self.mid - 0.5 * self.angle)
-            layers.append(cut)
-        # fragment: one conforming mesh, the layers share the nodes of their common face
-        _, children = occ.fragment(layers[0], layers[1])
-        occ.synchronize()
-        lining = [t for _, t in children[0]]
-        backplate = [t for _, t in children[1]]
-        # the internal face (z0 + lining) is in no group; the radial end faces are 'ends'
-        levels = {"friction": self.z0, None: self.z0 + self.lining,
-                  "back": self.z0 + self.lining + self.backplate}
-        radii = {"inner": self.inner, "outer": self.outer}
-        names = classify(gmsh, self.center, levels, radii, other="ends")
-        check_surfaces(names, ("friction", "back", "ends", "inner", "outer"), "pad")
-        if len(names["ends"]) != 4:
-            raise RuntimeError(f"pad: {len(names['ends'])} end faces, expected 4 (2 per layer)")
-        groups = {"lining": (3, lining), "backplate": (3, backplate),
-                  "all": (3, lining + backplate)}
-        groups.update({k: (2, v) for k, v in names.items()})
-        return groups
-
-    def distance(self, x, y, z):
-        """Distance to the friction face, for a point of the pad (above it)."""
-        return max(z - self.z0, 0.0)
-
-    def footprint_distance(self, x, y, z):
-        """Distance to the friction face from a point below it (in the disc): the in-plane
-        distance to the sector, exact inside its angular range and to the nearer end segment
-        outside it, combined with the depth below z0."""
-        dx, dy = x - self.center[0], y - self.center[1]
-        r = math.hypot(dx, dy)
-        dtheta = (math.atan2(dy, dx) - self.mid + math.pi) % (2 * math.pi) - math.pi
-        half = 0.5 * self.angle
-        if abs(dtheta) <= half:
-            plane = max(self.inner - r, r - self.outer, 0.0)
-        else:
-            end = self.mid + math.copysign(half, dtheta)
-            ux, uy = math.cos(end), math.sin(end)
-            along = min(max(dx * ux + dy * uy, self.inner), self.outer)
-            plane = math.hypot(dx - along * ux, dy - along * uy)
-        return math.hypot(plane, max(self.z0 - z, 0.0))
-
-    def samples(self, spacing):
-        half = 0.5 * self.angle
-        return polar_samples(self.center[:2], self.inner, self.outer, self.mid - half,
-                             self.mid + half, [self.z0, self.z0 + self.lining,
-                                               self.z0 + self.lining + self.backplate],
-                             spacing, periodic=False)
-
-
-def classify(gmsh, center, levels, radii, other):
-    """Surface tags by name: faces of constant z at a level of `levels` (name -> z), cylinders
-    about the axis through center of a radius of `radii`, the rest under `other`."""
-    names = {}
-    for _, tag in gmsh.model.getEntities(2):
-        lo, hi = gmsh.model.getParametrizationBounds(2, tag)
-        uv = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])]
-        x, y, z = gmsh.model.getValue(2, tag, uv)
-        kind = gmsh.model.getType(2, tag)
-        # (OpenCASCADE pads bounding boxes by its tolerance: the normal tells a flat face)
-        if kind == "Plane" and abs(abs(gmsh.model.getNormal(tag, uv)[2]) - 1) < GEOMETRY_TOL:
-            name = [n for n, level in levels.items() if abs(z - level) < GEOMETRY_TOL]
-        elif kind == "Cylinder":
-            r = math.hypot(x - center[0], y - center[1])
-            name = [n for n, radius in radii.items() if abs(r - radius) < GEOMETRY_TOL]
-        else:
-            name = [other]
-        if len(name) != 1:
-            raise RuntimeError(f"surface {tag} ({kind} through {x:.4g}, {y:.4g}, {z:.4g}) is "
-                               "none of the expected faces")
-        names.setdefault(name[0], []).append(tag)
-    return names
-
-
-def check_surfaces(names, expected, part):
-    """Every expected surface found; the unnamed ones (the pad's internal face) dropped."""
-    missing = [n for n in expected if not names.get(n)]
-    if missing:
-        raise RuntimeError(f"{part}: no surface classified as {', '.join(missing)}")
-    names.pop(None, None)
-
-
-def polar_samples(center, r0, r1, t0, t1, levels, spacing, periodic):
-    """Midpoint samples of a polar box (r0-r1, t0-t1, z between levels) and of its faces and
-    edges, cells about `spacing` wide: {3: (points, volumes), 2: (points, areas), 1: (points,
-    lengths)}. The faces are the z-faces at every level (the internal ones too: they are
-    meshed), the cylinders r0 and r1, and the two radial ends unless periodic; the edges are
-    their intersections. The weights sum to the exact volume, area and length."""
-    def cuts(a, b, length):
-        """Midpoints and width of the cells of [a, b], `length` long in metres."""
-        n = max(1, math.ceil(length / spacing))
-        return a + (np.arange(n) + 0.5) * (b - a) / n, (b - a) / n
-
-    r, dr = cuts(r0, r1, r1 - r0)
-    t, dt = cuts(t0, t1, 0.5 * (r0 + r1) * (t1 - t0))
-    zs = [cuts(a, b, b - a) for a, b in zip(levels[:-1], levels[1:])]
-    z = np.concatenate([c for c, _ in zs])
-    dz = np.concatenate([np.full(len(c), d) for c, d in zs])
-
-    def polar(R, T, Z, W):
-        R, T, Z, W = np.broadcast_arrays(R, T, Z, W)
-        pts = np.stack([center[0] + R * np.cos(T), center[1] + R * np.sin(T), Z], axis=-1)
-        return pts.reshape(-1, 3), W.ravel()
-
-    def join(pieces):
-        return (np.vstack([p for p, _ in pieces]), np.concatenate([w for _, w in pieces]))
-
-    ends = [] if periodic else [t0, t1]
-    R, T, Z = np.meshgrid(r, t, z, indexing="ij")
-    volume = polar(R, T, Z, R * dr * dt * np.broadcast_to(dz, Z.shape))
-    faces = [polar(*np.meshgrid(r, t, [lv], indexing="ij"),
-                   np.meshgrid(r, t, [lv], indexing="ij")[0] * dr * dt) for lv in levels]
-    faces += [polar(rr, *np.meshgrid(t, z, indexing="ij"), rr * dt * dz[None, :])
-              for rr in (r0, r1)]
-    faces += [polar(*np.meshgrid(r, [te], z, indexing="ij"), dr * dz[None, None, :])
-              for te in ends]
-    edges = [polar(rr, t, lv, rr * dt) for lv in levels for rr in (r0, r1)]
-    edges += [polar(r, te, lv, dr) for lv in levels for te in ends]
-    edges += [polar(rr, te, z, dz) for rr in (r0, r1) for te in ends]
-    return {3: volume, 2: join(faces), 1: join(edges)}
+geometry = tool_module("brake_geometry")
 
 
 # ----------------------------------------------------------------------------- sizes
@@ -384,30 +220,79 @@ def mesh_part(gmsh, name, part, size, path, high_order_optimize):
     return counts + (time.perf_counter() - t0,)
 
 
-def parts_of(case):
-    """{part name: Disc or Pad} of the mirrored case's annular_disc and brake_pad parts."""
+def parts_of(case, shape):
+    """{part name: Disc or Pad} of the mirrored case's annular_disc and brake_pad parts, the
+    pad cut to `shape` (a geometry.Shape)."""
+    from transient.errors import CaseError
     kinds = {name: part.mesh.kind for name, part in case.parts.items()}
     discs = [n for n, k in kinds.items() if k == "annular_disc"]
     pads = [n for n, k in kinds.items() if k == "brake_pad"]
     if len(discs) != 1 or len(pads) != 1 or len(kinds) != 2:
-        sys.exit(f"{case.path}: expected one annular_disc part and one brake_pad part, "
-                 f"got {kinds}")
-    pad = Pad(case.parts[pads[0]].mesh.params)
-    return {discs[0]: Disc(case.parts[discs[0]].mesh.params, pad), pads[0]: pad}
+        raise CaseError(case.path, "parts", "expected one annular_disc part and one brake_pad "
+                        f"part, got {kinds}")
+    pad = geometry.Pad(case.parts[pads[0]].mesh.params, shape)
+    disc = geometry.Disc(case.parts[discs[0]].mesh.params, pad)
+    # the disc's size may be set: the pad must follow it onto its top face
+    top = disc.center[2] + disc.thickness
+    if abs(pad.z0 - top) > geometry.GEOMETRY_TOL:
+        raise CaseError(case.path, f"parts.{pads[0]}.mesh.z0", f"expected the disc's top face, "
+                        f"z = {top:g} m (the pad's friction face lies on it), got {pad.z0:g}")
+    wrong = pad.shape_error()
+    if wrong:
+        raise CaseError("command line", wrong[0], f"expected {wrong[1]}")
+    return {discs[0]: disc, pads[0]: pad}
 
 
-def write_case(source, target, files, summary):
-    """The mirrored case's tables, its generator meshes replaced by the files (paths relative
-    to the target's directory)."""
+def shape_of(args):
+    """The pad's Shape from --slot WIDTH[,DEPTH] and --chamfer LENGTH,DEPTH."""
+    slot = numbers(args.slot, "--slot", (1, 2)) if args.slot else [0.0]
+    chamfer = numbers(args.chamfer, "--chamfer", (2,)) if args.chamfer else [0.0, 0.0]
+    return geometry.Shape(slot_width=slot[0], slot_depth=slot[1] if len(slot) > 1 else None,
+                          chamfer_length=chamfer[0], chamfer_depth=chamfer[1])
+
+
+def numbers(text, option, counts):
+    """Positive lengths [m] given as comma-separated numbers, as many as one of `counts`."""
+    from transient.errors import CaseError
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) not in counts or not all(0 < v < math.inf for v in values):
+        raise CaseError("command line", option, f"expected {' or '.join(map(str, counts))} "
+                        f"positive lengths in metres separated by commas, got {text!r}")
+    return values
+
+
+def shape_summary(shape):
+    """The pad's cuts in words, for the case's title ('' for none)."""
+    words = []
+    if shape.slot_width:
+        words.append(f"slot {1e3 * shape.slot_width:g} mm wide, {1e3 * shape.slot_depth:g} mm "
+                     "deep")
+    if shape.chamfer_length:
+        words.append(f"chamfers {1e3 * shape.chamfer_length:g} x "
+                     f"{1e3 * shape.chamfer_depth:g} mm")
+    return "".join(f", {w}" for w in words)
+
+
+def write_case(source, overrides, target, files, summary):
+    """The mirrored case's tables with the overrides applied, its generator meshes replaced by
+    the files (paths relative to the target's directory)."""
     import os
     import tomllib
-    data = tomllib.loads(Path(source).read_text())
+    from transient.case.loading import apply_overrides
+    from transient.errors import one_line
+    data = apply_overrides(tomllib.loads(Path(source).read_text()), overrides, source)
     for name, path in files.items():
         data["parts"][name]["mesh"] = {"kind": "file", "path": Path(
             os.path.relpath(path.resolve(), target.resolve().parent)).as_posix()}
     data["title"] = data.get("title", "") + f" (tet10 meshes by gmsh, {summary})"
-    header = (f"# Written by tools/mesh_brake.py from {Path(source).name}, its generator meshes "
-              f"replaced by gmsh tet10 meshes\n# ({summary}); regenerate rather than edit.\n")
+    # (a value's newline would end the comment: control characters escaped)
+    changed = "".join(f" --set {one_line(o)}" for o in overrides)
+    header = (f"# Written by tools/mesh_brake.py from {Path(source).name}{changed}, its "
+              f"generator meshes replaced by gmsh tet10 meshes\n# ({summary}); regenerate "
+              "rather than edit.\n")
     target.write_text(header + fuzz_dumps()(data))
 
 
@@ -451,11 +336,41 @@ def main(argv=None):
                         "move nodes differently from run to run)")
     parser.add_argument("--calibrate", help="comma-separated uniform sizes [m]: fit the node "
                         "model to the meshes' counts")
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="override a key of the mirrored case, as transient's --set (the "
+                        "parts' generator sizes: the disc's radii and thickness, the pad's)")
+    parser.add_argument("--slot", metavar="WIDTH[,DEPTH]", help="a radial slot at mid-arc "
+                        "through the lining [m]: WIDTH wide, DEPTH deep from the friction face "
+                        "(default: the lining's thickness, down to the backplate)")
+    parser.add_argument("--chamfer", metavar="LENGTH,DEPTH", help="a chamfer at both ends of "
+                        "the lining [m]: LENGTH along the friction face, DEPTH up the end")
     args = parser.parse_args(argv)
+    from transient.errors import CaseError
+    try:
+        build(args)
+    except CaseError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)
+
+
+def build(args):
+    """The meshes (and the case) main's arguments ask for."""
     from transient.case.loading import load
     from transient.mesh.meshfile import jacobian_check, read_mesh
 
-    parts = parts_of(load(args.case))
+    case = load(args.case, args.set)
+    parts = parts_of(case, shape_of(args))
+    # the case takes a point's nearest node: a point that new sizes (--set of a radius) left
+    # off its part would measure or load somewhere else without a word
+    points = {f"sensors.{k}.point": (s.part, s.point) for k, s in case.sensors.items()}
+    points.update({f"loads.{k}.point": (f.part, f.point) for k, f in case.loads.items()
+                   if f.kind == "force"})
+    for key, (name, point) in points.items():
+        away = parts[name].outside(*point) if name in parts else 0.0
+        if away > POINT_TOL:
+            print(f"note: {key} {list(point)} lies {away:.3g} m off the {name}: set it "
+                  f"(--set {key}=[x,y,z])")
+    shape = next(p.shape for p in parts.values() if isinstance(p, geometry.Pad))
     args.outdir.mkdir(parents=True, exist_ok=True)
     if args.calibrate:
         gmsh = start_gmsh()
@@ -512,7 +427,8 @@ def main(argv=None):
     print(f"total: {total} dofs{target}; h = {h:.5g} m{refined}")
     if args.case_out != "none":
         target = Path(args.case_out) if args.case_out else args.outdir / "brake.toml"
-        write_case(args.case, target, files, f"{total} dofs, h = {h:.4g} m{refined}")
+        write_case(args.case, args.set, target, files,
+                   f"{total} dofs, h = {h:.4g} m{refined}{shape_summary(shape)}")
         print(f"wrote {target}")
 
 
