@@ -15,6 +15,7 @@ import scipy.sparse as sp
 
 from ..solve import blas
 from .linearize import linearized
+from .residual import mode_residuals
 from .modes import complex_modes
 from .reference import MAX_TOP_DAMPING, Unresolved, full_complex_modes, top_damping
 from .rigid import rigid_motions
@@ -108,6 +109,11 @@ def analysis_of(case, setup, stages=None):
         own = ({p: done.result() for p, done in beside.items()} if beside is not None else
                {p: _alone(model, p, fmax) for p in still} if len(which) else None)
         shapes = describe(case, model, basis, modes, which, fmax, own)
+        if system.reduced and len(which):
+            mass = model.M if case.solver.mass != "lumped" else sp.diags(model.lumped_mass)
+            for row, rho in zip(shapes, mode_residuals(model, mass, system, setup.state, basis,
+                                                       modes, which)):
+                row["residual"] = float(rho)
         stages["shapes"] = time.perf_counter() - t0
     return Analysis(modes, fmax, int(ndof), system.n if system.reduced else 0, stages,
                     setup.meta, shapes, model, basis)

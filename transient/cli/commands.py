@@ -73,6 +73,7 @@ def cmd_cea(args):
     if args.json:
         print(json.dumps({"modes": modes.table(), "ndof": result.ndof,
                           "reduced": result.reduced, "fmax_hz": result.fmax,
+
                           "unstable_shapes": result.shapes, "stages": result.stages,
                           "total": total}))
         return 0
@@ -98,8 +99,10 @@ def cmd_cea(args):
         own = "".join(f"; {p}: like its mode {d['mode']} alone "
                       f"({max(d['frequency_hz'], 0.0):.0f} Hz, MAC {d['mac']:.2f})"
                       for p, d in row.get("part_modes", {}).items())
+        residual = (f"; residual {row['residual']:.1e} of the full model's equations"
+                    if "residual" in row else "")
         print(f"  mode {row['mode']} at {row['frequency_hz']:.1f} Hz: kinetic energy "
-              f"{parts}{nd}{own}")
+              f"{parts}{nd}{own}{residual}")
     print("stages: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.stages.items())
           + f"; total {total:.2f} s")
     return 0

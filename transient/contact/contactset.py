@@ -108,6 +108,15 @@ class ContactSet:
         f = self.friction
         return f.along.T @ y if self.factors is None else f.along @ (self.factors[0].T @ y)
 
+    def normal_load(self, y):
+        """C^T y (ndof, ...): the force on the dofs of pressures times areas y (P, ...)."""
+        return self.C.T @ y if self.factors is None else self.factors[1] @ (self.factors[0].T @ y)
+
+    def across_load(self, y):
+        """Cc^T y (ndof, ...): the force on the dofs of tractions y (P, ...) across it."""
+        f = self.friction
+        return f.across.T @ y if self.factors is None else f.across @ (self.factors[0].T @ y)
+
     def friction_force(self, p):
         """The force on the dofs of the friction tractions at steady sliding, Ct^T (w p m)."""
         return self.tangential_load(self.weights * p * self.friction.m)

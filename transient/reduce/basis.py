@@ -48,6 +48,7 @@ class Basis:
     contact_flexibility: np.ndarray = None   # mu of contact_shapes, descending
     n_static_kept: int = 0         # static directions (contact shapes and loads) beyond the modes
     peaks: dict = None             # the process's peak memory after each of timings' parts [GB]
+    mode_hz: np.ndarray = None     # (n_modes,) the frequencies of the modes, X's first columns
 
     @property
     def T(self):
@@ -76,8 +77,9 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     shapes of them that matter (`contact_shapes`, tol); C (m, ndof), or (m, nfree) already
     restricted to the free dofs (the factorization stage's).
 
-    coupling: loads (nfree, k) of the modes Phi (nfree, n) that the basis must respond to
-    beyond them (the friction forces their normal motion drives, reduce.stage), or None.
+    coupling: the loads of the modes Phi (nfree, n) that the basis must respond to beyond them
+    (the friction forces their motion drives: reduce.stage.FrictionLoads, called with Phi and
+    its eigenvalues, its width(omega2) columns), or None.
     Mf: M on the free dofs when the caller has it (the contact solver's), or None.
     solved: called after the last solve (the owner of the factors frees them), or None.
     """
@@ -93,7 +95,8 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     Phi = modes.shapes
     n, m = len(free), Phi.shape[1]
     columns, shapes, held = [], None, []
-    width = (m if coupling is not None else 0) + statics.shape[1]
+    omega2_modes = (2 * np.pi * modes.frequencies) ** 2
+    width = (coupling.width(omega2_modes) if coupling is not None else 0) + statics.shape[1]
     n_static = width         # the friction's coupling loads are static directions asked too
 
     def into_basis(r):
@@ -105,14 +108,13 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
     if contact is not None and len(contact[1]):
         C, stiffness = contact
         Cf = C if C is None or C.shape[1] == len(free) else restrict(C, cols=free)
-        omega2_modes = (2 * np.pi * modes.frequencies) ** 2
         shapes, mu = contact_shapes(Cf, stiffness, solve, Phi, omega2_modes, tol,
                                     out=into_basis)
         C = Cf = contact = None          # a dense copy at scale: not held through the basis
         columns.append(shapes)
         n_shapes = shapes.shape[1]
     if coupling is not None:
-        columns.append(np.atleast_2d(solve(np.asfortranarray(coupling(Phi))).T).T)
+        columns.append(np.atleast_2d(solve(np.asfortranarray(coupling(Phi, omega2_modes))).T).T)
     if statics.shape[1]:
         columns.append(np.atleast_2d(solve(np.asfortranarray(statics[free])).T).T)
     t_static = time.perf_counter() - t0 - t_modes
@@ -182,7 +184,7 @@ def reduced_basis(K_lin, M, fixed, fmax, statics, solve, shift_hz, contact=None,
                "orthonormalization": time.perf_counter() - t0 - t_modes - t_static}
     peaks["orthonormalization"] = peak_rss_gb()
     return Basis(X, A, np.maximum(omega2, 0.0), len(modes.frequencies), n_static,
-                 timings, n_shapes, mu, n_static_kept, peaks)
+                 timings, n_shapes, mu, n_static_kept, peaks, modes.frequencies)
 
 
 def rebase(basis, K0r, K_lin, M, fixed, u):
@@ -216,7 +218,7 @@ def rebase(basis, K0r, K_lin, M, fixed, u):
     timings = {"rebase": time.perf_counter() - t0}
     return Basis(X, A, np.maximum(omega2, 0.0), basis.n_modes, basis.n_static + 1, timings,
                  basis.n_contact_shapes, basis.contact_flexibility,
-                 basis.n_static_kept + int(extra), {"rebase": peak_rss_gb()})
+                 basis.n_static_kept + int(extra), {"rebase": peak_rss_gb()}, basis.mode_hz)
 
 
 def structural_gram(basis, K_lin, fixed):

@@ -63,6 +63,7 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
     q0, v = basis.coordinates(M @ preload.u), basis.coordinates(M @ v0)
     meta = {"reduced_dofs": len(basis.omega2), "normal_modes": basis.n_modes,
             "modes_fmax_hz": reduction.modes_fmax,
+            "modes_hz": [float(f) for f in basis.mode_hz],
             "contact_shapes": basis.n_contact_shapes,
             # the static directions asked (contact shapes, load patterns, the preload) and kept
             # beyond the modes: those dropped lie in the span of the rest
@@ -121,7 +122,7 @@ def make_basis(case, model, M, contacts, preload, patterns, solve, kt_crit, rows
         rows = contacts.C        # the contact shapes need the rows themselves
     contact = ((rows, contacts.weights * kt_crit)
                if reduction.statics and contacts.n_points else None)
-    coupling = (_friction_loads(contacts, preload, free)
+    coupling = (FrictionLoads(contacts, preload, free, reduction.fmax)
                 if contacts.friction is not None and reduction.statics else None)
     return reduced_basis(K_lin, M, model.fixed, reduction.modes_fmax, np.hstack(loads), solve,
                          case.solver.shift_hz, contact, reduction.statics_tolerance, coupling,
@@ -151,18 +152,41 @@ def mass_scaled(red, cap_hz):
                    v0=red.v0 * root, meta=meta)
 
 
-def _friction_loads(contacts, preload, free):
-    """The friction forces Ct^T diag(w m k_t) C phi that the normal motion of each mode phi
-    drives at steady sliding (the friction stiffness's columns on the modes): their static
-    responses give the basis what the coupling of the modes through friction moves, which the
-    modes and the normal contact shapes need not hold."""
-    d = contacts.weights * contacts.friction.m * preload.tangent
+class FrictionLoads:
+    """The friction forces the modes drive at steady sliding, whose static responses give the
+    basis what the coupling of the modes through friction moves, which the modes and the
+    normal contact shapes need not hold:
+    - of every mode phi, Ct^T diag(w m k_t) C phi: the pressure its normal motion changes,
+      dragged along the sliding (the friction stiffness's columns on the modes);
+    - of the band's modes (below band_hz), Ct^T diag(w p m') Ct phi + Cc^T diag(w p m / V) Cc
+      phi: the traction its velocity turns across the sliding and changes along it (the
+      friction damping's columns). At a slow sliding m / V is a stiff damper across it, and
+      the interface's motion across the sliding that it drives is a direction no mode or
+      normal contact shape holds (tools/study_cea_band.py --spans)."""
 
-    def loads(Phi):
+    def __init__(self, contacts, preload, free, band_hz):
+        f = contacts.friction
+        self.contacts, self.free, self.band = contacts, free, (2 * np.pi * band_hz) ** 2
+        self.stiffness = contacts.weights * f.m * preload.tangent
+        self.along = contacts.weights * preload.pressure * f.dm
+        self.across = contacts.weights * preload.pressure * f.turn
+
+    def width(self, omega2):
+        """Columns of the loads of modes of eigenvalues omega2."""
+        return len(omega2) + int(np.sum(omega2 <= self.band))
+
+    def __call__(self, Phi, omega2):
+        """(nfree, width(omega2)): the stiffness loads of every mode, then the damping loads
+        of the band's."""
+        c, free = self.contacts, self.free
         X = np.zeros((len(free), Phi.shape[1]))
         X[free] = Phi
-        return contacts.tangential_load(d[:, None] * contacts.observe(X))[free]
-    return loads
+        stiffness = c.tangential_load(self.stiffness[:, None] * c.observe(X))[free]
+        X = X[:, omega2 <= self.band]
+        along, across = c.observe_tangential(X)
+        damping = (c.tangential_load(self.along[:, None] * along)
+                   + c.across_load(self.across[:, None] * across))[free]
+        return np.hstack([stiffness, damping])
 
 
 def sample_on(case, contacts, candidate, basis, q0, preload, sample=None):
