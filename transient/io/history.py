@@ -28,6 +28,7 @@ from ..dynamics.energy import drift as energy_drift
 from ..errors import DamagedHistory, RunAborted, interrupted
 from ..kernels.codes import ENERGY_TERMS
 from .attributes import CASE_TEXT, read_attrs, short, write_attrs
+from .checksums import FILTER, create, verify
 
 CHUNK_BYTES = 2 ** 20      # ~1 MB chunks: fast sequential reads of long series
 CHECKPOINT = "checkpoint"       # a soft link to the last checkpoint written whole
@@ -89,9 +90,10 @@ class History:
                 # zero-length row axes cannot be chunked as fixed dimensions
                 f.create_dataset(name, shape=(0,) + shape,
                                  maxshape=(None,) + tuple(n or None for n in shape),
-                                 chunks=(rows,) + tuple(max(n, 1) for n in shape), dtype="f8")
+                                 chunks=(rows,) + tuple(max(n, 1) for n in shape), dtype="f8",
+                                 **FILTER)
             for name, value in (geometry or {}).items():
-                f.create_dataset(f"{GEOMETRY}/{name}", data=np.asarray(value))
+                create(f, f"{GEOMETRY}/{name}", value)
             if system is not None:
                 from .systems import write_system
                 write_system(f, system)
@@ -166,7 +168,7 @@ class History:
                 else:
                     if old is not None:
                         del group[name]
-                    group.create_dataset(name, data=value)
+                    create(group, name, value)
             group.attrs["rows"] = f.attrs["rows"]
             f.flush()
             if link is not None:
@@ -247,6 +249,20 @@ def _rows(f, path):
             raise DamagedHistory(name, f"{ds.shape[0]} rows, attribute 'rows' says "
                                  f"{int(value)}")
     return int(value)
+
+
+def verify_history(f, rows):
+    """Read every checksummed array of the open history f that its readers may take (the
+    series' `rows` complete rows, the checkpoint linked, the system and geometry): a
+    DamagedHistory names the first whose data fail their checksum (io.checksums)."""
+    link = f.get(CHECKPOINT, getlink=True)
+    linked = link.path.strip("/") if isinstance(link, h5py.SoftLink) else ""
+    # the other slot may be one a kill cut short while it was written: never read
+    slots = f.get(CHECKPOINTS)
+    skip = tuple(f"{CHECKPOINTS}/{slot}/" for slot in
+                 (slots if isinstance(slots, h5py.Group) else ())
+                 if f"{CHECKPOINTS}/{slot}" != linked)
+    verify(f, rows, _series_shapes(f), skip)
 
 
 def check_appendable(f, layout):
@@ -336,6 +352,7 @@ def summary(path):
     path = Path(path)
     with _open(path, "r") as f:
         rows = _rows(f, path)
+        verify_history(f, rows)
         series = {name: list(shape) for name, shape in _series_shapes(f).items()}
         meta = read_attrs(f.attrs)
         t_end = float(f["time"][rows - 1]) if rows and "time" in series else None

@@ -12,7 +12,7 @@ from ..dynamics.state import ACC, ROWS, State
 from ..errors import CaseError, DamagedHistory
 from ..kernels.codes import BILATERAL, TABLE
 from .attributes import read_attrs
-from .history import CHECKPOINT, _rows, check_appendable, load_checkpoint
+from .history import CHECKPOINT, _rows, check_appendable, load_checkpoint, verify_history
 from .series import layout
 from .stored import run_case
 from .systems import GROUP, read_system
@@ -33,7 +33,7 @@ def resumed(path, case):
     """The run stored at path, to continue with case (which must be the one it ran)."""
     try:
         with h5py.File(path, "r", locking=False) as f:
-            _rows(f, path)
+            verify_history(f, _rows(f, path))
             meta = read_attrs(f.attrs)
             if GROUP not in f or CHECKPOINT not in f:
                 raise CaseError(path, "--resume", "the history keeps no system or checkpoint "
