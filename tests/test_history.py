@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from transient.errors import RunAborted
-from transient.io.history import (CASE_TEXT, History, energy_drift, format_summary,
-                               load_checkpoint, summary)
+from transient.io.history import CASE_TEXT, History, energy_drift, load_checkpoint, summary
+from transient.io.report import format_summary
 
 ROOT = Path(__file__).resolve().parent.parent
 M = 7

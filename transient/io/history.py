@@ -18,7 +18,6 @@ before the next append: HDF5 will not reopen for writing a file it holds open re
 The root attribute `rows` counts the complete rows and is written last in `append`: rows past
 it (an append interrupted half way) are cut off by `finish` and `open_for_resume`.
 """
-import json
 from pathlib import Path
 
 import h5py
@@ -103,11 +102,12 @@ class History:
         return cls(path, shapes)
 
     @classmethod
-    def open_for_resume(cls, path):
+    def open_for_resume(cls, path, meta=None):
         """Reopen a history (running, aborted or complete) to append after its stored rows.
 
         Rows past the checkpoint, if there is one, are dropped: the run resumes from the
-        checkpoint's state and recomputes them. Sets status back to 'running'.
+        checkpoint's state and recomputes them. Sets status back to 'running'. meta: root
+        attributes to store anew (what the resumed run changed: its case, t_end...).
         """
         path = Path(path)
         with _open(path, "r+") as f:
@@ -116,6 +116,7 @@ class History:
                 rows = _checkpoint_rows(f)
             layout = _series_shapes(f)
             _truncate(f, layout, rows)
+            write_attrs(f.attrs, meta or {})
             f.attrs["status"] = "running"
         return cls(path, layout)
 
@@ -174,6 +175,20 @@ class History:
             if link is not None:
                 del f[CHECKPOINT]
             f[CHECKPOINT] = h5py.SoftLink(slot)
+
+    def truncate(self, rows):
+        """Drop the rows past the first `rows` (a subdivided step goes back to a row before
+        them); the checkpoint's rows stay."""
+        self._check_open()
+        with _open(self.path, "r+") as f:
+            _truncate(f, self.layout, rows)
+
+    def annotate(self, meta):
+        """Store root attributes (name -> value, as `create`'s meta) while the run goes: what
+        it learns on the way (a subdivided step, its end row)."""
+        self._check_open()
+        with _open(self.path, "r+") as f:
+            write_attrs(f.attrs, meta)
 
     def finish(self, status, timings=None):
         """Set the final status ('complete' or 'aborted: <reason>'), store timings, close.
@@ -365,31 +380,3 @@ def summary(path):
     return {"path": str(path), "status": meta.pop("status"), "steps": rows, "t_end": t_end,
             "timings": meta.pop("timings", {}), "energy_drift": drift, "series": series,
             "meta": meta, "file_size": path.stat().st_size}
-
-
-def format_summary(d):
-    """`summary` as a human-readable table."""
-    drift = "n/a" if d["energy_drift"] is None else f"{d['energy_drift']:.3g}"
-    t_end = "n/a" if d["t_end"] is None else f"{d['t_end']:.6g} s"
-    timings = ", ".join(f"{k} {v:.3g} s" if isinstance(v, (int, float)) else f"{k} {v}"
-                        for k, v in d["timings"].items())
-    lines = [("file", f"{d['path']} ({_size(d['file_size'])})"), ("status", d["status"]),
-             ("rows", str(d["steps"])), ("t_end", t_end), ("energy drift", drift),
-             ("timings", timings or "n/a")]
-    lines += [("series" if i == 0 else "", f"{name} {tuple(shape)}")
-              for i, (name, shape) in enumerate(d["series"].items())]
-    lines += [("meta" if i == 0 else "", f"{key} = {_show(value)}")
-              for i, (key, value) in enumerate(d["meta"].items())]
-    width = max(len(label) for label, _ in lines)
-    return "\n".join(f"{label:<{width}}  {text}" for label, text in lines)
-
-
-def _size(n):
-    for unit in ("bytes", "kB", "MB", "GB"):
-        if n < 1000 or unit == "GB":
-            return f"{n:.0f} {unit}" if unit == "bytes" else f"{n:.1f} {unit}"
-        n /= 1000
-
-
-def _show(value):
-    return value if isinstance(value, str) else json.dumps(value)
