@@ -29,7 +29,10 @@ from ..kernels.codes import ENERGY_TERMS
 from .attributes import CASE_TEXT, read_attrs, short, write_attrs
 from .checksums import FILTER, create, verify
 
-CHUNK_BYTES = 2 ** 20      # ~1 MB chunks: fast sequential reads of long series
+CHUNK_BYTES = 2 ** 16      # 64 kB chunks: with the checksum (io.checksums) an append reads,
+#                            checks and writes again whole each chunk it adds to, and 1 MB
+#                            ones (a long run's series each one chunk) made every append pay
+#                            for them; a row read decodes its chunk whole, too
 CHECKPOINT = "checkpoint"       # a soft link to the last checkpoint written whole
 CHECKPOINTS = "checkpoints"     # its two slots, written in turn
 GEOMETRY = "geometry"      # fixed arrays written once (contact points, weights, normals)
