@@ -10,7 +10,6 @@ import pytest
 from test_cea import small
 from test_resume import assert_same, series
 from test_validation import BAR
-from transient.case.loading import load
 from transient.cli import main
 from transient.dynamics.plan import Plan
 from transient.io.history import summary

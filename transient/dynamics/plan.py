@@ -14,8 +14,8 @@ from dataclasses import dataclass
 from .state import FORCES
 
 WHOLE = 1e-9      # t_end / dt within this of an integer (relative) is a whole number of steps:
-#                   the shipped cases' 0.01 / 3.125e-6 is 3200 to round-off, their every step
-#                   whole as before
+#                   0.01 / 3.125e-6 is 3200 only to round-off, and the shipped cases must run
+#                   the whole steps they ran before
 
 
 @dataclass(frozen=True)
