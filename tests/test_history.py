@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from transient.errors import RunAborted
-from transient.io.history import (CASE_TEXT, History, energy_drift, format_summary,
-                               load_checkpoint, summary)
+from transient.io.history import CASE_TEXT, History, energy_drift, load_checkpoint, summary
+from transient.io.report import format_summary
 
 ROOT = Path(__file__).resolve().parent.parent
 M = 7
@@ -63,9 +63,10 @@ def test_three_chunks_read_back(tmp_path):
         assert f.attrs["status"] == "complete" and f.attrs[CASE_TEXT] == "[parts.disc]\n"
         assert f.attrs["dt"] == 1e-6 and json.loads(f.attrs["stages"]) == ["model", "contact"]
         assert json.loads(f.attrs["timings"]) == {"setup": 1.5, "kernel": 2.0, "total": 3.6}
-        # ~1 MB chunks, uncompressed
-        assert f["contact/pad_disc/gap"].chunks == (2 ** 20 // (8 * M), M)
-        assert f["time"].chunks == (2 ** 17,) and f["time"].compression is None
+        # 64 kB chunks, uncompressed, checksummed
+        assert f["contact/pad_disc/gap"].chunks == (2 ** 16 // (8 * M), M)
+        assert f["time"].chunks == (2 ** 13,) and f["time"].compression is None
+        assert f["time"].fletcher32 and f["contact/pad_disc/gap"].fletcher32
 
 
 def test_leaving_the_block_completes_the_run(tmp_path):

@@ -86,8 +86,10 @@ def test_unstable_run_aborts_cleanly_and_keeps_its_history(tmp_path, capsys):
     case = tmp_path / "bar.toml"
     case.write_text((CASES / "bar_impact.toml").read_text())
     out = tmp_path / "bad.h5"
+    # held at the user's step: subdivided, it holds (test_subdivision)
     code = main(["run", str(case), "-o", str(out), "--quiet", "--set", "solver.dt=4e-7",
-                 "--set", "solver.force_dt=true", "--set", "solver.chunk=50"])
+                 "--set", "solver.force_dt=true", "--set", "solver.chunk=50",
+                 "--set", "solver.subdivision=0"])
     assert code == 3
     assert "aborted" in capsys.readouterr().err
     info = summary(out)
@@ -259,12 +261,13 @@ def test_explicit_step_rechecked_at_the_deepest_penetration(tmp_path, capsys):
 
 
 def test_a_diverging_run_never_leaves_a_nan_in_its_file(tmp_path, capsys):
-    # no drift check: the forced, unstable step runs until the state overflows
+    # no drift check: the forced, unstable step runs until the state overflows (held at
+    # the user's step: subdivided, it holds)
     out = tmp_path / "nan.h5"
     code = main(["run", str(CASES / "bar_impact.toml"), "-o", str(out), "--quiet",
                  "--set", "solver.dt=4e-7", "--set", "solver.force_dt=true",
                  "--set", "solver.drift_tolerance=1e300", "--set", "solver.t_end=1e-2",
-                 "--set", "solver.chunk=500"])
+                 "--set", "solver.chunk=500", "--set", "solver.subdivision=0"])
     assert code == 3
     assert "not finite" in capsys.readouterr().err
     info = summary(out)
@@ -297,8 +300,10 @@ def test_a_penalty_too_stiff_for_the_explicit_step_runs_within_1_percent_or_is_s
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
     assert "solver.dt" in err and "contact.wall.k" in err and "omega_c dt = 1.67" in err
-    # forced, the balance (checked 20 times a run) stops it within its first 5%, by name
-    assert main(args + ["--set", "solver.dt=2.17e-7", "--set", "solver.force_dt=true"]) == 3
+    # forced and held at that step (subdivided, it runs at half of it), the balance (judged
+    # from the first 5% of the run) stops it within its first 5%, by name
+    assert main(args + ["--set", "solver.dt=2.17e-7", "--set", "solver.force_dt=true",
+                        "--set", "solver.subdivision=0"]) == 3
     err = capsys.readouterr().err
     assert "contact.wall.k" in err and "solver.dt" in err and "omega_max dt = 1.80" in err
     info = summary(out)

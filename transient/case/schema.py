@@ -4,90 +4,10 @@ Tables keyed by name (`[parts.NAME]`) give every value a dotted path. The schema
 validation (`loading.py`), `--set` overrides, and the key reference in `cases/README.md`
 (`python -m transient.case` prints it).
 """
+from .geometry import MESH, SELECTION, positive as _pos, vector3 as _vec3
 from .nodes import REQUIRED, Named, Table, Value, Variant, reference_markdown as _markdown
 from .solver_schema import SOLVER
 
-def _pos(doc, unit="", default=REQUIRED):
-    return Value("float", doc, default, unit, open_min=0.0)
-
-
-def _vec3(doc, unit="m", default=REQUIRED):
-    return Value("floats", doc, default, unit, length=3)
-
-
-ELEMENT = Value("choice", "element type of the generated mesh", "hex8",
-                choices=("hex8", "hex20", "tet4", "tet10"))
-
-MESH = Variant("mesh of the part: a generator or a file", {
-    "box": {
-        "size": Value("floats", "edge lengths along x, y, z", unit="m", length=3, open_min=0.0),
-        "divisions": Value("ints", "cells along x, y, z", length=3, minimum=1),
-        "origin": _vec3("corner with the smallest coordinates", default=[0.0, 0.0, 0.0]),
-        "element": ELEMENT,
-    },
-    "drilled_box": {
-        "size": Value("floats", "edge lengths along x, y, z", unit="m", length=3, open_min=0.0),
-        "divisions": Value("ints", "background cells along x, y, z", length=3, minimum=1),
-        "origin": _vec3("corner with the smallest coordinates", default=[0.0, 0.0, 0.0]),
-        "hole_center": Value("floats", "x, y of the axis of the hole (along z)", unit="m",
-                             length=2),
-        "hole_radius": _pos("radius of the hole", "m"),
-        "ogrid_cells": Value("int", "half-width in background cells of the square meshed as an "
-                             "O-grid around the hole (0: smallest that fits 1.5 radius)", 0,
-                             minimum=0),
-        "filled": Value("bool", "mesh the hole too (a plain block with the drilled block's plan)",
-                        False),
-        "element": ELEMENT,
-    },
-    "annular_disc": {
-        "inner_radius": _pos("radius of the hub (inner) face", "m"),
-        "outer_radius": _pos("outer radius", "m"),
-        "thickness": _pos("thickness along z", "m"),
-        "divisions": Value("ints", "cells along radius, circumference, thickness", length=3,
-                           minimum=1),
-        "center": _vec3("centre of the lower face", default=[0.0, 0.0, 0.0]),
-        "element": ELEMENT,
-    },
-    "brake_pad": {
-        "inner_radius": _pos("inner radius of the annular sector", "m"),
-        "outer_radius": _pos("outer radius of the annular sector", "m"),
-        "angle": Value("float", "opening angle of the sector", unit="deg", open_min=0.0,
-                       maximum=360.0),
-        "center_angle": Value("float", "polar angle of the sector's middle", 90.0, "deg"),
-        "lining_thickness": _pos("thickness of the friction lining", "m"),
-        "backplate_thickness": _pos("thickness of the steel backplate", "m"),
-        "divisions": Value("ints", "cells along radius, angle, lining thickness, backplate "
-                           "thickness", length=4, minimum=1),
-        "z0": Value("float", "height of the friction face (bottom of the lining)", 0.0, "m"),
-        "center": Value("floats", "x, y of the axis of the sector", [0.0, 0.0], "m", length=2),
-        "element": ELEMENT,
-    },
-    "file": {
-        "path": Value("str", "mesh file read by meshio (Gmsh .msh, Abaqus .inp, VTU...), "
-                      "relative to the case file"),
-        "scale": _pos("factor applied to the coordinates (1e-3 for a file in mm)", "-", 1.0),
-        "translate": _vec3("translation applied after scaling", default=[0.0, 0.0, 0.0]),
-    },
-})
-
-SELECTION = Variant("named selection from geometry: nodes within tol, and the boundary faces "
-                    "whose nodes are all selected", {
-                        "plane": {
-                            "point": _vec3("a point of the plane"),
-                            "normal": Value("floats", "normal of the plane", length=3),
-                        },
-                        "box": {
-                            "min": _vec3("smallest corner"),
-                            "max": _vec3("largest corner"),
-                        },
-                        "cylinder": {
-                            "point": _vec3("a point of the axis"),
-                            "axis": Value("floats", "direction of the axis", length=3),
-                            "radius": _pos("radius of the cylindrical surface", "m"),
-                        },
-                    }, common={
-                        "tol": Value("float", "distance tolerance", 1e-9, "m", minimum=0.0),
-                    })
 
 PART = Table("a solid part", {
     "mesh": MESH,

@@ -47,9 +47,16 @@ SOLVER = Table("solution settings", {
     "chunk": Value("int", "steps per kernel call at most, 0 for about 0.2 s of the kernel "
                    "each and 2000 steps at least (output and checks between calls, at least "
                    "20 times a run; the results do not depend on it)", 0, minimum=0),
-    "drift_tolerance": Value("float", "stop when the energy balance drifts by more than this "
-                             "fraction of the largest energy the run holds (mechanical) or "
-                             "has exchanged (work in, dissipated)", 0.05, open_min=0.0),
+    "drift_tolerance": Value("float", "a step fails (see subdivision) where the energy "
+                             "balance drifts by more than this fraction of the largest energy "
+                             "the run holds (mechanical) or has exchanged (work in, "
+                             "dissipated)", 0.05, open_min=0.0),
+    "subdivision": Value("int", "halvings of a step that fails (energy balance past "
+                         "drift_tolerance, a state not finite, Newton not converged): the run "
+                         "goes back to the last row before the failure and on at half the "
+                         "step (its rows at the same times), down to dt / 2^subdivision; past "
+                         "that it stops (0: at the first failure, whatever gave dt)", 4,
+                         minimum=0, maximum=20),
     "damping": Table("damping", {
         "modal": Value("float", "modal damping ratio of every mode (reduced model)", 0.0,
                        minimum=0.0),
@@ -90,7 +97,8 @@ SOLVER = Table("solution settings", {
     "newton": Table("Newton iterations of the preload and of the implicit scheme", {
         "tolerance": Value("float", "relative residual of the Newton iterations", 1e-10,
                            open_min=0.0),
-        "max_iter": Value("int", "iteration cap (non-convergence stops the run)", 50, minimum=1),
+        "max_iter": Value("int", "iteration cap (non-convergence fails the step: "
+                          "solver.subdivision)", 50, minimum=1),
     }, optional=True),
     "linear_solver": Value("choice", "sparse factorization: auto picks CHOLMOD if installed, "
                            "else PARDISO, else SuperLU", "auto",

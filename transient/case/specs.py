@@ -187,6 +187,7 @@ class SolverSpec:
     force_dt: bool
     chunk: int
     drift_tolerance: float
+    subdivision: int
     damping: DampingSpec
     reduction: ReductionSpec
     newton: NewtonSpec

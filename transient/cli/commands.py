@@ -223,9 +223,14 @@ def cmd_run(args):
         print(json.dumps({"file": result.path, "status": result.status, "steps": result.steps,
                           "t_end": result.t_end, "dt": result.dt,
                           "dt_critical": result.dt_critical, "stages": result.stages,
-                          "timings": result.timings, "energy_drift": result.energy_drift}))
+                          "timings": result.timings, "energy_drift": result.energy_drift,
+                          "subdivisions": list(result.subdivisions)}))
     else:
-        print(f"{case.path}: {result.status}, {result.steps} steps of {result.dt:.4g} s "
+        step = f"{result.dt:.4g} s"
+        if result.subdivisions:
+            step = (f"{2 * result.subdivisions[0]['dt']:.4g} s subdivided to {step} "
+                    f"from t = {result.subdivisions[0]['t']:.6g} s")
+        print(f"{case.path}: {result.status}, {result.steps} steps of {step} "
               f"(central differences' critical step {result.dt_critical:.4g} s) to "
               f"t = {result.t_end:.6g} s")
         print("stages: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.stages.items()))
@@ -254,7 +259,7 @@ def _peak_line(meta):
 
 
 def cmd_info(args):
-    from ..io.history import format_summary
+    from ..io.report import format_summary
     from ..io.stored import read_summary
     d = read_summary(args.file)
     print(json.dumps(d) if args.json else format_summary(d))

@@ -99,8 +99,8 @@ def chunks(stepper, state, n_total, size, every, out, step=0, threads=None):
             threads.record(count, seconds, done)
         if done:
             per_step[count] = seconds / done
-        # a kernel stopping on a non-finite state has not stored that step
-        rows = (done - (status == NOT_FINITE)) // every
+        # a kernel stopping on a non-finite state or a Newton failure has not stored that step
+        rows = (done - (status != OK)) // every
         finite = all(np.all(np.isfinite(x[:rows])) for x in out.arrays) and \
             np.all(np.isfinite(state.array))
         if not finite or status == NOT_FINITE:

@@ -56,6 +56,27 @@ class Balance:
             self.deviation = max(self.deviation, float(np.abs(total(energy) - self.e0).max()))
         return self.drift
 
+    def first_over(self, energy, tolerance, judged=0):
+        """(row, drift) of the first of the rows (r, 5) at which the drift so far exceeds
+        tolerance, or None: where a run's balance failed, whatever chunks it was cut into.
+        The rows before `judged` only add to the balance: at a run's start the energy held is
+        still small, and the step's error on it a large share of it (a load setting a body at
+        rest in motion)."""
+        if not len(energy):
+            return None
+        peak = np.maximum(self.peak, np.maximum.accumulate(scale(energy)))
+        deviation = np.maximum(self.deviation,
+                               np.maximum.accumulate(np.abs(total(energy) - self.e0)))
+        over = deviation / peak > tolerance
+        over[:max(judged, 0)] = False
+        if not over.any():
+            return None
+        row = int(np.argmax(over))
+        return row, float(deviation[row] / peak[row])
+
+    def copy(self):
+        return Balance.restore(self.arrays())
+
     def arrays(self):
         """(E(0), peak, largest deviation), as a checkpoint keeps them."""
         return np.array([self.e0, self.peak, self.deviation])

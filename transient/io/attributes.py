@@ -118,6 +118,11 @@ ATTRIBUTES = {
     "case_path": (_is_text, "a path"),
     "overrides": (lambda v: isinstance(v, list) and all(map(_is_text, v)), "a list of texts"),
     "dt": (lambda v: _is_number(v) and 0 < v < np.inf, "a time step > 0 [s]"),
+    "dt_end": (lambda v: _is_number(v) and 0 < v < np.inf, "a time step > 0 [s]"),
+    "end_row": (lambda v: isinstance(v, bool), "true or false"),
+    "subdivisions": (lambda v: isinstance(v, list) and all(
+        _is_table(s) and _is_number(s.get("t")) and _is_number(s.get("dt"))
+        and _is_text(s.get("why")) for s in v), "a list of tables of t, dt and why"),
     "reduced": (lambda v: isinstance(v, bool), "true or false"),
     "timings": (_is_table, "a table of seconds"),
     "pairs": (lambda v: _is_table(v) and all(map(_is_table, v.values())),

@@ -18,7 +18,6 @@ before the next append: HDF5 will not reopen for writing a file it holds open re
 The root attribute `rows` counts the complete rows and is written last in `append`: rows past
 it (an append interrupted half way) are cut off by `finish` and `open_for_resume`.
 """
-import json
 from pathlib import Path
 
 import h5py
@@ -28,8 +27,12 @@ from ..dynamics.energy import drift as energy_drift
 from ..errors import DamagedHistory, RunAborted, interrupted
 from ..kernels.codes import ENERGY_TERMS
 from .attributes import CASE_TEXT, read_attrs, short, write_attrs
+from .checksums import FILTER, create, verify
 
-CHUNK_BYTES = 2 ** 20      # ~1 MB chunks: fast sequential reads of long series
+CHUNK_BYTES = 2 ** 16      # 64 kB chunks: with the checksum (io.checksums) an append reads,
+#                            checks and writes again whole each chunk it adds to, and 1 MB
+#                            ones (a long run's series each one chunk) made every append pay
+#                            for them; a row read decodes its chunk whole, too
 CHECKPOINT = "checkpoint"       # a soft link to the last checkpoint written whole
 CHECKPOINTS = "checkpoints"     # its two slots, written in turn
 GEOMETRY = "geometry"      # fixed arrays written once (contact points, weights, normals)
@@ -89,9 +92,10 @@ class History:
                 # zero-length row axes cannot be chunked as fixed dimensions
                 f.create_dataset(name, shape=(0,) + shape,
                                  maxshape=(None,) + tuple(n or None for n in shape),
-                                 chunks=(rows,) + tuple(max(n, 1) for n in shape), dtype="f8")
+                                 chunks=(rows,) + tuple(max(n, 1) for n in shape), dtype="f8",
+                                 **FILTER)
             for name, value in (geometry or {}).items():
-                f.create_dataset(f"{GEOMETRY}/{name}", data=np.asarray(value))
+                create(f, f"{GEOMETRY}/{name}", value)
             if system is not None:
                 from .systems import write_system
                 write_system(f, system)
@@ -101,11 +105,12 @@ class History:
         return cls(path, shapes)
 
     @classmethod
-    def open_for_resume(cls, path):
+    def open_for_resume(cls, path, meta=None):
         """Reopen a history (running, aborted or complete) to append after its stored rows.
 
         Rows past the checkpoint, if there is one, are dropped: the run resumes from the
-        checkpoint's state and recomputes them. Sets status back to 'running'.
+        checkpoint's state and recomputes them. Sets status back to 'running'. meta: root
+        attributes to store anew (what the resumed run changed: its case, t_end...).
         """
         path = Path(path)
         with _open(path, "r+") as f:
@@ -114,6 +119,7 @@ class History:
                 rows = _checkpoint_rows(f)
             layout = _series_shapes(f)
             _truncate(f, layout, rows)
+            write_attrs(f.attrs, meta or {})
             f.attrs["status"] = "running"
         return cls(path, layout)
 
@@ -166,12 +172,26 @@ class History:
                 else:
                     if old is not None:
                         del group[name]
-                    group.create_dataset(name, data=value)
+                    create(group, name, value)
             group.attrs["rows"] = f.attrs["rows"]
             f.flush()
             if link is not None:
                 del f[CHECKPOINT]
             f[CHECKPOINT] = h5py.SoftLink(slot)
+
+    def truncate(self, rows):
+        """Drop the rows past the first `rows` (a subdivided step goes back to a row before
+        them); the checkpoint's rows stay."""
+        self._check_open()
+        with _open(self.path, "r+") as f:
+            _truncate(f, self.layout, rows)
+
+    def annotate(self, meta):
+        """Store root attributes (name -> value, as `create`'s meta) while the run goes: what
+        it learns on the way (a subdivided step, its end row)."""
+        self._check_open()
+        with _open(self.path, "r+") as f:
+            write_attrs(f.attrs, meta)
 
     def finish(self, status, timings=None):
         """Set the final status ('complete' or 'aborted: <reason>'), store timings, close.
@@ -247,6 +267,20 @@ def _rows(f, path):
             raise DamagedHistory(name, f"{ds.shape[0]} rows, attribute 'rows' says "
                                  f"{int(value)}")
     return int(value)
+
+
+def verify_history(f, rows):
+    """Read every checksummed array of the open history f that its readers may take (the
+    series' `rows` complete rows, the checkpoint linked, the system and geometry): a
+    DamagedHistory names the first whose data fail their checksum (io.checksums)."""
+    link = f.get(CHECKPOINT, getlink=True)
+    linked = link.path.strip("/") if isinstance(link, h5py.SoftLink) else ""
+    # the other slot may be one a kill cut short while it was written: never read
+    slots = f.get(CHECKPOINTS)
+    skip = tuple(f"{CHECKPOINTS}/{slot}/" for slot in
+                 (slots if isinstance(slots, h5py.Group) else ())
+                 if f"{CHECKPOINTS}/{slot}" != linked)
+    verify(f, rows, _series_shapes(f), skip)
 
 
 def check_appendable(f, layout):
@@ -336,6 +370,7 @@ def summary(path):
     path = Path(path)
     with _open(path, "r") as f:
         rows = _rows(f, path)
+        verify_history(f, rows)
         series = {name: list(shape) for name, shape in _series_shapes(f).items()}
         meta = read_attrs(f.attrs)
         t_end = float(f["time"][rows - 1]) if rows and "time" in series else None
@@ -348,31 +383,3 @@ def summary(path):
     return {"path": str(path), "status": meta.pop("status"), "steps": rows, "t_end": t_end,
             "timings": meta.pop("timings", {}), "energy_drift": drift, "series": series,
             "meta": meta, "file_size": path.stat().st_size}
-
-
-def format_summary(d):
-    """`summary` as a human-readable table."""
-    drift = "n/a" if d["energy_drift"] is None else f"{d['energy_drift']:.3g}"
-    t_end = "n/a" if d["t_end"] is None else f"{d['t_end']:.6g} s"
-    timings = ", ".join(f"{k} {v:.3g} s" if isinstance(v, (int, float)) else f"{k} {v}"
-                        for k, v in d["timings"].items())
-    lines = [("file", f"{d['path']} ({_size(d['file_size'])})"), ("status", d["status"]),
-             ("rows", str(d["steps"])), ("t_end", t_end), ("energy drift", drift),
-             ("timings", timings or "n/a")]
-    lines += [("series" if i == 0 else "", f"{name} {tuple(shape)}")
-              for i, (name, shape) in enumerate(d["series"].items())]
-    lines += [("meta" if i == 0 else "", f"{key} = {_show(value)}")
-              for i, (key, value) in enumerate(d["meta"].items())]
-    width = max(len(label) for label, _ in lines)
-    return "\n".join(f"{label:<{width}}  {text}" for label, text in lines)
-
-
-def _size(n):
-    for unit in ("bytes", "kB", "MB", "GB"):
-        if n < 1000 or unit == "GB":
-            return f"{n:.0f} {unit}" if unit == "bytes" else f"{n:.1f} {unit}"
-        n /= 1000
-
-
-def _show(value):
-    return value if isinstance(value, str) else json.dumps(value)

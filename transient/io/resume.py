@@ -12,7 +12,7 @@ from ..dynamics.state import ACC, ROWS, State
 from ..errors import CaseError, DamagedHistory
 from ..kernels.codes import BILATERAL, TABLE
 from .attributes import read_attrs
-from .history import CHECKPOINT, _rows, check_appendable, load_checkpoint
+from .history import CHECKPOINT, _rows, check_appendable, load_checkpoint, verify_history
 from .series import layout
 from .stored import run_case
 from .systems import GROUP, read_system
@@ -22,18 +22,20 @@ from .systems import GROUP, read_system
 class Resumed:
     system: object           # the ReducedSystem or FullSystem the run integrated
     state: State             # at the last checkpoint
-    step: int                # steps done there
-    dt: float
+    step: int                # steps of dt done there
+    dt: float                # the step there (the run's first, or subdivided)
     blocks: np.ndarray       # row blocks of the reduced contact pass (the summation order)
     balance: np.ndarray      # (3,) the energy balance there: E(0), peak, drift
     meta: dict               # the history's root attributes
+    every: int = 0           # steps of dt between rows (0: the case's, an older history)
+    taken: int = 0           # steps made from t = 0 (a subdivided step's count differs)
 
 
 def resumed(path, case):
     """The run stored at path, to continue with case (which must be the one it ran)."""
     try:
         with h5py.File(path, "r", locking=False) as f:
-            _rows(f, path)
+            verify_history(f, _rows(f, path))
             meta = read_attrs(f.attrs)
             if GROUP not in f or CHECKPOINT not in f:
                 raise CaseError(path, "--resume", "the history keeps no system or checkpoint "
@@ -60,8 +62,12 @@ def resumed(path, case):
                         f"{', '.join(RESUMABLE)}")
     state = State(_padded(saved["state"], (ROWS, system.n)), _padded(saved["acc"], (ACC,)),
                   saved["gmin"])
-    return Resumed(system, state, int(saved["step"][0]), float(meta["dt"]), saved["blocks"],
-                   saved["balance"], meta)
+    step = int(saved["step"][0])
+    # a history before the step's subdivision keeps its step in the attributes only
+    dt = float(saved["dt"][0]) if "dt" in saved else float(meta["dt"])
+    return Resumed(system, state, step, dt, saved["blocks"], saved["balance"], meta,
+                   int(saved["every"][0]) if "every" in saved else 0,
+                   int(saved["taken"][0]) if "taken" in saved else step)
 
 
 def _fits(system, saved):
@@ -75,15 +81,23 @@ def _fits(system, saved):
                   "balance": (3,), "blocks": (len(np.atleast_1d(saved.get("blocks", ()))),)}
     # an earlier version's state and accumulators, without the friction's rows
     legacy = {"state": (6, n), "acc": (3,)} if system.contacts.friction is None else {}
-    for name, want in checkpoint.items():
+    # the step, rows and steps made: kept since the step may be subdivided
+    optional = {"dt": (1,), "every": (1,), "taken": (1,)}
+    for name, want in {**checkpoint, **optional}.items():
         value = saved.get(name)
+        if value is None and name in optional:
+            continue
         if value is None:
             raise DamagedHistory(f"{CHECKPOINT}/{name}", "missing")
-        kinds = {"step": "iu", "blocks": "fiu"}.get(name, "f")
+        kinds = {"step": "iu", "blocks": "fiu", "every": "iu", "taken": "iu"}.get(name, "f")
         if value.shape not in (want, legacy.get(name)) or value.dtype.kind not in kinds:
             raise DamagedHistory(f"{CHECKPOINT}/{name}", f"a {value.dtype} array of shape "
                                  f"{value.shape}, expected {want} "
                                  + ("integers" if kinds == "iu" else "numbers"))
+        low = 0 if name == "taken" else np.nextafter(0, 1)
+        if name in optional and not low <= value[0] < np.inf:
+            raise DamagedHistory(f"{CHECKPOINT}/{name}", f"{value[0]}, expected "
+                                 + ("a step > 0" if name == "dt" else "a count"))
     # None: any length (the sensors' rows)
     arrays = {"contacts/gap0": (c.gap0, (m,)), "contacts/weights": (c.weights, (m,)),
               "contacts/code": (c.code, (m,)), "contacts/params": (c.params, (m, 4)),

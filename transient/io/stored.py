@@ -3,7 +3,7 @@
 The layout is the one `history` writes: `/time`, the series `/<group>/<name>` with one row per
 output row, `/geometry/...` written once, and the meta data as root attributes.
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import h5py
@@ -21,6 +21,14 @@ class Stored:
     rows: int            # complete rows
     series: dict         # name -> shape of one row
     meta: dict           # root attributes decoded (`history.summary`), status included
+
+    def uniform(self):
+        """This history without its end row when that row is off the rows' grid (a run whose
+        t_end is not on it stores its end as a row of its own: attribute end_row): the rows
+        that spectra take, at one sample step."""
+        if self.meta.get("end_row") and self.rows > 1:
+            return replace(self, rows=self.rows - 1)
+        return self
 
     def scalars(self):
         """Names of the series with one number per row (sensors, energy terms)."""

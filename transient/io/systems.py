@@ -18,6 +18,7 @@ from ..contact.contactset import ContactSet, FrictionSet
 from ..dynamics.critical import CriticalStep
 from ..dynamics.system import FullSystem, ReducedSystem
 from ..errors import DamagedHistory
+from .checksums import create
 from .history import SYSTEM as GROUP
 
 SKIPPED = ("T",)
@@ -68,19 +69,19 @@ def _write(g, name, value):
     if value is None:
         g.attrs[name] = "null"
     elif isinstance(value, np.ndarray):
-        g.create_dataset(name, data=value)
+        create(g, name, value)
     elif sp.issparse(value):
         s = g.create_group(name)
         s.attrs["type"], s.attrs["shape"] = "csr", value.shape
         A = sp.csr_matrix(value)
         for part in ("indptr", "indices", "data"):
-            s.create_dataset(part, data=getattr(A, part))
+            create(s, part, getattr(A, part))
     elif isinstance(value, ContactSet):
         s = g.create_group(name)
         s.attrs["type"] = "contacts"
         s.attrs["slices"] = json.dumps({k: [v.start, v.stop] for k, v in value.slices.items()})
         for part in ("gap0", "weights", "code", "params"):
-            s.create_dataset(part, data=getattr(value, part))
+            create(s, part, getattr(value, part))
         _write(s, "C", value.C)
         f = value.friction
         if f is not None:
@@ -90,7 +91,7 @@ def _write(g, name, value):
             _write(r, "along", along)
             _write(r, "across", across)
             for part in FRICTION_ARRAYS:
-                r.create_dataset(part, data=getattr(f, part))
+                create(r, part, getattr(f, part))
             _write(r, "tables", tuple(f.tables))
     elif isinstance(value, CriticalStep):
         s = g.create_group(name)
@@ -98,13 +99,13 @@ def _write(g, name, value):
         s.attrs["omega_contact"] = value.omega_contact
         s.attrs["omega_remainder"] = value.omega_remainder
         s.attrs["friction_dt"], s.attrs["stick_dt"] = value.friction_dt, value.stick_dt
-        s.create_dataset("kt_checked", data=value.kt_checked)
-        s.create_dataset("rows", data=value.rows)
+        create(s, "kt_checked", value.kt_checked)
+        create(s, "rows", value.rows)
     elif isinstance(value, tuple) and all(isinstance(v, np.ndarray) for v in value):
         s = g.create_group(name)
         s.attrs["type"], s.attrs["length"] = "arrays", len(value)
         for k, v in enumerate(value):
-            s.create_dataset(str(k), data=v)
+            create(s, str(k), v)
     else:
         # numbers, flags, and the sensor names (a tuple of strings)
         g.attrs[name] = json.dumps(list(value) if isinstance(value, tuple) else value)

@@ -111,6 +111,7 @@ def history_figure(stored, names, path):
 def spectrum_figure(stored, names, path, fmax=None):
     """Amplitude spectra (Hann window, one-sided, log amplitude) of scalar series, frequency in
     kHz, one panel per group."""
+    stored = stored.uniform()
     t = stored.time()
     dt = sample_step(stored, t)
     top = min(fmax or np.inf, 0.5 / dt)        # at most the Nyquist frequency [Hz]
@@ -140,6 +141,7 @@ SPECTROGRAM_ROWS = 400   # frequency rows drawn at most: about the map's height 
 def spectrogram_figure(stored, name, path, segment=None, fmax=None):
     """Time-frequency map of one series: short-time amplitude spectra in dB (Hann segments
     overlapping by three quarters), time in ms, frequency in kHz."""
+    stored = stored.uniform()
     t = stored.time()
     dt = sample_step(stored, t)
     n = len(t)
@@ -168,6 +170,7 @@ def envelope_figure(stored, names, path, window=None, band=None):
     """Each series with its envelope (top), and the envelope on a log scale with the
     exponential fitted over its linear phase and its growth rate (bottom). Returns
     {name: (sigma [1/s], (t0, t1), rms)}."""
+    stored = stored.uniform()
     t = stored.time()
     dt = sample_step(stored, t)
     fig = _figure(10, 7)
@@ -206,6 +209,7 @@ def frf_figure(stored, source, response, path, segment=None, fmax=None):
 
     Raises CaseError when the history has fewer rows than a segment.
     """
+    stored = stored.uniform()
     t = stored.time()
     dt = sample_step(stored, t)
     n = len(t)
