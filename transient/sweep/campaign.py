@@ -24,7 +24,8 @@ from pathlib import Path
 
 from ..errors import CaseError
 from .folder import MARK, check_out, holding, write_whole
-from .outputs import is_sweep_csv, is_sweep_json, modes_file, outputs, plan
+from .folder import modes_file
+from .outputs import is_sweep_csv, is_sweep_json, outputs, plan
 from .tasks import KINDS, build_shared, cea_summary, run_variant
 from .variants import WHERE
 

@@ -124,3 +124,15 @@ def write_whole(path, text):
     finally:
         if temporary.exists():
             temporary.unlink()
+
+
+def modes_file(path):
+    """The JSON object of complex modes a campaign wrote at path, or None if it is not one."""
+    try:
+        data = json.loads(Path(path).read_text())
+    except (OSError, ValueError, RecursionError):
+        return None
+    if isinstance(data, dict) and data.get("written_by") == MARK and isinstance(
+            data.get("modes"), list):
+        return data
+    return None

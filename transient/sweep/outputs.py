@@ -18,7 +18,7 @@ from pathlib import Path
 
 from ..case.compare import changed
 from ..errors import CaseError, DamagedHistory
-from .folder import MARK
+from .folder import MARK, modes_file
 from .variants import WHERE
 
 # a run stopped from outside (killed, Ctrl-C, SIGTERM): what it stored goes on as it would have
@@ -191,18 +191,6 @@ def _kind(path):
 
 def _what(path):
     return {".h5": "history", ".json": "JSON file"}.get(path.suffix, "table")
-
-
-def modes_file(path):
-    """The JSON object of complex modes a campaign wrote at path, or None if it is not one."""
-    try:
-        data = json.loads(Path(path).read_text())
-    except (OSError, ValueError, RecursionError):
-        return None
-    if isinstance(data, dict) and data.get("written_by") == MARK and isinstance(
-            data.get("modes"), list):
-        return data
-    return None
 
 
 def _check_table(path):

@@ -99,8 +99,7 @@ def _modes_written(analysis, case, path):
     as a history's); their summary. The file is replaced whole (a killed writer leaves the
     old one or none), and only if it is absent or the modes of a campaign."""
     from .. import __version__
-    from .folder import MARK, write_whole
-    from .outputs import modes_file
+    from .folder import MARK, modes_file, write_whole
     path = Path(path)
     if path.exists() and path.stat().st_size and modes_file(path) is None:
         raise CaseError(path, "--out", "exists and is not complex modes written by transient "
