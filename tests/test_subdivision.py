@@ -97,12 +97,12 @@ def test_no_step_down_to_the_floor_holds_and_the_run_stops(tmp_path, capsys):
 
 def test_a_friction_run_failing_at_the_default_step_completes_subdivided(tmp_path):
     """The small pad and disc of test_cea at mu = 0.6, at the default step: the evaluated
-    corrector fails as the vibration saturates (its balance at 0.29 by 5.1 ms: the run stops
-    without subdivision, as pad_disc's did at 1.5 ms). Subdivided it completes at a quarter
-    of the step, its balance within 3% (2.96% measured), its rows at one sample step; its
-    unstable mode (30.3 kHz, the CEA's 3691 1/s) grew before at the default step's rate of it
-    (3507 1/s fitted over 1-3 ms; 3645 at half the step), the mode's amplitude from the
-    stored field as tests/test_squeal.py takes it."""
+    corrector fails as the vibration saturates (its balance at 0.14 by 6.4 ms: the run stops
+    without subdivision, as pad_disc's did at 1.5 ms). Subdivided it completes at an eighth
+    of the step, its balance within 3% (1.0% measured), its rows at one sample step; its
+    fastest unstable mode (11.8 kHz, the CEA's 2825 1/s) grew before at the default step's
+    rate of it (2810 1/s fitted over 1-3 ms), the mode's amplitude from the stored field as
+    tests/test_squeal.py takes it."""
     sets = ["contact.pad_disc.friction.mu=0.6", "loads.tap.vector=[0.0,0.0,-0.02]",
             "solver.t_end=8e-3", "output.field=true", "output.every=1"]
     held = run(small(*sets, "solver.subdivision=0"), tmp_path / "held.h5")
@@ -126,5 +126,5 @@ def test_a_friction_run_failing_at_the_default_step_completes_subdivided(tmp_pat
     amplitude = np.abs(z @ left[:, grow].conj())
     linear = (t > 1e-3) & (t < 3e-3)
     rate = np.polyfit(t[linear], np.log(amplitude[linear]), 1)[0]
-    assert lam[grow].real > 3000
+    assert lam[grow].real > 2500
     assert rate == pytest.approx(lam[grow].real, rel=0.06)

@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parent.parent
 PAD = ROOT / "cases" / "pad_disc.toml"
 SMALL = ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1,1]",
          'parts.disc.mesh.element="hex8"', 'parts.pad.mesh.element="hex8"',
-         "motion.disc.omega=50.0", "solver.damping.residual=0.0", "solver.t_end=3e-3",
+         "motion.disc.omega=50.0", "solver.damping.residual=0.0", "solver.t_end=5e-3",
          "output.every=2", "loads.tap.vector=[0.0,0.0,-0.02]"]
 
 
@@ -116,7 +116,8 @@ def test_a_sweep_equals_its_variants_run_one_by_one(campaign):
         for name in ref:
             assert np.array_equal(got[name], ref[name]), name
     # the summaries: growth at mu = 0.4 only (the small pad and disc flutter above 0.3; a
-    # fit over 3 ms of beating modes, the sign its point)
+    # fit over 5 ms of beating modes, the sign its point: over 3 ms the growing mode's 8x
+    # did not yet stand out of the tap's response of the modes to 2 fmax)
     assert rows[2]["growth_rate"] > 500
     assert rows[0]["growth_rate"] is None or rows[0]["growth_rate"] < 100
     assert 11e3 < rows[2]["cycle_frequency"] < 12.5e3
@@ -387,9 +388,9 @@ def test_a_sweep_resumed_to_a_longer_t_end_continues_its_histories(campaign, tmp
     checkpoint, bit for bit the run alone to the whole; to a shorter time than stored, the
     campaign is refused (the longer run would be lost)."""
     out = tmp_path / "half"
-    half = ["--set", "solver.t_end=1.5e-3"]
+    half = ["--set", "solver.t_end=2.5e-3"]
     rows = _mu_sweep(out, "run", capsys, "[0.0,0.4]", *half)
-    assert all(r["steps"] == 480 for r in rows)
+    assert all(r["steps"] == 800 for r in rows)
     rows = _mu_sweep(out, "run", capsys, "[0.0,0.4]", "--resume")
     assert [(r["resumed"], r["continued"]) for r in rows] == [(False, True)] * 2
     for row, alone in zip(rows, (campaign[2][0], campaign[2][2])):
@@ -424,6 +425,10 @@ class _Recorder:
         return value
 
     def __getattr__(self, name):
+        derived = getattr(type(self._obj), name, None)
+        if isinstance(derived, property):
+            # a spec's property reads its fields: record those
+            return derived.fget(self)
         return self._wrap(getattr(self._obj, name), f"{self._path}.{name}".lstrip("."))
 
     def __getitem__(self, key):
