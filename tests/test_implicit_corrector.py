@@ -16,7 +16,7 @@ def _runs(force, t_end=2e-3):
     dt = choose_dt(load(CASES / "pad_disc.toml", base), setup)
     n = int(round(t_end / dt))
     out = {}
-    for corrector, k in (("evaluated", 1), ("implicit", 1), ("evaluated", 16)):
+    for corrector, k in (("evaluated", 1), ("implicit", 1), ("implicit", 2), ("evaluated", 16)):
         case = load(CASES / "pad_disc.toml", base + [f'solver.corrector="{corrector}"'])
         series, status, _ = simulate(case, setup, dt / k, n * k, k)
         out[corrector, k] = (series, status)
@@ -37,11 +37,18 @@ def test_implicit_corrector_matches_the_evaluated_one_on_a_gentle_tap():
 
 
 def test_implicit_corrector_is_stable_where_the_explicit_remainder_diverges():
-    # an 8 kN tap on a pad pressed by 4.4 kN: contact tangents several times the preload's
+    """An 8 kN tap on a pad pressed by 4.4 kN: contact tangents several times the preload's.
+    At the default step (20 a period of fmax) the evaluated corrector diverges and the
+    implicit one completes; its accuracy is taken at 20 steps a period of the basis' cutoff
+    (2 fmax), half that step: the impact drives the modes between fmax and the cutoff, which
+    the default step leaves at 10 steps a period (there the pad's history is 21% off and its
+    band below fmax 10%; 3.8% and 1.5% with the modes cut at fmax)."""
     out = _runs(8000.0)
     assert out["evaluated", 1][1] == "not finite"
     series, status = out["implicit", 1]
     assert status == "complete" and np.all(np.isfinite(series["sensors/pad_back"]))
+    series, status = out["implicit", 2]
+    assert status == "complete"
     ref = out["evaluated", 16][0]
     assert out["evaluated", 16][1] == "complete"
     assert _error(series, ref) < 0.05

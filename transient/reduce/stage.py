@@ -207,7 +207,7 @@ def _sample(case, contacts, candidate, omega2, Cr, q0, preload, tangential=None,
     solver = case.solver
     name = next(n for n, s in contacts.slices.items() if candidate[s].any())
     spec = case.contact[name]
-    band = int(np.sum(omega2 <= (2 * np.pi * solver.reduction.fmax) ** 2))
+    band = int(np.sum(omega2 <= (2 * np.pi * solver.reduction.modes_fmax) ** 2))
     try:
         return sample_contact(contacts, candidate, omega2, Cr, q0, preload.gap,
                               preload.pressure, preload.tangent, band,
