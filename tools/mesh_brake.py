@@ -199,6 +199,14 @@ def start_gmsh():
     return gmsh
 
 
+def size_at(part, size, x, y, z):
+    """The mesh size at a point: the size field's at its distance from the contact faces,
+    capped by the part's own `local_size` where it has one (a feature too small for h: the
+    brake corner caliper's bores)."""
+    h = size(part.distance(x, y, z))
+    return min(h, part.local_size(x, y, z)) if hasattr(part, "local_size") else h
+
+
 def mesh_part(gmsh, name, part, size, path, high_order_optimize):
     """Mesh one part in tet10 and write it; returns (nodes, tets, seconds)."""
     t0 = time.perf_counter()
@@ -206,9 +214,8 @@ def mesh_part(gmsh, name, part, size, path, high_order_optimize):
     for gname, (dim, tags) in part.build(gmsh).items():
         gmsh.model.addPhysicalGroup(dim, tags, name=gname)
     gmsh.option.setNumber("Mesh.MeshSizeMax", size.h)
-    if size.interface is not None:
-        gmsh.model.mesh.setSizeCallback(
-            lambda dim, tag, x, y, z, lc: size(part.distance(x, y, z)))
+    if size.interface is not None or hasattr(part, "local_size"):
+        gmsh.model.mesh.setSizeCallback(lambda dim, tag, x, y, z, lc: size_at(part, size, x, y, z))
     gmsh.model.mesh.generate(3)
     gmsh.model.mesh.setOrder(2)           # midside nodes on the true geometry (cylinders)
     if high_order_optimize:
@@ -418,8 +425,10 @@ def mesh_parts(parts, args):
         off = total / args.dofs - 1
         capped = not args.size and h >= largest_size(parts) * (1 - 1e-9) and off > 0
         if capped:
-            print(f"note: the interface size {args.interface:g} m alone makes more than "
-                  f"{args.dofs:.0f} dofs: h is held at {h:.4g} m (the thickest part)")
+            cause = (f"the interface size {args.interface:g} m alone" if interface
+                     else "every part an element thick")
+            print(f"note: {cause} makes more than {args.dofs:.0f} dofs: h is held at "
+                  f"{h:.4g} m (the thickest part)")
         if args.size or capped or abs(off) <= args.tolerance or attempt == MAX_REMESH:
             break
         print(f"h = {h:.5g} m gave {total} dofs ({100 * off:+.1f}%): meshing again")
