@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from brake_shapes import CORNER_LINING, CORNER_VOLUMES
 from tet10_meshes import cell_volumes, named_sets
 from transient.case.loading import load
 from transient.mesh.meshfile import jacobian_check
@@ -40,32 +41,6 @@ def corner(tmp_path_factory, mesh_corner):
     mesh_corner.main([str(out)] + ARGUMENTS)
     case = load(out / "corner.toml")
     return out, case, {name: part_mesh(case, name) for name in case.parts}
-
-
-def sector(r0, r1, degrees, dz):
-    return 0.5 * math.radians(degrees) * (r1 ** 2 - r0 ** 2) * dz
-
-
-# The dimensions [m, deg] of cases/brake_corner.toml's comments: the disc 0.055-0.14 m, 20 mm
-# thick from z = 0; the pads 0.09-0.135 m over 65-115 degrees, a 10 mm lining on a 5 mm
-# backplate; the pistons 18.75 mm in radius and 16 mm long; the caliper's bores 14 mm deep
-LINING = sector(0.09, 0.135, 50.0, 0.01)
-BACKPLATE = sector(0.09, 0.135, 50.0, 0.005)
-PISTON = math.pi * 0.01875 ** 2 * 0.016
-VOLUMES = {
-    "disc": math.pi * (0.14 ** 2 - 0.055 ** 2) * 0.02,
-    "pad_in": LINING + BACKPLATE, "pad_out": LINING + BACKPLATE,
-    "piston_in": PISTON, "piston_out": PISTON,
-    # the inner jaw, the ears over the arms, the bridge past the rim, the outer jaw, less the
-    # two bores
-    "caliper": (sector(0.088, 0.145, 50.0, 0.013) + sector(0.088, 0.145, 80.0, 0.015)
-                + sector(0.145, 0.165, 44.0, 0.11) + sector(0.088, 0.145, 44.0, 0.028)
-                - 2 * math.pi * 0.01875 ** 2 * 0.014),
-    # at each end of the pads an arm above (with the crossbeam's root) and below the disc and
-    # its bridge past the rim; the crossbeam between the arms
-    "bracket": 2 * (sector(0.07, 0.145, 15.0, 0.02) + sector(0.088, 0.145, 15.0, 0.02)
-                    + sector(0.145, 0.16, 15.0, 0.08)) + sector(0.07, 0.085, 50.0, 0.01),
-}
 
 
 def test_every_set_the_case_names_is_in_its_file(corner):
@@ -123,11 +98,11 @@ def test_cells_are_tet10_with_positive_volumes_the_geometry_s(corner):
         volumes = cell_volumes(mesh, slice(None))
         assert volumes.min() > 0, name
         # the meshes follow the cylinders at their nodes: within 1e-4 at this size
-        assert volumes.sum() == pytest.approx(VOLUMES[name], rel=2e-4), name
+        assert volumes.sum() == pytest.approx(CORNER_VOLUMES[name], rel=2e-4), name
     for name in ("pad_in", "pad_out"):
         pad = meshes[name]
         lining = cell_volumes(pad, pad.cell_sets["lining"]["tetra10"])
-        assert lining.min() > 0 and lining.sum() == pytest.approx(LINING, rel=2e-4)
+        assert lining.min() > 0 and lining.sum() == pytest.approx(CORNER_LINING, rel=2e-4)
 
 
 def test_the_outer_pad_is_the_inner_one_mirrored(corner):
