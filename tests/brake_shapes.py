@@ -1,5 +1,6 @@
-"""Closed forms of a slotted, chamfered brake pad (tools/mesh_brake.py --slot, --chamfer): the
-areas and volumes its meshes must have, written from the geometry, not from the tool's code.
+"""Closed forms of a slotted, chamfered brake pad (tools/mesh_brake.py --slot, --chamfer) and
+of the brake corner's parts (tools/mesh_corner.py): the areas and volumes their meshes must
+have, written from the geometry, not from the tools' code.
 
 The pad is the annular sector ri < r < ro over `angle` radians. The slot's walls are parallel to
 the radius at mid-arc, half a width a from it; a chamfer's line on the friction face is parallel
@@ -42,3 +43,31 @@ def pad_geometry(ri, ro, angle, lining, slot_width, slot_depth, chamfer_length,
         "chamfer": 2 * chamfer_plan * math.hypot(L, D) / L,
         "lining": sector * lining - slot_depth * slot_plan - 2 * chamfer_volume,
     }
+
+
+def sector(r0, r1, degrees, dz):
+    """Volume of an annular sector: radii r0-r1 [m], an angle [deg], a height dz [m]."""
+    return 0.5 * math.radians(degrees) * (r1 ** 2 - r0 ** 2) * dz
+
+
+# The volumes [m^3] of cases/brake_corner.toml's parts (tools/mesh_corner.py), from the
+# dimensions [m, deg] of its comments: the disc 0.055-0.14 m, 20 mm thick from z = 0; the pads
+# 0.09-0.135 m over 65-115 degrees, a 10 mm lining on a 5 mm backplate; the pistons 18.75 mm
+# in radius and 16 mm long; the caliper's bores 14 mm deep
+CORNER_LINING = sector(0.09, 0.135, 50.0, 0.01)
+CORNER_BACKPLATE = sector(0.09, 0.135, 50.0, 0.005)
+CORNER_PISTON = math.pi * 0.01875 ** 2 * 0.016
+CORNER_VOLUMES = {
+    "disc": math.pi * (0.14 ** 2 - 0.055 ** 2) * 0.02,
+    "pad_in": CORNER_LINING + CORNER_BACKPLATE, "pad_out": CORNER_LINING + CORNER_BACKPLATE,
+    "piston_in": CORNER_PISTON, "piston_out": CORNER_PISTON,
+    # the inner jaw, the ears over the arms, the bridge past the rim, the outer jaw, less the
+    # two bores
+    "caliper": (sector(0.088, 0.145, 50.0, 0.013) + sector(0.088, 0.145, 80.0, 0.015)
+                + sector(0.145, 0.165, 44.0, 0.11) + sector(0.088, 0.145, 44.0, 0.028)
+                - 2 * math.pi * 0.01875 ** 2 * 0.014),
+    # at each end of the pads an arm above (with the crossbeam's root) and below the disc and
+    # its bridge past the rim; the crossbeam between the arms
+    "bracket": 2 * (sector(0.07, 0.145, 15.0, 0.02) + sector(0.088, 0.145, 15.0, 0.02)
+                    + sector(0.145, 0.16, 15.0, 0.08)) + sector(0.07, 0.085, 50.0, 0.01),
+}

@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tet10_meshes import cell_volumes, named_sets
 from transient.case.loading import load
 from transient.mesh import generators
-from transient.mesh.elements import ELEMENTS
 from transient.mesh.meshfile import jacobian_check
 from transient.model.model import build_model, part_mesh
 
@@ -32,19 +32,6 @@ def built(tmp_path_factory):
     mesh_brake.main([str(out), "--dofs", str(TARGET)])
     case = load(out / "brake.toml")
     return out, case, {name: part_mesh(case, name) for name in case.parts}
-
-
-def named_sets(case):
-    """(part, set, kind) of every set the case names: constraints, pressure loads, contact
-    surfaces, region materials."""
-    refs = [(c.set, "nodes") for c in case.constraints.values()]
-    refs += [(load.set, "faces") for load in case.loads.values() if load.set]
-    for pair in case.contact.values():
-        refs += [(pair.surface1, "faces"), (pair.surface2, "faces")]
-    out = [tuple(ref.split(".", 1)) + (kind,) for ref, kind in refs]
-    out += [(name, cset, "cells") for name, part in case.parts.items()
-            for cset in part.region_materials]
-    return out
 
 
 def test_every_set_the_case_names_is_in_the_files(built):
@@ -99,17 +86,6 @@ def test_same_arguments_same_files(built, tmp_path):
     mesh_brake.main([str(tmp_path), "--dofs", str(TARGET)])
     for name in ("disc.msh", "pad.msh", "brake.toml"):
         assert (tmp_path / name).read_bytes() == (out / name).read_bytes(), name
-
-
-def cell_volumes(mesh, cells):
-    """Volumes of tet10 cells by the element's own mass quadrature (exact for curved cells up
-    to its degree)."""
-    el = ELEMENTS["tetra10"]
-    xi, w = el.rule(el.mass_degree)
-    dN = el.shape_derivatives(xi)
-    X = mesh.points[mesh.cells["tetra10"][cells]]
-    J = np.swapaxes(X, 1, 2)[:, None] @ dN[None]
-    return np.linalg.det(J) @ w
 
 
 def test_parts_weigh_their_volume_times_density(built):

@@ -37,8 +37,9 @@ def test_every_case_is_tested():
     # pad_disc_squeal.toml: test_pad_disc_squeal_grows_as_its_complex_modes (the growth; its
     # second of squeal, 1.1 min: tools/bench_squeal.py and the README)
     assert sorted(p.name for p in CASES.glob("*.toml")) == [
-        "bar_impact.toml", "drilled_cube.toml", "pad_disc.toml", "pad_disc_long.toml",
-        "pad_disc_squeal.toml", "pad_disc_tet10.toml", "slotted_pad.toml", "two_bars.toml"]
+        "bar_impact.toml", "brake_corner.toml", "drilled_cube.toml", "pad_disc.toml",
+        "pad_disc_long.toml", "pad_disc_squeal.toml", "pad_disc_tet10.toml", "slotted_pad.toml",
+        "two_bars.toml"]
 
 
 def test_pad_disc_tet10_locks_tied_exactly_with_the_rich_rule_only():
@@ -106,6 +107,56 @@ def test_slotted_pad_contact_carries_the_piston(tmp_path):
         force = json.loads(f.attrs["preload_contact_force"])["pad_disc"]
     sector = 0.5 * (0.1125 ** 2 - 0.0675 ** 2) * np.radians(52.0)
     assert force == pytest.approx(1.0e6 * sector, rel=1e-4)
+
+
+CORNER_DOFS = {"disc": 13578, "pad_in": 2928, "pad_out": 2952, "piston_in": 1281,
+               "piston_out": 1260, "caliper": 11823, "bracket": 7884}
+
+
+def test_brake_corner_parts_and_mass():
+    """The corner's seven meshes (tools/mesh_corner.py --size 0.016), each part's dofs, and
+    their mass: the parts' volumes at steel's density, the linings' at the lining's."""
+    from brake_shapes import CORNER_LINING, CORNER_VOLUMES
+    model = build_model(load(CASES / "brake_corner.toml"))
+    assert {name: 3 * part.mesh.n_nodes for name, part in model.parts.items()} == CORNER_DOFS
+    mass = 7850.0 * sum(CORNER_VOLUMES.values()) - 2 * (7850.0 - 2500.0) * CORNER_LINING
+    assert total_mass(model) == pytest.approx(mass, rel=1e-4)
+
+
+def test_brake_corner_preload_with_friction():
+    """The corner's preload at mu = 0.4 on both linings, the disc turning about +z: each
+    friction pair carries its piston's force, the line pressure on the piston's area (the
+    pistons are free along their axes, the pads' other ties hold the tangential plane only);
+    the friction drags both pads along the disc's motion at their centres (-x), the mirrored
+    outer pad as the inner one, by mu times that force less the spread of its directions over
+    the pads' arc; the abutments hold it, the trailing one in compression, the leading one in
+    tension. The setup's stages up to the preload only (no reduction)."""
+    from transient.contact.contactset import first_tangent, stack
+    from transient.contact.pair import build_contact
+    from transient.model import constant_load
+    from transient.shared import factorization
+    from transient.solve.preload import solve_preload
+    case = load(CASES / "brake_corner.toml", ["contact.pad_in_disc.friction.mu=0.4",
+                                              "contact.pad_out_disc.friction.mu=0.4"])
+    model = build_model(case)
+    pairs = build_contact(case, model)
+    contacts = stack(pairs, model.ndof)
+    preload = solve_preload(model.K, model.fixed, constant_load(case, model), contacts,
+                            factorization(case, model, contacts), case.solver.newton.tolerance,
+                            case.solver.newton.max_iter, first_tangent(pairs, contacts))
+    force = {name: float((contacts.weights * preload.pressure)[s].sum())
+             for name, s in contacts.slices.items()}
+    piston = 4.0e6 * np.pi * 0.01875 ** 2
+    friction = contacts.friction_force(preload.pressure)
+    for side in ("in", "out"):
+        # (the piston's face a circle of 12 quadratic arcs: 1.6e-4 short of its area)
+        assert force[f"pad_{side}_disc"] == pytest.approx(piston, rel=3e-4)
+        assert force[f"piston_{side}"] == pytest.approx(force[f"pad_{side}_disc"], rel=1e-8)
+        drag = friction[model.part_dofs(f"pad_{side}")].reshape(-1, 3).sum(axis=0)
+        assert -0.4 * piston < drag[0] < -0.95 * 0.4 * piston
+        assert abs(drag[2]) < 1e-9 * piston
+        assert force[f"abutment_{side}_hi"] > 0.1 * piston
+        assert force[f"abutment_{side}_lo"] < -0.1 * piston
 
 
 def test_drilled_cube_mass_and_modes(capsys):

@@ -67,9 +67,11 @@ class Disc:
 
 
 class Pad:
-    """The lining and backplate of a `brake_pad` mesh spec: an annular sector, two layers."""
+    """The lining and backplate of a `brake_pad` mesh spec: an annular sector, two layers;
+    with `mirror` (a height [m]), its image through the plane z = mirror: the outer pad of a
+    caliper, whose lining faces up onto the disc's lower face."""
 
-    def __init__(self, params, shape=Shape()):
+    def __init__(self, params, shape=Shape(), mirror=None):
         self.inner, self.outer = params["inner_radius"], params["outer_radius"]
         self.angle = math.radians(params["angle"])
         self.mid = math.radians(params["center_angle"])
@@ -80,6 +82,11 @@ class Pad:
         if shape.slot_width and shape.slot_depth is None:
             shape = replace(shape, slot_depth=self.lining)
         self.shape = shape
+        self.mirror = mirror
+
+    def flip(self, z):
+        """The height z of the unmirrored pad where the pad has a point at z, and back."""
+        return z if self.mirror is None else 2 * self.mirror - z
 
     def shape_error(self):
         """(option, what was expected) when the shape does not fit the pad, else None."""
@@ -114,6 +121,12 @@ class Pad:
             if z == self.z0 and self.shape != Shape():
                 cut = self.cut_lining(occ, cut)
             occ.rotate(cut, cx, cy, 0, 0, 0, 1, self.mid - 0.5 * self.angle)
+            if self.mirror is not None:
+                # the pad, its slot and its chamfers are symmetric about its mid-arc radius:
+                # the half turn about that radius in the plane z = mirror is its mirror image
+                # (OpenCASCADE's mirror turns the planes and cylinders into B-splines)
+                occ.rotate(cut, cx, cy, self.mirror, math.cos(self.mid), math.sin(self.mid),
+                           0, math.pi)
             layers.append(cut)
         # fragment: one conforming mesh, the layers share the nodes of their common face
         _, children = occ.fragment(layers[0], layers[1])
@@ -128,6 +141,7 @@ class Pad:
                   "back": self.z0 + self.lining + self.backplate}
         if self.shape.slot_width and self.shape.slot_depth < self.lining:
             levels["slot"] = self.z0 + self.shape.slot_depth
+        levels = {name: self.flip(z) for name, z in levels.items()}
         radii = {"inner": self.inner, "outer": self.outer}
         names = classify(gmsh, self.center, levels, radii, other=self.side_name)
         # a slot down to the backplate bares a strip of its face: a face of one volume only
@@ -193,13 +207,13 @@ class Pad:
         return "ends" if abs(offset) < GEOMETRY_TOL else "slot"
 
     def distance(self, x, y, z):
-        """Distance to the friction face, for a point of the pad (above it)."""
-        return max(z - self.z0, 0.0)
+        """Distance to the friction face, for a point of the pad (above it, unmirrored)."""
+        return max(self.flip(z) - self.z0, 0.0)
 
     def footprint_distance(self, x, y, z):
         """Distance to the friction face from a point below it (in the disc): the in-plane
         distance to the sector, exact inside its angular range and to the nearer end segment
-        outside it, combined with the depth below z0."""
+        outside it, combined with the depth below z0 (above it, mirrored)."""
         dx, dy = x - self.center[0], y - self.center[1]
         r = math.hypot(dx, dy)
         dtheta = (math.atan2(dy, dx) - self.mid + math.pi) % (2 * math.pi) - math.pi
@@ -211,19 +225,20 @@ class Pad:
             ux, uy = math.cos(end), math.sin(end)
             along = min(max(dx * ux + dy * uy, self.inner), self.outer)
             plane = math.hypot(dx - along * ux, dy - along * uy)
-        return math.hypot(plane, max(self.z0 - z, 0.0))
+        return math.hypot(plane, max(self.z0 - self.flip(z), 0.0))
 
     def outside(self, x, y, z):
         """Distance from a point to the pad's two layers, uncut (0 inside or on them)."""
+        z = self.flip(z)
         height = max(self.z0 - z, z - self.z0 - self.thickness, 0.0)
-        return math.hypot(self.footprint_distance(x, y, self.z0), height)
+        return math.hypot(self.footprint_distance(x, y, self.flip(self.z0)), height)
 
     def samples(self, spacing):
         half = 0.5 * self.angle
+        levels = sorted(self.flip(z) for z in (self.z0, self.z0 + self.lining,
+                                                 self.z0 + self.lining + self.backplate))
         return polar_samples(self.center[:2], self.inner, self.outer, self.mid - half,
-                             self.mid + half, [self.z0, self.z0 + self.lining,
-                                               self.z0 + self.lining + self.backplate],
-                             spacing, periodic=False)
+                             self.mid + half, levels, spacing, periodic=False)
 
 
 def classify(gmsh, center, levels, radii, other):

@@ -77,11 +77,14 @@ POINT_TOL = 1e-6   # a sensor's or a force's point farther off its part is told 
 
 
 def tool_module(name):
-    """A sibling module of tools/ (not a package), loaded from its file."""
-    spec = importlib.util.spec_from_file_location(name, ROOT / "tools" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    """A sibling module of tools/ (not a package), loaded from its file once: a tool that
+    imports it by name (tools/ on its path) gets the same module, and its classes."""
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, ROOT / "tools" / f"{name}.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        sys.modules[name] = module
+    return sys.modules[name]
 
 
 def fuzz_dumps():
@@ -196,6 +199,14 @@ def start_gmsh():
     return gmsh
 
 
+def size_at(part, size, x, y, z):
+    """The mesh size at a point: the size field's at its distance from the contact faces,
+    capped by the part's own `local_size` where it has one (a feature too small for h: the
+    brake corner caliper's bores)."""
+    h = size(part.distance(x, y, z))
+    return min(h, part.local_size(x, y, z)) if hasattr(part, "local_size") else h
+
+
 def mesh_part(gmsh, name, part, size, path, high_order_optimize):
     """Mesh one part in tet10 and write it; returns (nodes, tets, seconds)."""
     t0 = time.perf_counter()
@@ -203,9 +214,8 @@ def mesh_part(gmsh, name, part, size, path, high_order_optimize):
     for gname, (dim, tags) in part.build(gmsh).items():
         gmsh.model.addPhysicalGroup(dim, tags, name=gname)
     gmsh.option.setNumber("Mesh.MeshSizeMax", size.h)
-    if size.interface is not None:
-        gmsh.model.mesh.setSizeCallback(
-            lambda dim, tag, x, y, z, lc: size(part.distance(x, y, z)))
+    if size.interface is not None or hasattr(part, "local_size"):
+        gmsh.model.mesh.setSizeCallback(lambda dim, tag, x, y, z, lc: size_at(part, size, x, y, z))
     gmsh.model.mesh.generate(3)
     gmsh.model.mesh.setOrder(2)           # midside nodes on the true geometry (cylinders)
     if high_order_optimize:
@@ -276,9 +286,9 @@ def shape_summary(shape):
     return "".join(f", {w}" for w in words)
 
 
-def write_case(source, overrides, target, files, summary):
+def write_case(source, overrides, target, files, summary, tool="tools/mesh_brake.py"):
     """The mirrored case's tables with the overrides applied, its generator meshes replaced by
-    the files (paths relative to the target's directory)."""
+    the files (paths relative to the target's directory); `tool` writes it."""
     import os
     import tomllib
     from transient.case.loading import apply_overrides
@@ -290,7 +300,7 @@ def write_case(source, overrides, target, files, summary):
     data["title"] = data.get("title", "") + f" (tet10 meshes by gmsh, {summary})"
     # (a value's newline would end the comment: control characters escaped)
     changed = "".join(f" --set {one_line(o)}" for o in overrides)
-    header = (f"# Written by tools/mesh_brake.py from {Path(source).name}{changed}, its "
+    header = (f"# Written by {tool} from {Path(source).name}{changed}, its "
               f"generator meshes replaced by gmsh tet10 meshes\n# ({summary}); regenerate "
               "rather than edit.\n")
     target.write_text(header + fuzz_dumps()(data))
@@ -356,7 +366,6 @@ def main(argv=None):
 def build(args):
     """The meshes (and the case) main's arguments ask for."""
     from transient.case.loading import load
-    from transient.mesh.meshfile import jacobian_check, read_mesh
 
     case = load(args.case, args.set)
     parts = parts_of(case, shape_of(args))
@@ -380,6 +389,19 @@ def build(args):
         finally:
             gmsh.finalize()
         return
+    files, total, h, refined = mesh_parts(parts, args)
+    if args.case_out != "none":
+        target = Path(args.case_out) if args.case_out else args.outdir / "brake.toml"
+        write_case(args.case, args.set, target, files,
+                   f"{total} dofs, h = {h:.4g} m{refined}{shape_summary(shape)}")
+        print(f"wrote {target}")
+
+
+def mesh_parts(parts, args):
+    """Mesh each part ({name: solid}) into args.outdir/NAME.msh at args.size, or at the h that
+    meets args.dofs within args.tolerance; read them back and report. Returns (files, total
+    dofs, h, the interface's size in words)."""
+    from transient.mesh.meshfile import jacobian_check, read_mesh
     # The node model is within 8.5% on uniform meshes; a graded size makes more nodes than it
     # says (1.3 times with --interface h / 5), so a mesh off the target by more than
     # --tolerance is made again with each part's prediction scaled by what its mesh measured.
@@ -403,8 +425,10 @@ def build(args):
         off = total / args.dofs - 1
         capped = not args.size and h >= largest_size(parts) * (1 - 1e-9) and off > 0
         if capped:
-            print(f"note: the interface size {args.interface:g} m alone makes more than "
-                  f"{args.dofs:.0f} dofs: h is held at {h:.4g} m (the thickest part)")
+            cause = (f"the interface size {args.interface:g} m alone" if interface
+                     else "every part an element thick")
+            print(f"note: {cause} makes more than {args.dofs:.0f} dofs: h is held at "
+                  f"{h:.4g} m (the thickest part)")
         if args.size or capped or abs(off) <= args.tolerance or attempt == MAX_REMESH:
             break
         print(f"h = {h:.5g} m gave {total} dofs ({100 * off:+.1f}%): meshing again")
@@ -425,11 +449,7 @@ def build(args):
     target = "" if args.size else f" (target {args.dofs:.0f}: {100 * off:+.1f}%)"
     refined = f", interface {interface:g} m" if interface else ""
     print(f"total: {total} dofs{target}; h = {h:.5g} m{refined}")
-    if args.case_out != "none":
-        target = Path(args.case_out) if args.case_out else args.outdir / "brake.toml"
-        write_case(args.case, args.set, target, files,
-                   f"{total} dofs, h = {h:.4g} m{refined}{shape_summary(shape)}")
-        print(f"wrote {target}")
+    return files, total, h, refined
 
 
 if __name__ == "__main__":
