@@ -25,7 +25,7 @@ RETAIN_TOP = 512_000_000      # bytes of free memory kept at the heap's top (M_T
 # block's size, up to 32 MB on 64 bits (DEFAULT_MMAP_THRESHOLD_MAX), the trim one to twice it
 SETTLED_BLOCK, SETTLED_TOP = 32 * 1024 * 1024, 64 * 1024 * 1024
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
-_state = {"retaining": False, "last_setup": False}
+_state = {"retaining": False, "last_setup": False, "permitted": False}
 
 
 def _libc():
@@ -37,6 +37,15 @@ def _libc():
     mallopt.argtypes, mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
     trim.argtypes, trim.restype = [ctypes.c_size_t], ctypes.c_int
     return mallopt, trim
+
+
+def permit():
+    """Let setups retain freed blocks (transient.configure: the heap is the process's)."""
+    _state["permitted"] = True
+
+
+def permitted():
+    return _state["permitted"]
 
 
 def retain_freed():
