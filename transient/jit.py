@@ -205,8 +205,8 @@ def spinning(ms=SPIN_MS):
     The reduced kernel's contact pass is one parallel region per step, tens of microseconds
     apart. MKL's OpenMP runtime (libiomp5, loaded by PARDISO: it exports the GOMP entry points
     and so serves Numba's omp layer too) falls to a blocktime of 0 in the setup, so the threads
-    slept between passes: 88-104 us per step on two threads against 35-37 on one, and 27-30
-    with 200 ms (pad_disc_long's stepper, load 0.1). The setting is restored after the block:
+    slept between passes and two threads stepped slower than one (docs/performance.md,
+    "Threads of the kernel"). The setting is restored after the block:
     between chunks the history's writes do not compete with spinning threads. Under libgomp
     (no MKL: `load_iomp`) this does nothing."""
     lib = _iomp()
@@ -245,8 +245,7 @@ def load_iomp():
     takes the GOMP entry points of the runtime loaded first: PARDISO's first threaded call
     loads libiomp5, but a parallel kernel that runs before it (a setup stage before the
     factorization: model.dofs.restricted) binds Numba and then MKL to libgomp, whose threads
-    `spinning` cannot keep awake: pad_disc_long's two-thread steps took 99 us against 26, and
-    its kernel ran on one thread (11.7 s against 8.5)."""
+    `spinning` cannot keep awake (docs/performance.md). transient.configure calls it."""
     from ctypes.util import find_library
     for path in (Path(sys.prefix, "lib", "libiomp5.so"), find_library("iomp5")):
         if path and (not isinstance(path, Path) or path.exists()):
