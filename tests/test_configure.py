@@ -92,8 +92,8 @@ print(json.dumps([csr_dot._cache._cache_path.startswith(jit.cache_dir()),
 
 
 def test_the_command_line_configures_before_its_first_stage(tmp_path):
-    """`transient` makes the settings: NumPy's arrays on small pages and MKL's OpenMP runtime
-    loaded, as seen by a run of a shipped case."""
+    """`transient` makes the settings before main runs a command: NumPy's arrays on small
+    pages and the OpenMP wait policy, as main sees them."""
     code = """
 import os, sys
 from transient.cli import commands

@@ -122,8 +122,8 @@ print(jit._iomp() is not None, b"libiomp5" in info.fname)
 
 def test_numbas_threads_are_mkls_whatever_runs_first():
     """With MKL installed and transient configured, Numba's OpenMP pool is served by libiomp5
-    even when a parallel kernel starts it before PARDISO's first call: `spinning` then keeps the kernel's threads
-    awake (under libgomp pad_disc_long's two-thread steps took 99 us against 26)."""
+    even when a parallel kernel starts it before PARDISO's first call: `spinning` then keeps
+    the kernel's threads awake (under libgomp it cannot: docs/performance.md)."""
     import pytest
     from transient.solve.linsolve import available
     if "pardiso" not in available():
