@@ -54,12 +54,18 @@ def test_a_retaining_heap_reuses_a_freed_block_without_faulting_it_again():
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt")
-@pytest.mark.parametrize("share, retains", [(0.1, True), (0.8, False)])
-def test_the_setup_retains_freed_blocks_only_far_below_the_memory_bound(share, retains):
+@pytest.mark.parametrize("share, configured, retains", [
+    (0.1, True, True), (0.8, True, False), (0.1, False, False)])
+def test_the_setup_retains_freed_blocks_only_far_below_the_memory_bound(share, configured,
+                                                                          retains):
     """A setup estimated at over half of limits.memory keeps glibc's defaults (its freed blocks
-    in the heap's middle would stay resident); a small one retains them, until it ends."""
+    in the heap's middle would stay resident); a small one retains them, until it ends. The
+    heap is the process's: without transient.configure a setup leaves it alone."""
     out = _run(f"""
     import json
+    import transient
+    if {configured}:
+        transient.configure()
     import transient.heap as heap
     from transient.case.loading import load
     from transient.case.sizes import parts_cells, setup_bytes

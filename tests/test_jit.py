@@ -98,6 +98,8 @@ def test_spinning_sets_mkls_blocktime_for_the_block_only():
 FIRST_CHILD = """
 import ctypes
 import numpy as np
+import transient
+transient.configure()
 import scipy.sparse as sp
 from transient.kernels.sparse import csr_dot
 # a parallel kernel before any MKL call (a setup stage before the factorization)
@@ -119,9 +121,9 @@ print(jit._iomp() is not None, b"libiomp5" in info.fname)
 
 
 def test_numbas_threads_are_mkls_whatever_runs_first():
-    """With MKL installed, Numba's OpenMP pool is served by libiomp5 even when a parallel
-    kernel starts it before PARDISO's first call: `spinning` then keeps the kernel's threads
-    awake (under libgomp pad_disc_long's two-thread steps took 99 us against 26)."""
+    """With MKL installed and transient configured, Numba's OpenMP pool is served by libiomp5
+    even when a parallel kernel starts it before PARDISO's first call: `spinning` then keeps
+    the kernel's threads awake (under libgomp it cannot: docs/performance.md)."""
     import pytest
     from transient.solve.linsolve import available
     if "pardiso" not in available():
@@ -135,14 +137,15 @@ HUGE_CHILD = """
 import os
 {imports}
 core = getattr(numpy, "_core", None) or numpy.core
-print(core.multiarray._get_madvise_hugepage(), os.environ["NUMPY_MADVISE_HUGEPAGE"])
+print(core.multiarray._get_madvise_hugepage(), os.environ.get("NUMPY_MADVISE_HUGEPAGE"))
 """
 
 
 def test_numpy_arrays_on_small_pages_unless_the_user_says():
-    """transient turns NumPy's huge-page advice off (its arrays' huge pages are zeroed through
-    the host on a ballooned VM), whether NumPy was imported before it or after, and passes the
-    setting to the processes it starts; a NUMPY_MADVISE_HUGEPAGE of the user's is kept."""
+    """transient.configure turns NumPy's huge-page advice off (its arrays' huge pages are
+    zeroed through the host on a ballooned VM), whether NumPy was imported before it or after,
+    and passes the setting to the processes it starts; a NUMPY_MADVISE_HUGEPAGE of the user's
+    is kept, and importing transient alone leaves NumPy's advice as it was."""
     def child(imports, value=None):
         env = {k: v for k, v in os.environ.items() if k != "NUMPY_MADVISE_HUGEPAGE"}
         if value is not None:
@@ -150,9 +153,11 @@ def test_numpy_arrays_on_small_pages_unless_the_user_says():
         out = subprocess.run([sys.executable, "-c", HUGE_CHILD.format(imports=imports)],
                              capture_output=True, text=True, env=env, check=True)
         return out.stdout.split()
-    assert child("import transient, numpy") == ["False", "0"]
-    assert child("import numpy, transient") == ["False", "0"]
-    assert child("import numpy, transient", "1") == ["True", "1"]
+    configured = "; transient.configure()"
+    assert child("import transient, numpy" + configured) == ["False", "0"]
+    assert child("import numpy, transient" + configured) == ["False", "0"]
+    assert child("import numpy, transient" + configured, "1") == ["True", "1"]
+    assert child("import transient, numpy") == child("import numpy")
 
 
 def _lines(stream):

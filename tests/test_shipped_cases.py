@@ -35,7 +35,7 @@ def test_every_case_is_tested():
     # tools/bench_long.py (the whole second)
     # two_bars.toml: tests/test_transient.py::test_two_identical_bars_exchange_velocities
     # pad_disc_squeal.toml: test_pad_disc_squeal_grows_as_its_complex_modes (the growth; its
-    # second of squeal, 1.1 min: tools/bench_squeal.py and the README)
+    # second of squeal: tools/bench_squeal.py and docs/performance.md)
     assert sorted(p.name for p in CASES.glob("*.toml")) == [
         "bar_impact.toml", "brake_corner.toml", "drilled_cube.toml", "pad_disc.toml",
         "pad_disc_long.toml", "pad_disc_squeal.toml", "pad_disc_tet10.toml", "slotted_pad.toml",

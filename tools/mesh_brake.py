@@ -453,4 +453,6 @@ def mesh_parts(parts, args):
 
 
 if __name__ == "__main__":
+    import transient
+    transient.configure()     # the settings `transient` makes (its docstring)
     main()

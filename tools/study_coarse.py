@@ -172,4 +172,6 @@ def write(directory, stem, out):
 
 
 if __name__ == "__main__":
+    import transient
+    transient.configure()     # the settings `transient` makes (its docstring)
     main()

@@ -34,4 +34,6 @@ def main():
 
 
 if __name__ == "__main__":
+    import transient
+    transient.configure()     # the settings `transient` makes (its docstring)
     main()

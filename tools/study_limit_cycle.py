@@ -455,4 +455,6 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
+    import transient
+    transient.configure()     # the settings `transient` makes (its docstring)
     main()

@@ -216,7 +216,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--case", choices=("tet10", "hex20", "both"), default="both")
     parser.add_argument("--hex20", action="store_true",
-                        help="both cases, the default (kept for README's command)")
+                        help="both cases, the default (kept for scripts that pass it)")
     parser.add_argument("--modes", type=int, default=50, help="modes compared (50)")
     parser.add_argument("--k", type=float, nargs="*", default=K, help="the penalty ties' k")
     parser.add_argument("--sizes", type=float, nargs="*", default=[],
@@ -249,4 +249,6 @@ def main():
 
 
 if __name__ == "__main__":
+    import transient
+    transient.configure()     # the settings `transient` makes (its docstring)
     main()

@@ -2,18 +2,17 @@
 
 glibc serves a block of 32 MB and more (its threshold's ceiling) by a fresh mapping and unmaps
 it when freed, so each such array is faulted in afresh, page by page; so is the top of the heap
-trimmed past twice the threshold. The setup makes and drops many: blocks of n x 128 responses,
-a Lanczos step's n x 16 arrays, NNLS columns, 0.94 M page faults (3.7 GB) in pad_disc_long's
-setup, 6.9 M (27 GB) in 4x pad_disc's, where the system time was 22 s of a 105 s setup. With
-blocks up to RETAIN_BLOCK taken from the heap and RETAIN_TOP of free memory kept at its top,
-pad_disc_long's setup faulted 0.47 M pages (its peak, 1.86 GB, once) and 4x pad_disc's
-4.0 M: 12.5 -> 11.7 s and 104.8 -> 94.8 s, their peaks within 0.05 GB (2026-12-05; with 256 MB
-and 1 GB the 4x's peak grew by 0.86 GB). Freed blocks in the heap's middle stay resident until
-reused, so a setup near the memory bound keeps glibc's defaults (stages.prepare decides, from
-the case's estimate), and the retention ends with the setup (`setup`): what is free is given
-back and the thresholds are left where glibc's own adjustment takes them after large blocks
-are freed, so a notebook or a campaign's worker does not keep a setup's peak for good. Only
-where the allocation happens changes, never the arithmetic.
+trimmed past twice the threshold. The setup makes and drops many (blocks of n x 128 responses,
+a Lanczos step's n x 16 arrays, NNLS columns): with blocks up to RETAIN_BLOCK taken from the
+heap and RETAIN_TOP of free memory kept at its top, it faults about half the pages in and
+its peak stays where it was (docs/performance.md, "The heap"). The heap is the process's, so
+only a process that asked (transient.configure: `permit`) retains. Freed blocks in the heap's
+middle stay resident until reused, so a setup near the memory bound keeps glibc's defaults
+(stages.prepare decides, from the case's estimate), and the retention ends with the setup
+(`setup`): what is free is given back and the thresholds are left where glibc's own
+adjustment takes them after large blocks are freed, so a notebook or a campaign's worker does
+not keep a setup's peak for good. Only where the allocation happens changes, never the
+arithmetic.
 """
 import ctypes
 import ctypes.util
@@ -25,7 +24,7 @@ RETAIN_TOP = 512_000_000      # bytes of free memory kept at the heap's top (M_T
 # block's size, up to 32 MB on 64 bits (DEFAULT_MMAP_THRESHOLD_MAX), the trim one to twice it
 SETTLED_BLOCK, SETTLED_TOP = 32 * 1024 * 1024, 64 * 1024 * 1024
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
-_state = {"retaining": False, "last_setup": False}
+_state = {"retaining": False, "last_setup": False, "permitted": False}
 
 
 def _libc():
@@ -37,6 +36,15 @@ def _libc():
     mallopt.argtypes, mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
     trim.argtypes, trim.restype = [ctypes.c_size_t], ctypes.c_int
     return mallopt, trim
+
+
+def permit():
+    """Let setups retain freed blocks (transient.configure: the heap is the process's)."""
+    _state["permitted"] = True
+
+
+def permitted():
+    return _state["permitted"]
 
 
 def retain_freed():

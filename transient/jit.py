@@ -10,27 +10,46 @@ minutes: its holder writes who it is into the file, and a process waiting for it
 can be stopped (SIGINT, SIGTERM).
 
 `spinning` keeps Numba's OpenMP threads awake between the parallel regions of a kernel call.
+
+Every kernel is cached in `cache_dir()`, set on its dispatcher when it is decorated, so the
+cache needs no environment variable and the process's other Numba functions keep theirs.
 """
 import ctypes
 import fcntl
+import hashlib
 import os
 import signal
 import socket
 import sys
-import tempfile
 import threading
 import time
 from contextlib import contextmanager
 
+from pathlib import Path
+
 import numba
+from numba.core import caching
 
 _guard = threading.RLock()
 _held = {"depth": 0, "file": None}
 
 
+def cache_dir():
+    """NUMBA_CACHE_DIR when set, else a directory keyed by the source of every module jitted
+    code comes from: Numba checks only a function's own file, so a kernel that inlines a law or
+    a signal from another module would otherwise keep a stale copy after that module changes."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return os.environ["NUMBA_CACHE_DIR"]
+    here = Path(__file__).parent
+    digest = hashlib.sha1()
+    for path in [here / "jit.py"] + sorted((here / "kernels").glob("*.py")):
+        digest.update(path.read_bytes())
+    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return str(base / "transient" / "numba" / digest.hexdigest()[:16])
+
+
 def lock_path():
-    base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(tempfile.gettempdir(), "numba")
-    return os.path.join(base, ".compile.lock")
+    return os.path.join(cache_dir(), ".compile.lock")
 
 
 POLL_S = 0.1        # between tries of a lock held elsewhere
@@ -132,11 +151,32 @@ def _stoppable():
             signal.signal(sig, handler)
 
 
+class _Locator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
+    """Numba's user-provided cache locator, at cache_dir() rather than numba.config's."""
+
+    def __init__(self, py_func, py_file):
+        self._py_file = py_file
+        self._lineno = py_func.__code__.co_firstlineno
+        self._cache_path = os.path.join(cache_dir(), self.get_suitable_cache_subpath(py_file))
+
+    def get_cache_path(self):
+        return self._cache_path
+
+
+class _CacheImpl(caching.CompileResultCacheImpl):
+    _locator_classes = [_Locator]
+
+
+class _Cache(caching.FunctionCache):
+    _impl_class = _CacheImpl
+
+
 def _locked(**flags):
-    """numba.njit(**flags), with the dispatcher's compile path (taken only for argument types
-    it has not compiled yet) under compile_lock."""
+    """numba.njit(**flags) cached in cache_dir(), with the dispatcher's compile path (taken
+    only for argument types it has not compiled yet) under compile_lock."""
     def decorate(fn):
         dispatcher = numba.njit(**flags)(fn)
+        dispatcher._cache = _Cache(dispatcher.py_func)
         compile_for_args = dispatcher._compile_for_args
 
         def locked(*args, **kws):
@@ -147,12 +187,12 @@ def _locked(**flags):
     return decorate
 
 
-njit = _locked(cache=True, nogil=True, error_model="numpy")
-njit_fast = _locked(cache=True, nogil=True, error_model="numpy", fastmath=True)
-njit_parallel = _locked(cache=True, nogil=True, error_model="numpy", fastmath=True,
+njit = _locked(nogil=True, error_model="numpy")
+njit_fast = _locked(nogil=True, error_model="numpy", fastmath=True)
+njit_parallel = _locked(nogil=True, error_model="numpy", fastmath=True,
                         parallel=True)
 # parallel without fastmath: no fused multiply-adds, so the sums are SciPy's to the last bit
-njit_parallel_ieee = _locked(cache=True, nogil=True, error_model="numpy", parallel=True)
+njit_parallel_ieee = _locked(nogil=True, error_model="numpy", parallel=True)
 
 
 SPIN_MS = 200     # Intel's documented default blocktime
@@ -165,10 +205,10 @@ def spinning(ms=SPIN_MS):
     The reduced kernel's contact pass is one parallel region per step, tens of microseconds
     apart. MKL's OpenMP runtime (libiomp5, loaded by PARDISO: it exports the GOMP entry points
     and so serves Numba's omp layer too) falls to a blocktime of 0 in the setup, so the threads
-    slept between passes: 88-104 us per step on two threads against 35-37 on one, and 27-30
-    with 200 ms (pad_disc_long's stepper, load 0.1). The setting is restored after the block:
+    slept between passes and two threads stepped slower than one (docs/performance.md,
+    "Threads of the kernel"). The setting is restored after the block:
     between chunks the history's writes do not compete with spinning threads. Under libgomp
-    (no MKL: `_load_iomp`) this does nothing."""
+    (no MKL: `load_iomp`) this does nothing."""
     lib = _iomp()
     if lib is None:
         yield
@@ -199,17 +239,14 @@ def _iomp():
     return _runtime["iomp"]
 
 
-def _load_iomp():
+def load_iomp():
     """MKL's OpenMP runtime (libiomp5, the MKL wheels' lib directory) loaded into the process's
     global scope before Numba starts its thread pool, when MKL is installed. Numba's omp layer
     takes the GOMP entry points of the runtime loaded first: PARDISO's first threaded call
     loads libiomp5, but a parallel kernel that runs before it (a setup stage before the
     factorization: model.dofs.restricted) binds Numba and then MKL to libgomp, whose threads
-    `spinning` cannot keep awake: pad_disc_long's two-thread steps took 99 us against 26, and
-    its kernel ran on one thread (11.7 s against 8.5)."""
-    import sys
+    `spinning` cannot keep awake (docs/performance.md). transient.configure calls it."""
     from ctypes.util import find_library
-    from pathlib import Path
     for path in (Path(sys.prefix, "lib", "libiomp5.so"), find_library("iomp5")):
         if path and (not isinstance(path, Path) or path.exists()):
             try:
@@ -217,6 +254,3 @@ def _load_iomp():
                 return
             except OSError:
                 continue
-
-
-_load_iomp()

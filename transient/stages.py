@@ -72,10 +72,9 @@ def prepare(case, check=None, built=None, unsampled=False, analysis=False):
     """Model, contact, preload, linearization and (optionally) reduction of a case.
 
     The setup's dense algebra runs on one OpenBLAS thread: its calls are many and mid-sized
-    (eigh of a few thousand, products of n x a few hundred), where two threads on this 2-core
-    machine were 2.8 times slower over the setup of pad_disc_long (an 2668^2 eigh: 4.1 s on
-    one thread, 22-26 s on two, though 2.8 -> 1.7 s alone: the slowdown is contention with
-    PARDISO's and Numba's threads). PARDISO (MKL) keeps its threads, which pay for its solves.
+    (eigh of a few thousand, products of n x a few hundred), where two threads contend with
+    PARDISO's and Numba's (docs/performance.md). PARDISO (MKL) keeps its threads, which pay
+    for its solves.
     The large products of sections that solve nothing run on every core (solve.blas).
     built: the first stages' results when built already (a Built: cea bounds the model's size
     first, a campaign's variants share them). unsampled: also the Setup of a sampled rule's
@@ -102,7 +101,8 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
     model = (stages.timed("loads", build_model, case, built.model) if built.model is not None
              else stages.timed("model", build_model, case))
     check_band(case, model, _band_keys(case, analysis))
-    if setup_bytes(parts_cells(model.parts)) <= case.limits.memory_bytes / 2:
+    small = setup_bytes(parts_cells(model.parts)) <= case.limits.memory_bytes / 2
+    if small and heap.permitted():
         heap.retain_freed()     # freed blocks reused, not faulted in afresh (heap's docstring)
     if built.geometry is not None:
         pairs = build_contact(case, model, geometry=built.geometry)

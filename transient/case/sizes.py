@@ -11,11 +11,8 @@ from ..errors import CaseError
 NODES = {"hex8": 8, "hex20": 20, "tet4": 4, "tet10": 10}
 TETS_PER_HEX = 6          # the generators split each hex in six tets (Kuhn)
 # bytes per entry of the element matrices (COO rows, columns, values; K and M), times the
-# setup's multiple of them (factorization, basis, contact), from the setups' measured peaks
-# (2026-12-05, the factors freed after the last solve): pad_disc's 14.6 M entries 1.88 GB
-# (129 bytes each), 4x pad_disc's 55.8 M 5.96 GB (107), a 500k-dof tet10 pad and disc's 95.6 M
-# 9.63 GB (101), the 1M-dof one's 193 M 23.1 GB (120): it asks 25.1 GB, within this 25.3 GB
-# machine. 160 (before those savings) asked 30.9 GB for it and refused it here
+# setup's multiple of them (factorization, basis, contact): the largest of the setups' measured
+# peaks per entry, from pad_disc to a 1M-dof tet10 brake (docs/performance.md, "Memory")
 BYTES_PER_ENTRY = 130
 
 

@@ -212,9 +212,8 @@ PAD = 8      # doubles (a 64-byte cache line) between the rows of the blocks' fo
 def block_buffers(nblocks, n):
     """The row blocks' force buffers of contact_pass (normal, friction): a row of n per block,
     PAD apart. Rows side by side shared the cache line at each boundary, which two threads then
-    wrote in turn at every four points (false sharing): pad_disc_long's 421 x 345 pass on two
-    threads 19.9 -> 17.2 us, 1000 x 100 20.2 -> 16.8 (a microbenchmark of the pass, 2026-12-05).
-    Only where the sums are stored changes, not the sums."""
+    wrote in turn at every four points (false sharing; docs/performance.md). Only where the
+    sums are stored changes, not the sums."""
     return np.empty((nblocks, n + PAD)), np.empty((nblocks, n + PAD))
 
 

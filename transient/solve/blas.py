@@ -1,11 +1,9 @@
 """Thread counts of the setup's dense algebra (OpenBLAS, through threadpoolctl).
 
 The setup runs on one OpenBLAS thread (stages.prepare): most of its dense calls are mid-sized
-and come between PARDISO's solves, whose MKL threads two OpenBLAS threads contend with (inside
-the tangent solve of the block Lanczos two threads were slower, 0.21 s against 0.14). The large
-products of a section that solves nothing run on every core (`every_core`): 1.7-1.9x on this
-2-core machine (pad_disc_long, one thread against two: 66554 x 599 times 599 x 306 in 482 ->
-245-305 ms, 7734 x 599 Gram 62 -> 36 ms, 70k x 345 times 345^2 342 -> 183 ms).
+and come between PARDISO's solves, whose MKL threads two OpenBLAS threads contend with. The
+large products of a section that solves nothing run on every core (`every_core`), where they
+scale (docs/performance.md, "Threads of the setup's dense algebra").
 
 The section, not a timing, decides, so the arithmetic is the same run after run: OpenBLAS splits
 a product by blocks of its result, each summed whole by one thread. Two threads sum some entries

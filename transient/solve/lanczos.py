@@ -1,8 +1,8 @@
 """Block shift-invert Lanczos: the eigenpairs of (K, M) from a shift sigma up to a bound.
 
 ARPACK's shift-invert (scipy eigsh) applies (K - sigma M)^-1 M to one vector at a time: each
-step is a forward and back substitution through the whole factor (memory bound: pad_disc's
-124 steps were 9 s of a 36 s setup) and a sparse product with M. Here each step applies it to
+step is a forward and back substitution through the whole factor (memory bound) and a sparse
+product with M. Here each step applies it to
 a block of b vectors, so the factor and M are read once for b vectors, and the
 orthogonalization is matrix-matrix work.
 
@@ -18,9 +18,8 @@ without end.
 Wanted are all lambda <= lam_max, that is theta >= 1 / (lam_max - sigma): the largest theta,
 which shift-invert converges first, in order.
 
-Measured against ARPACK on the same operator (scipy eigsh, what normal_modes ran before): on
-pad_disc_long the 37 modes in 9.4 s against 31 s (load 2-3); on drilled_cube its eigenvalues
-agree with a tighter run to 7e-16 where ARPACK's are 3.2e-9 off. With its upper cube floating
+Against ARPACK on the same operator (scipy eigsh, what normal_modes ran before) it is faster
+and closer to a tighter run (docs/performance.md, "Modes"). With drilled_cube's upper cube floating
 (`transient modes`, contact.interface.k = 1e-3) one rigid theta is 1e6 times the elastic ones:
 each block is orthonormalized level by level (m_orthonormalize), and each residual measured
 against the thetas of its own scale (_reference); a basis that stops converging raises

@@ -3,9 +3,10 @@
 The embedded cluster is a dask.distributed LocalCluster of N worker processes of one thread
 each, with BLAS, MKL, OpenMP and Numba at one thread set in their environment before they
 start (so that a worker is the one-thread `transient run` it stands for, and N of them share
-the cores); the Numba cache is shared, its first compile serialized by transient.jit's lock.
+the cores), and each task makes transient.configure's settings in its worker before any stage
+(sweep.tasks); the Numba cache is shared, its first compile serialized by transient.jit's lock.
 --scheduler ADDRESS runs the same tasks on an existing cluster instead (dask-jobqueue on
-SLURM: the README). Variants equal on the fields a first stage reads (shared.READS: the
+SLURM: docs/commands.md). Variants equal on the fields a first stage reads (shared.READS: the
 model's structure, the contact pairs' geometry, the factorization with the contact's low-rank
 update, the basis at a friction's basis_mu) share its result, built once by a task of its own
 and sent to each worker once (a factorization is made again where it lands: PARDISO's handle

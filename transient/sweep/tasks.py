@@ -8,13 +8,15 @@ made them, and sums up the unstable ones; 'both' does the two from one setup (th
 modes from the run's stages before its sampling: what `transient cea` analyses). A history
 is written under the lock and the checks `transient run` makes (io.lock), or continued from
 its checkpoint as `transient run --resume` does. A variant refused, or a run that aborts, is
-a row with its reason: the campaign goes on.
+a row with its reason: the campaign goes on. Each task first makes the settings a
+`transient run` makes (transient.configure), on whatever cluster it lands.
 """
 import json
 import time
 from pathlib import Path
 
 from ..errors import CaseError
+from ..settings import configure
 
 KINDS = ("run", "cea", "both")
 
@@ -24,6 +26,7 @@ def run_variant(case_path, overrides, out, kind, built=None, resume=False):
     its kind. out: its history (run, both) or its complex modes (cea). built: the first
     stages' results it shares with others (shared.Built), or None to build them. resume:
     continue its history (its complex modes, if any, are complete already)."""
+    configure()
     t0 = time.perf_counter()
     try:
         from ..case.loading import load
@@ -48,6 +51,7 @@ def build_shared(case_path, overrides, depth, built=None, kind="run"):
     from ..case.loading import load
     from ..cea.stage import analysed_case
     from ..shared import build_shared
+    configure()
     case = load(case_path, overrides)
     return build_shared(analysed_case(case) if kind == "cea" else case, depth, built)
 
