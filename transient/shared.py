@@ -32,7 +32,7 @@ _FACTORIZATION = _CONTACT + ("solver.shift_hz", "solver.linear_solver")
 # loads, the laws, the friction and the sliding, and a sampled rule's points its tolerance
 _BASIS = _FACTORIZATION + ("loads", "motion", "contact.law", "contact.friction",
                            "contact.sampling_tolerance", "solver.newton", "solver.mass",
-                           "solver.reduction.enabled",
+                           "solver.reduction.enabled", "solver.reduction.method",
                            "solver.reduction.fmax", "solver.reduction.cutoff",
                            "solver.reduction.statics",
                            "solver.reduction.statics_tolerance")

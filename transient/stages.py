@@ -23,6 +23,7 @@ from .kernels.codes import ENERGY_TERMS, NO_CONVERGENCE, NOT_FINITE, OK
 from .model import build_model, constant_load
 from .model.band import check_band
 from .reduce.basis import rebase
+from .reduce.components import components_basis
 from .reduce.reference import rebased, reference_basis
 from .reduce.stage import reduce, reduction_mass
 from .shared import Built, factorization
@@ -78,6 +79,12 @@ def _band_keys(case, analysis):
 
 def _prepare(case, stages, built, want_unsampled=False, analysis=False):
     solver = case.solver
+    components = solver.reduction.enabled and solver.reduction.method == "components"
+    if components and rebased(case):
+        name = next(n for n, c in case.contact.items() if c.friction.basis_mu)
+        raise CaseError(case.path, f"contact.{name}.friction.basis_mu", "not with "
+                        'solver.reduction.method = "components", whose part bases do not '
+                        "depend on the friction: leave it out")
     model = (stages.timed("loads", build_model, case, built.model) if built.model is not None
              else stages.timed("model", build_model, case))
     check_band(case, model, _band_keys(case, analysis))
@@ -98,26 +105,32 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
     free = model.free
     # without constant loads there is no preload: the run starts from the undeformed state
     # (with initial velocities), in equilibrium or not
-    cs, unsampled = None, None
-    if np.any(constant) or solver.reduction.enabled:
+    cs, unsampled, basis, tangent = None, None, None, None
+    if (np.any(constant) or solver.reduction.enabled) and not components:
         cs = built.solver or stages.timed("factorization", factorization, case, model, contacts)
-    try:
-        preload = stages.timed("preload", solve_preload, model.K, model.fixed, constant,
-                               contacts, cs, solver.newton.tolerance, solver.newton.max_iter,
-                               first_tangent(pairs, contacts))
-    except PreloadError as exc:
-        raise CaseError(case.path, "loads", str(exc)) from None
-    if preload.iterations == 0:
-        del stages["preload"]
+    if components:
+        # each part's own basis, the preload solved on their coupling (reduce.components)
+        basis, preload = stages.timed("components", components_basis, case, model,
+                                      reduction_mass(case, model, None)[0], pairs, contacts,
+                                      patterns, constant)
+    else:
+        try:
+            preload = stages.timed("preload", solve_preload, model.K, model.fixed, constant,
+                                   contacts, cs, solver.newton.tolerance,
+                                   solver.newton.max_iter, first_tangent(pairs, contacts))
+        except PreloadError as exc:
+            raise CaseError(case.path, "loads", str(exc)) from None
+        if preload.iterations == 0:
+            del stages["preload"]
     t0 = time.perf_counter()
-    if solver.reduction.enabled:
+    if solver.reduction.enabled and not components:
         # the tangent solve, which also applies K_lin on the free dofs (tangent.stiffness)
         tangent = cs.solver(contacts.weights * preload.tangent)
-    else:
+    elif not solver.reduction.enabled:
         kw = [contacts.weights[s] * preload.tangent[s] for s in contacts.slices.values()]
         K_lin = ((model.K + contact_stiffness(pairs, model.ndof, kw=kw)).tocsr() if pairs
                  else model.K)
-    if pairs:
+    if pairs and not components:
         stages["linearization"] = time.perf_counter() - t0
     stages.check()
     v0 = initial_velocity(case, model)
@@ -125,25 +138,13 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
     sensors = model.sensors if case.output.sensors else model.sensors[:0]
     names = tuple(model.sensor_names) if case.output.sensors else ()
     if solver.reduction.enabled:
-        M, Mf = reduction_mass(case, model, cs)
-        # the factors freed after the basis' last solve, unless a campaign's variants share them
-        release = cs.release if cs is not built.solver else None
-        basis, sample, shared, elsewhere = None, None, built.basis, rebased(case)
-        if shared is None and elsewhere:
-            shared = stages.timed("reference", reference_basis, case, model, M, pairs, cs,
-                                  patterns, Mf)
-        if shared is not None:
-            # a basis made at another friction (or this case's own, shared by a campaign)
-            basis = (stages.timed("reduction", rebase, shared.basis, shared.K0r,
-                                  tangent.stiffness, M, model.fixed, preload.u)
-                     if elsewhere else shared.basis)
-            sample = shared.sample
-            if release is not None:
-                release()           # the last solve was the preload's
-            release = None
-        red = reduce(case, model, M, pairs, contacts, preload, patterns, v0, tangent,
-                     critical_tangent(contacts, preload.tangent), stages, cs.C, Mf, release,
-                     basis, sample)
+        if components:
+            red, elsewhere = reduce(case, model, reduction_mass(case, model, None)[0], pairs,
+                                    contacts, preload, patterns, v0, None, None, stages,
+                                    basis=basis), False
+        else:
+            red, elsewhere = _assembled(case, stages, built, model, pairs, contacts, preload,
+                                        patterns, v0, cs, tangent)
         pairs, contacts, preload, meta = red.pairs, red.contacts, red.preload, red.meta
         if elsewhere:
             meta["basis_mu"] = {name: c.friction.basis_mu for name, c in case.contact.items()
@@ -178,6 +179,31 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
     stages.check()
     return Setup(system, state, rows0, dict(stages), meta, _geometry(case, system, pairs),
                  model, (red.X, red.AW) if system.reduced else None, unsampled)
+
+
+def _assembled(case, stages, built, model, pairs, contacts, preload, patterns, v0, cs,
+               tangent):
+    """(ReducedModel, whether its basis was made at another friction) of the assembled path:
+    the basis of the whole model on its factorization cs and the tangent solve."""
+    M, Mf = reduction_mass(case, model, cs)
+    # the factors freed after the basis' last solve, unless a campaign's variants share them
+    release = cs.release if cs is not built.solver else None
+    basis, sample, shared, elsewhere = None, None, built.basis, rebased(case)
+    if shared is None and elsewhere:
+        shared = stages.timed("reference", reference_basis, case, model, M, pairs, cs,
+                              patterns, Mf)
+    if shared is not None:
+        # a basis made at another friction (or this case's own, shared by a campaign)
+        basis = (stages.timed("reduction", rebase, shared.basis, shared.K0r,
+                              tangent.stiffness, M, model.fixed, preload.u)
+                 if elsewhere else shared.basis)
+        sample = shared.sample
+        if release is not None:
+            release()           # the last solve was the preload's
+        release = None
+    return reduce(case, model, M, pairs, contacts, preload, patterns, v0, tangent,
+                  critical_tangent(contacts, preload.tangent), stages, cs.C, Mf, release,
+                  basis, sample), elsewhere
 
 
 def _reduced(case, red, patterns, signals, sensors, names, critical=True):

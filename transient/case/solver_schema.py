@@ -72,6 +72,12 @@ SOLVER = Table("solution settings", {
     "reduction": Table("reduced model: normal modes of the preloaded structure to a cutoff above "
                        "the band, plus static responses", {
         "enabled": Value("bool", "integrate a reduced model (false: the full model)", False),
+        "method": Value("choice", "assembled: the basis of the whole model, one factorization "
+                        "of every part with the contact's low-rank update; components: each "
+                        "part reduced on its own (its modes to the cutoff, its responses to "
+                        "its interface's contact loads and to the loads), coupled through the "
+                        "contact rows in reduced coordinates", "assembled",
+                        choices=("assembled", "components")),
         "fmax": Value("float", "the band of the answer: the complex modes `transient cea` "
                       "reports, the contact stiffness a sampled rule reproduces, and the "
                       "exponential scheme's default step (20 steps a period) are to this "

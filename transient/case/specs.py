@@ -155,6 +155,7 @@ class ReductionSpec:
     statics_tolerance: float
     mass_scaling_hz: float = 0.0
     cutoff: float = 0.0
+    method: str = "assembled"
 
     @property
     def modes_fmax(self):

@@ -248,32 +248,52 @@ def sample_contact(contacts, candidate, omega2, Cr, q0, gap, pressure, tangent, 
                    s)
 
 
-def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter, Ct=None):
+def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter, Ct=None, start=None):
     """Newton on fr + Cr^T (w p(Cr q + g0)) - Kr q = 0 (dense: a reduced model); with the
     tangential rows Ct, plus the friction of steady sliding Ct^T (w p m), whose stiffness the
-    tangent holds (dense and small here: exact Newton)."""
+    tangent holds (dense and small here: exact Newton). start: (P,) the tangent the first step
+    takes at least, with a backtracking line search (from the undeformed state, as
+    solve_preload), or None (from a preload close by: plain Newton)."""
     q = q.copy()
     scale = max(np.linalg.norm(fr), 1e-300)
     w = contacts.weights
     m = None if Ct is None else contacts.friction.m
-    for it in range(max_iter + 1):
+
+    def residual(q):
         g = Cr @ q + contacts.gap0
         p, kt, _ = contacts.laws(g)
         r = fr + Cr.T @ (w * p) - Kr @ q
         if Ct is not None:
             r += Ct.T @ (w * p * m)
+        return r, g, p, kt
+
+    r, g, p, kt = residual(q)
+    for it in range(max_iter + 1):
         res = np.linalg.norm(r) / scale
         if res <= tol:
             return q, g, p, kt, it, float(res)
         if it < max_iter:
-            tangent = Kr + (Cr.T * (w * kt)) @ Cr
+            d = kt if start is None or it else np.maximum(kt, start)
+            tangent = Kr + (Cr.T * (w * d)) @ Cr
             if Ct is not None:
-                tangent += (Ct.T * (w * m * kt)) @ Cr
+                tangent += (Ct.T * (w * m * d)) @ Cr
             try:
-                q += np.linalg.solve(tangent, r)
+                dq = np.linalg.solve(tangent, r)
             except np.linalg.LinAlgError:
-                raise ReducedPreloadError("the preload tangent with the sampled points is "
-                                          "singular: too few points hold the parts (lower "
-                                          "sampling_tolerance)") from None
-    raise ReducedPreloadError(f"the preload with the sampled points did not converge in "
+                raise ReducedPreloadError(
+                    "the preload tangent in the reduced coordinates is singular: too few "
+                    "contact points or statics hold the parts") from None
+            if start is None:
+                q += dq
+                r, g, p, kt = residual(q)
+                continue
+            step, norm = 1.0, np.linalg.norm(r)
+            while True:
+                trial = q + step * dq
+                r, g, p, kt = residual(trial)
+                if np.linalg.norm(r) < norm or step < 1e-6:
+                    break
+                step *= 0.5
+            q = trial
+    raise ReducedPreloadError(f"the preload in the reduced coordinates did not converge in "
                               f"{max_iter} Newton iterations (residual {res:.1e})")

@@ -102,7 +102,7 @@ def reduction_mass(case, model, cs):
     or the consistent M), with the free block the factorization cs holds of the consistent
     one."""
     M = sp.diags(model.lumped_mass).tocsr() if case.solver.mass == "lumped" else model.M
-    return M, (cs.M if M is model.M else None)
+    return M, (cs.M if cs is not None and M is model.M else None)
 
 
 def make_basis(case, model, M, contacts, preload, patterns, solve, kt_crit, rows=None,

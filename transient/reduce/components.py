@@ -1,0 +1,201 @@
+"""The components path of the reduction (solver.reduction.method = "components"): each part
+reduced on its own, the assembly coupled through its contact rows in reduced coordinates.
+
+Component mode synthesis with free interfaces and residual attachment shapes (MacNeal, Rubin):
+each part's basis holds its normal modes to the cutoff (its rigid modes too when it floats)
+and its static responses to the contact point loads on its interface (normal, and tangential
+where a pair has friction: the tractions the parts exchange), to the load patterns and to the
+constant load. The coupled structure's static response to any contact force is a sum of the
+parts' responses to their share of it, so the preload lies in the span exactly where the
+interface responses are all kept (statics_tolerance = 0) and to the tolerance's flexibility
+otherwise. The preload is solved by Newton in the reduced coordinates, and the basis is
+diagonalized on the contact-linearized stiffness there: no factorization of the whole model.
+"""
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from ..contact.contactset import first_tangent
+from ..errors import CaseError
+from ..model.dofs import free_block, shifted
+from ..solve import blas
+from ..solve.linsolve import FactorizationError, factorize
+from ..solve.modes import normal_modes, shift_sigma
+from ..solve.preload import Preload
+from .basis import MODES_TOL, Basis, contact_shapes
+from .sampling import ReducedPreloadError, reduced_preload
+
+
+@dataclass(frozen=True)
+class PartBasis:
+    """One part's reduction: T (n, r) on its free dofs, T^T M T = I, its first n_modes
+    columns the part's normal modes; Kr = T^T K T."""
+    name: str
+    T: np.ndarray
+    Kr: np.ndarray
+    mode_hz: np.ndarray      # (n_modes,) [Hz]
+    n_shapes: int            # interface shapes kept (contact_shapes at the tolerance)
+    n_static: int            # static directions asked beyond the interface shapes
+    seconds: float
+
+
+def part_basis(name, K, M, rows, stiffness, loads, fmax, shift_hz, tol, backend="auto"):
+    """The PartBasis of one part from its own matrices on its free dofs: K, M (n, n) sparse,
+    rows (m, n) the contact rows that touch it (None: none), stiffness (m,) the contact law's
+    w k_t of each row, loads (n, s) the static loads to respond to.
+
+    Its own factorization of K - sigma M (the small shift keeps a floating part solvable) gives
+    the modes and the responses beyond them; the interface's are kept by their flexibility
+    against the contact law's (basis.contact_shapes)."""
+    t0 = time.perf_counter()
+    sigma = shift_sigma(-shift_hz)
+    try:
+        solve = factorize(shifted(K, M, sigma), backend, definite=True)
+    except FactorizationError as exc:
+        raise PartError(name, str(exc)) from None
+    modes = normal_modes(K, M, None, count=40, fmax=fmax, shift=-shift_hz, solve=solve,
+                         tol=MODES_TOL)
+    Phi = modes.shapes
+    MPhi = M @ Phi
+
+    def beyond(b):
+        """(K - sigma M)^-1 beyond the modes, P^T (K - sigma M)^-1 P with P = I - M Phi Phi^T:
+        the loads without their modal part, so that a floating part's rigid motion (1/sigma,
+        1e8 times its elastic response) never enters the responses only to be subtracted
+        (its eigenvalue, round-off of the largest, is not known to that precision)."""
+        x = solve(np.asfortranarray(b - MPhi @ (Phi.T @ b)))
+        return x - Phi @ (MPhi.T @ x)
+    columns, n_shapes = [], 0
+    if rows is not None and rows.shape[0]:
+        shapes, _ = contact_shapes(sp.csr_matrix(rows), stiffness, beyond, Phi[:, :0],
+                                   np.zeros(0), tol)
+        columns.append(shapes)
+        n_shapes = shapes.shape[1]
+    if loads.shape[1]:
+        columns.append(beyond(loads))
+    T = _with_statics(Phi, np.hstack(columns) if columns else np.zeros((len(Phi), 0)), M)
+    Kr = T.T @ (K @ T)
+    return PartBasis(name, T, 0.5 * (Kr + Kr.T), modes.frequencies, n_shapes,
+                     int(loads.shape[1]), time.perf_counter() - t0)
+
+
+class PartError(RuntimeError):
+    def __init__(self, part, message):
+        super().__init__(message)
+        self.part = part
+
+
+def _with_statics(Phi, S, M):
+    """[Phi, S V]: the static responses S without what the modes hold (twice, for round-off:
+    on a floating part they are dominated by its rigid motion), their dependent directions
+    dropped, M-orthonormal."""
+    if not S.shape[1]:
+        return Phi
+    for _ in range(2):
+        S = S - Phi @ ((M @ Phi).T @ S)
+    G = S.T @ (M @ S)
+    norms = np.sqrt(np.maximum(np.diag(G), 0.0))
+    big = norms > 1e-12 * norms.max()
+    S, G = S[:, big] / norms[big], G[np.ix_(big, big)] / np.outer(norms[big], norms[big])
+    lam, V = np.linalg.eigh(0.5 * (G + G.T))
+    keep = lam > 1e-12 * max(lam.max(), 1.0)
+    return np.hstack([Phi, S @ (V[:, keep] / np.sqrt(lam[keep]))])
+
+
+def part_tasks(model, M, pairs, contacts, patterns, constant):
+    """(name, K, M, rows, stiffness, loads) of each part, on its free dofs: the arguments of
+    part_basis, with the dofs they sit on."""
+    free = ~model.fixed
+    rows = [contacts.C]
+    if contacts.friction is not None:
+        rows += list(contacts.tangential())
+    R = sp.vstack(rows).tocsc()
+    scale = np.tile(contacts.weights * law_tangent(pairs, contacts), len(rows))
+    loads = np.stack([constant] + list(patterns), axis=1)
+    out = []
+    for name in model.parts:
+        dofs = model.part_dofs(name)
+        dofs = dofs[free[dofs]]
+        Rp = R[:, dofs].tocsr()
+        touch = np.flatnonzero(np.diff(Rp.indptr))
+        out.append((dofs, (name, free_block(model.K, dofs), free_block(M, dofs),
+                           Rp[touch] if len(touch) else None, scale[touch], loads[dofs])))
+    return out
+
+
+def law_tangent(pairs, contacts):
+    """(P,) the contact law's tangent each point's interface shapes are measured against: the
+    pair's k on exponential laws (the preload, where the law's own tangent is, comes after
+    the reduction), the law's tangent at the initial gap on the others."""
+    return np.maximum(first_tangent(pairs, contacts), contacts.laws(contacts.gap0.copy())[1])
+
+
+def components_basis(case, model, M, pairs, contacts, patterns, constant, mapper=map):
+    """(Basis, Preload) of the components path: each part's PartBasis (mapper(fn, tasks),
+    map by default: one task a part), the preload by Newton in the coupled reduced
+    coordinates, the basis diagonalized on K_lin there."""
+    reduction, solver = case.solver.reduction, case.solver
+    t0 = time.perf_counter()
+    tasks = part_tasks(model, M, pairs, contacts, patterns, constant)
+    args = [task for _, task in tasks]
+    try:
+        parts = list(mapper(_reduce_part, args, [reduction.modes_fmax] * len(args),
+                            [solver.shift_hz] * len(args),
+                            [reduction.statics_tolerance] * len(args),
+                            [solver.linear_solver] * len(args)))
+    except PartError as exc:
+        raise CaseError(case.path, f"parts.{exc.part}", f"its stiffness cannot be factorized "
+                        f"on its own ({exc}): is it held by constraints, or free to move?")
+    t_parts = time.perf_counter() - t0
+    widths = [p.T.shape[1] for p in parts]
+    X = np.zeros((model.ndof, sum(widths)))
+    start = 0
+    for (dofs, _), p in zip(tasks, parts):
+        X[dofs, start:start + p.T.shape[1]] = p.T
+        start += p.T.shape[1]
+    Kr = sla.block_diag(*[p.Kr for p in parts])
+    with blas.every_core():
+        Cr = contacts.observe(X)
+        Ct = contacts.observe_tangential(X)[0] if contacts.friction is not None else None
+    preload = _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant)
+    w = contacts.weights
+    K_lin = Kr + (Cr.T * (w * preload.tangent)) @ Cr
+    omega2, A = sla.eigh(0.5 * (K_lin + K_lin.T))
+    mode_hz = np.sort(np.concatenate([p.mode_hz for p in parts]))
+    timings = {"parts": t_parts, "coupling": time.perf_counter() - t0 - t_parts,
+               "part_seconds": {p.name: p.seconds for p in parts}}
+    n_modes = len(mode_hz)
+    basis = Basis(X, A, np.maximum(omega2, 0.0), n_modes, sum(p.n_static for p in parts),
+                  timings, sum(p.n_shapes for p in parts), None, X.shape[1] - n_modes, None,
+                  mode_hz)
+    return basis, preload
+
+
+def _reduce_part(task, fmax, shift_hz, tol, backend):
+    """part_basis of one task (the unit a worker runs)."""
+    with blas.one_thread():
+        return part_basis(*task, fmax, shift_hz, tol, backend)
+
+
+def _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant):
+    """The Preload of the coupled reduced model: Newton from the undeformed state, its first
+    step at least at each pair's k (first_tangent: an exponential law is far softer at zero
+    gap than where the load takes it)."""
+    t0 = time.perf_counter()
+    g0 = contacts.gap0
+    if not np.any(constant):
+        p, kt, _ = contacts.laws(g0.copy())
+        return Preload(np.zeros(X.shape[0]), g0.copy(), p, kt, 0, 0.0,
+                       time.perf_counter() - t0)
+    newton = case.solver.newton
+    try:
+        q, g, p, kt, it, res = reduced_preload(Kr, X.T @ constant, Cr, contacts,
+                                               np.zeros(Kr.shape[0]), newton.tolerance,
+                                               newton.max_iter, Ct,
+                                               first_tangent(pairs, contacts))
+    except ReducedPreloadError as exc:
+        raise CaseError(case.path, "loads", str(exc)) from None
+    return Preload(X @ q, g, p, kt, it, res, time.perf_counter() - t0)
