@@ -355,6 +355,16 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols, out=
             return KE @ Y if out is None else np.matmul(KE, Y, out=out(Y.shape[1]))
     PhiE = Phi[cols] if V is None else V.T @ Phi[cols]
     H = H - (PhiE / np.maximum(omega2, 1e-300)) @ PhiE.T
+    solves = V is not None and not known.held       # else a product with Z or K^-1 E
+    return flexible_shapes(H, Cc, stiffness, tol, response, solves)
+
+
+def flexible_shapes(H, Cc, stiffness, tol, response, solves=False):
+    """The contact shapes of a flexibility H = E^T K^-1 E (k x k, beyond the modes) of the
+    load basis E of the rows Cc (m x k: C = Cc E^T), the law's stiffness (m,) at the points:
+    with Y = D^1/2 Cc H^1/2, mu the eigenvalues of Y Y^T; response(Z) gives K^-1 E Z, and the
+    shapes kept (mu >= tol) are response(X^T u_i). solves: response solves (its products on
+    one thread). Returns (shapes (n, r), mu (k,) descending)."""
     lam, W = np.linalg.eigh(0.5 * (H + H.T))
     root = (W * np.sqrt(np.maximum(lam, 0.0))) @ W.T
     X = np.sqrt(np.maximum(stiffness, 0.0))[:, None] * Cc
@@ -365,6 +375,5 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols, out=
     mu, Q = np.linalg.eigh(root @ XtX @ root)
     mu, Q = np.maximum(mu[::-1], 0.0), Q[:, ::-1]
     kept = mu >= tol
-    solves = V is not None and not known.held       # else a product with Z or K^-1 E
     with nullcontext() if solves else blas.every_core():
         return response(XtX @ (root @ (Q[:, kept] / np.sqrt(mu[kept])))), mu

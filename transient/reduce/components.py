@@ -25,7 +25,7 @@ from ..solve import blas
 from ..solve.linsolve import FactorizationError, factorize
 from ..solve.modes import normal_modes, shift_sigma
 from ..solve.preload import Preload
-from .basis import MODES_TOL, Basis, contact_shapes
+from .basis import MODES_TOL, Basis, flexible_shapes
 from .sampling import ReducedPreloadError, reduced_preload
 
 
@@ -39,25 +39,32 @@ class PartBasis:
     mode_hz: np.ndarray      # (n_modes,) [Hz]
     n_shapes: int            # interface shapes kept (contact_shapes at the tolerance)
     n_static: int            # static directions asked beyond the interface shapes
-    seconds: float
+    seconds: dict            # factorization, modes, interface, statics, orthonormalization
 
 
-def part_basis(name, K, M, rows, stiffness, loads, fmax, shift_hz, tol, backend="auto"):
+def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"):
     """The PartBasis of one part from its own matrices on its free dofs: K, M (n, n) sparse,
-    rows (m, n) the contact rows that touch it (None: none), stiffness (m,) the contact law's
-    w k_t of each row, loads (n, s) the static loads to respond to.
+    interface (E (n, k), Cc (m, k), stiffness (m,)) the loads that span the contact's on the
+    part, C = Cc E^T its rows, the law's w k_t at each row (None: no contact on the part),
+    loads (n, s) the static loads to respond to.
 
     Its own factorization of K - sigma M (the small shift keeps a floating part solvable) gives
     the modes and the responses beyond them; the interface's are kept by their flexibility
-    against the contact law's (basis.contact_shapes)."""
-    t0 = time.perf_counter()
+    against the contact law's (basis.flexible_shapes)."""
+    seconds, t0 = {}, time.perf_counter()
+
+    def lap(stage):
+        nonlocal t0
+        seconds[stage], t0 = time.perf_counter() - t0, time.perf_counter()
     sigma = shift_sigma(-shift_hz)
     try:
         solve = factorize(shifted(K, M, sigma), backend, definite=True)
     except FactorizationError as exc:
         raise PartError(name, str(exc)) from None
+    lap("factorization")
     modes = normal_modes(K, M, None, count=40, fmax=fmax, shift=-shift_hz, solve=solve,
                          tol=MODES_TOL)
+    lap("modes")
     Phi = modes.shapes
     MPhi = M @ Phi
 
@@ -69,17 +76,21 @@ def part_basis(name, K, M, rows, stiffness, loads, fmax, shift_hz, tol, backend=
         x = solve(np.asfortranarray(b - MPhi @ (Phi.T @ b)))
         return x - Phi @ (MPhi.T @ x)
     columns, n_shapes = [], 0
-    if rows is not None and rows.shape[0]:
-        shapes, _ = contact_shapes(sp.csr_matrix(rows), stiffness, beyond, Phi[:, :0],
-                                   np.zeros(0), tol)
+    if interface is not None:
+        E, Cc, stiffness = interface
+        KE = beyond(E)
+        shapes, _ = flexible_shapes(E.T @ KE, Cc, stiffness, tol, KE.__matmul__)
         columns.append(shapes)
         n_shapes = shapes.shape[1]
+    lap("interface")
     if loads.shape[1]:
         columns.append(beyond(loads))
+    lap("statics")
     T = _with_statics(Phi, np.hstack(columns) if columns else np.zeros((len(Phi), 0)), M)
     Kr = T.T @ (K @ T)
+    lap("orthonormalization")
     return PartBasis(name, T, 0.5 * (Kr + Kr.T), modes.frequencies, n_shapes,
-                     int(loads.shape[1]), time.perf_counter() - t0)
+                     int(loads.shape[1]), seconds)
 
 
 class PartError(RuntimeError):
@@ -106,23 +117,44 @@ def _with_statics(Phi, S, M):
 
 
 def part_tasks(model, M, pairs, contacts, patterns, constant):
-    """(name, K, M, rows, stiffness, loads) of each part, on its free dofs: the arguments of
-    part_basis, with the dofs they sit on."""
+    """(dofs, (name, K, M, interface, loads)) of each part: the arguments of part_basis on
+    the part's free dofs, which sit at dofs. The interface loads are the contact's: with
+    factored rows (a regularized rule, C = L B^T) the columns of B on the part, the traces of
+    the (1-eps)-compatible shapes, whose count eps sets, not the mesh; else a unit load on
+    each dof the rows touch. With friction, the tangential rows' loads too."""
     free = ~model.fixed
-    rows = [contacts.C]
-    if contacts.friction is not None:
-        rows += list(contacts.tangential())
-    R = sp.vstack(rows).tocsc()
-    scale = np.tile(contacts.weights * law_tangent(pairs, contacts), len(rows))
+    f = contacts.friction
+    scale = contacts.weights * law_tangent(pairs, contacts)
+    if contacts.factors is not None:
+        L, B = contacts.factors
+        bases = [B] + ([f.along, f.across] if f is not None else [])
+        E_all = sp.hstack([sp.csr_matrix(b) for b in bases]).tocsr()
+        rows = sp.block_diag([sp.csr_matrix(L)] * len(bases)).tocsc()
+    else:
+        bases = [contacts.C] + (list(contacts.tangential()) if f is not None else [])
+        E_all, rows = None, sp.vstack(bases).tocsc()
+    scale = np.tile(scale, len(bases))
     loads = np.stack([constant] + list(patterns), axis=1)
     out = []
     for name in model.parts:
         dofs = model.part_dofs(name)
         dofs = dofs[free[dofs]]
-        Rp = R[:, dofs].tocsr()
-        touch = np.flatnonzero(np.diff(Rp.indptr))
-        out.append((dofs, (name, free_block(model.K, dofs), free_block(M, dofs),
-                           Rp[touch] if len(touch) else None, scale[touch], loads[dofs])))
+        if E_all is None:
+            # the dofs the rows touch, each loaded alone
+            Rp = rows[:, dofs].tocsc()
+            cols = np.flatnonzero(np.diff(Rp.indptr))
+            E = sp.csr_matrix((np.ones(len(cols)), (cols, np.arange(len(cols)))),
+                              shape=(len(dofs), len(cols)))
+            Cc = Rp[:, cols]
+        else:
+            Ep = E_all[dofs].tocsc()
+            cols = np.flatnonzero(np.diff(Ep.indptr))
+            E, Cc = Ep[:, cols], rows[:, cols]
+        touch = np.flatnonzero(np.diff(Cc.tocsr().indptr))
+        interface = ((E.toarray(), Cc.tocsr()[touch].toarray(), scale[touch]) if len(cols)
+                     else None)
+        out.append((dofs, (name, free_block(model.K, dofs), free_block(M, dofs), interface,
+                           loads[dofs])))
     return out
 
 
@@ -166,7 +198,8 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, mapper
     omega2, A = sla.eigh(0.5 * (K_lin + K_lin.T))
     mode_hz = np.sort(np.concatenate([p.mode_hz for p in parts]))
     timings = {"parts": t_parts, "coupling": time.perf_counter() - t0 - t_parts,
-               "part_seconds": {p.name: p.seconds for p in parts}}
+               "part_seconds": {p.name: sum(p.seconds.values()) for p in parts},
+               "part_stages": {p.name: p.seconds for p in parts}}
     n_modes = len(mode_hz)
     basis = Basis(X, A, np.maximum(omega2, 0.0), n_modes, sum(p.n_static for p in parts),
                   timings, sum(p.n_shapes for p in parts), None, X.shape[1] - n_modes, None,
