@@ -94,6 +94,11 @@ def test_pad_disc_preload_and_modes_match_the_assembled_path():
     np.testing.assert_allclose(fc[:n], fa[:n], rtol=1e-3)
     ua, uc = (s.basis[0] @ (s.basis[1] @ s.state.q) for s in (a, c))
     assert np.linalg.norm(uc - ua) <= 1e-3 * np.linalg.norm(ua)
+    # the band's modes in the whole model: the assembled basis holds the structure's own
+    # (to the Lanczos' tolerance); the parts' modes and interface shapes approximate them
+    assert a.meta["band_residual"] < 1e-4
+    assert c.meta["band_residual"] < 0.1
+    assert c.meta["reduction_method"] == "components"
 
 
 def test_a_basis_at_another_friction_is_refused_with_components():

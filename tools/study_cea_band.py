@@ -4,7 +4,11 @@ normal modes to several cutoffs (solver.reduction.cutoff = factor x fmax), mode 
 (transient.cea.compare: each real part against its own size, 5 1/s floor).
 
     python tools/study_cea_band.py CASE --mu 0.3,0.5 [--factors 1,1.5,2] [--set KEY=VALUE ...]
-                                  [--out DIR] [--spans] [--markdown FILE]
+                                  [--reduced-set KEY=VALUE ...] [--out DIR] [--spans]
+                                  [--markdown FILE]
+
+--reduced-set applies to the reduced analyses only (solver.reduction.method="components"),
+so that they are compared with the same cached full model.
 
 The full model's modes are cached in DIR (default /tmp/study_cea_band) by case, overrides and
 mu. --spans also gives, for each unstable mode of the full model, the part of its right and
@@ -77,7 +81,7 @@ def outside(T, M, x):
     return float(np.sqrt(abs(np.vdot(r, M @ r)) / abs(np.vdot(x, M @ x))))
 
 
-def study(case_path, overrides, mus, factors, out, spans):
+def study(case_path, overrides, mus, factors, out, spans, reduced_overrides=()):
     rows = []
     base = load(case_path, overrides)
     fmax = base.solver.reduction.fmax
@@ -94,13 +98,15 @@ def study(case_path, overrides, mus, factors, out, spans):
         lefts, M = left_vectors(setup, ref, unstable) if spans else (None, None)
         for factor in factors:
             t0 = time.perf_counter()
-            red = analyse(load(case_path, more + [f"solver.reduction.cutoff={factor * fmax}"]))
+            red = analyse(load(case_path, more + list(reduced_overrides)
+                               + [f"solver.reduction.cutoff={factor * fmax}"]))
             seconds = time.perf_counter() - t0
             pairs = pair_modes(ref, red.modes, fmax)
             failing = [p for p in pairs if not p.within()]
             worst = max((abs(p.real_error) / max(0.05 * abs(p.real), 5.0) for p in pairs),
                         default=0.0)
             row = {"mu": mu, "factor": factor, "cutoff_hz": factor * fmax,
+                   "method": red.meta.get("reduction_method", "assembled"),
                    "reduced": red.reduced, "seconds": seconds,
                    "unstable_full": len(unstable),
                    "unstable_reduced": int(np.sum(red.modes.unstable)),
@@ -144,6 +150,7 @@ def main(argv=None):
     parser.add_argument("--mu", default="0.3,0.5")
     parser.add_argument("--factors", default="1,1.5,2")
     parser.add_argument("--set", dest="overrides", action="append", default=[])
+    parser.add_argument("--reduced-set", dest="reduced", action="append", default=[])
     parser.add_argument("--out", default="/tmp/study_cea_band")
     parser.add_argument("--spans", action="store_true")
     parser.add_argument("--markdown", help="append the table to this file")
@@ -151,7 +158,8 @@ def main(argv=None):
     args = parser.parse_args(argv)
     Path(args.out).mkdir(parents=True, exist_ok=True)
     rows = study(args.case, args.overrides, [float(m) for m in args.mu.split(",")],
-                 [float(f) for f in args.factors.split(",")], args.out, args.spans)
+                 [float(f) for f in args.factors.split(",")], args.out, args.spans,
+                 args.reduced)
     table = markdown(args.case, rows)
     print(table)
     if args.markdown:

@@ -129,6 +129,8 @@ ATTRIBUTES = {
               "a table of contact pairs"),
     "reduced_dofs": (_is_count, "a count"),
     "normal_modes": (_is_count, "a count"),
+    "reduction_method": (lambda v: v in ("assembled", "components"),
+                         "assembled or components"),
     "modes_fmax_hz": (lambda v: _is_number(v) and v > 0, "a frequency > 0 [Hz]"),
     "static_shapes": (lambda v: isinstance(v, list) and len(v) == 2 and all(map(_is_count, v)),
                       "two counts"),

@@ -62,6 +62,7 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
     # T^T (M u): two sparse products with vectors, not one with the n x r basis
     q0, v = basis.coordinates(M @ preload.u), basis.coordinates(M @ v0)
     meta = {"reduced_dofs": len(basis.omega2), "normal_modes": basis.n_modes,
+            "reduction_method": reduction.method,
             "modes_fmax_hz": reduction.modes_fmax,
             "modes_hz": [float(f) for f in basis.mode_hz],
             "contact_shapes": basis.n_contact_shapes,
@@ -71,6 +72,8 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
             "basis_timings": basis.timings, "basis_peak_rss_gb": basis.peaks,
             "basis_projection_error": float(np.linalg.norm(basis.expand(q0) - preload.u)
                                             / max(np.linalg.norm(preload.u), 1e-300)),
+            "band_residual": band_residual(model, M, contacts, preload, basis,
+                                           reduction.fmax),
             "free_dofs": int((~model.fixed).sum())}
     mask = candidates(case, pairs, contacts)
     cap = reduction.mass_scaling_hz
@@ -95,6 +98,31 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
                                     _sampled_pairs(pairs, contacts, sampled.keep,
                                                    sampled.contacts), held, meta, unsampled),
                        cap)
+
+
+def band_residual(model, M, contacts, preload, basis, fmax):
+    """The largest residual in the whole model of the basis' modes below fmax, the reduced
+    eigenpairs (omega^2, x = T a) of K_lin at the preload: ||K_lin x - omega^2 M x|| over
+    ||K_lin x|| in M^-1's norm. Zero for the whole model's own modes; what a basis misses of the band's
+    (its truncation, a part's interface the components path did not span) shows here."""
+    band = np.flatnonzero(basis.omega2 <= (2 * np.pi * fmax) ** 2)
+    if not len(band):
+        return 0.0
+    W = np.zeros((len(basis.omega2), len(band)))
+    W[band, np.arange(len(band))] = 1.0
+    with blas.every_core():
+        x = basis.expand(W)
+        Kx = model.K @ x
+        if contacts.n_points:
+            Kx += contacts.normal_load((contacts.weights * preload.tangent)[:, None]
+                                       * contacts.observe(x))
+        r = Kx - (M @ x) * basis.omega2[band]
+    # in the norm of M^-1 (the lumped mass): the energy's, where a force on a light dof
+    # counts as its motion does, not the Euclidean's, which the stiff dofs dominate
+    free = ~model.fixed
+    scale = 1.0 / np.sqrt(model.lumped_mass[free])[:, None]
+    return float(np.max(np.linalg.norm(r[free] * scale, axis=0)
+                        / np.maximum(np.linalg.norm(Kx[free] * scale, axis=0), 1e-300)))
 
 
 def reduction_mass(case, model, cs):

@@ -1,0 +1,106 @@
+"""The components path of the reduction against the assembled one on the same case: the
+complex modes' analysis (`transient cea`'s) of each, alternated A B A B in child processes so
+that a change of the machine's load shows in both; its seconds, the process's peak memory,
+the reduced dofs, each part's stages, and the unstable modes of components against assembled
+(frequency, and real part against 2% of its own size or 5 1/s: issue 45's allowance).
+
+    python tools/bench_components.py [CASE] [--mu 0.4] [--repeat 1] [--set key=value ...]
+                                     [--markdown FILE] [--json FILE]
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+METHODS = ("assembled", "components")
+
+CHILD = """
+import json, resource, sys, time
+import transient
+transient.configure()
+from transient.case.loading import load
+from transient.cea.stage import analyse
+t0 = time.perf_counter()
+a = analyse(load(sys.argv[1], sys.argv[2:]))
+seconds = time.perf_counter() - t0
+m = a.modes
+print(json.dumps({"seconds": seconds, "stages": a.stages, "reduced": a.reduced,
+                  "ndof": a.ndof, "peak_gb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+                  / 1e6, "parts": a.meta.get("basis_timings", {}).get("part_stages"),
+                  "real": m.eigenvalues.real.tolist(), "hz": m.frequency_hz.tolist(),
+                  "unstable": m.unstable.tolist(), "fmax": a.fmax}))
+"""
+
+
+def analysed(case, overrides, method):
+    args = [sys.executable, "-c", CHILD, str(case)] + list(overrides) + [
+        f'solver.reduction.method="{method}"']
+    done = subprocess.run(args, cwd=ROOT, capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit(f"cea with {method} failed ({done.returncode}): {done.stderr.strip()}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def compared(ref, other):
+    """(unstable modes of ref below fmax, worst frequency error, worst real error over its
+    allowance) of other's modes, each paired with the nearest of ref's in frequency."""
+    import numpy as np
+    hz, real = np.array(other["hz"]), np.array(other["real"])
+    worst_f, worst_r, count = 0.0, 0.0, 0
+    for f, r, u in zip(ref["hz"], ref["real"], ref["unstable"]):
+        if not u or f > ref["fmax"]:
+            continue
+        count += 1
+        j = int(np.argmin(np.abs(hz - f)))
+        worst_f = max(worst_f, abs(hz[j] / f - 1))
+        worst_r = max(worst_r, abs(real[j] - r) / max(0.02 * abs(r), 5.0))
+    return count, worst_f, worst_r
+
+
+def markdown(case, mu, rows, load):
+    lines = ["| case | mu | method | dofs | reduced | cea [s] | peak [GB] | unstable | "
+             "worst frequency error | worst real error / (2% or 5 1/s) | load |", "|" + "---|" * 11]
+    for r in rows:
+        lines.append(f"| {Path(case).name} | {mu} | {r['method']} | {r['ndof']} | "
+                     f"{r['reduced']} | {r['seconds']:.1f} | {r['peak_gb']:.2f} | "
+                     f"{r['count']} | {r['worst_f']:.1e} | {r['worst_r']:.2f} | {load:.1f} |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("case", nargs="?", default=str(ROOT / "cases" / "pad_disc.toml"))
+    parser.add_argument("--mu", type=float, default=0.4)
+    parser.add_argument("--repeat", type=int, default=1)
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--markdown")
+    parser.add_argument("--json")
+    args = parser.parse_args(argv)
+    from transient.case.loading import load
+    pairs = load(args.case, args.set).contact
+    overrides = args.set + [f"contact.{p}.friction.mu={args.mu}" for p in pairs]
+    load0, rows = os.getloadavg()[0], []
+    for _ in range(args.repeat):
+        runs = {m: analysed(args.case, overrides, m) for m in METHODS}
+        for m in METHODS:
+            count, worst_f, worst_r = compared(runs["assembled"], runs[m])
+            rows.append(dict(runs[m], method=m, count=count, worst_f=worst_f, worst_r=worst_r))
+            print(f"{m}: {runs[m]['seconds']:.1f} s, {runs[m]['reduced']} reduced dofs, peak "
+                  f"{runs[m]['peak_gb']:.2f} GB, {count} unstable, frequency {worst_f:.1e}, "
+                  f"real {worst_r:.2f} of allowed; parts {runs[m]['parts']}", flush=True)
+    load = 0.5 * (load0 + os.getloadavg()[0])
+    table = markdown(args.case, args.mu, rows, load)
+    print(table)
+    if args.markdown:
+        with open(args.markdown, "a") as f:
+            f.write(table + "\n")
+    if args.json:
+        Path(args.json).write_text(json.dumps(rows, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
