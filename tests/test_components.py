@@ -110,3 +110,50 @@ def test_a_basis_at_another_friction_is_refused_with_components():
                               "contact.pad_disc.friction.basis_mu=0.3"])
     with pytest.raises(CaseError, match="basis_mu"):
         prepare(case)
+
+
+def _reduced(case, engine):
+    setup = prepare(case, analysis=True, parts=engine)
+    return setup.basis[0] @ setup.basis[1], setup.system.omega2
+
+
+def test_a_cached_part_is_read_back_and_only_a_changed_part_is_reduced_again(tmp_path):
+    """Through a cache folder each part's reduction is kept under the key of what it is made
+    from: the same case again reads both parts back, bit for bit; a stiffer pad reduces the
+    pad again and reads the disc (counted by the engine's done)."""
+    from transient.reduce.parts import Engine
+    made = []
+    engine = Engine(cache=tmp_path / "parts", done=lambda task, part: made.append(
+        (task.name, "cache" in part.seconds)))
+    overrides = SMALL + ['solver.reduction.method="components"']
+    T0, w0 = _reduced(load(PAD, overrides), engine)
+    assert sorted(made) == [("disc", False), ("pad", False)]
+    made.clear()
+    T1, w1 = _reduced(load(PAD, overrides), engine)
+    assert sorted(made) == [("disc", True), ("pad", True)]
+    assert np.array_equal(T0, T1) and np.array_equal(w0, w1)
+    made.clear()
+    _reduced(load(PAD, overrides + ["materials.lining.E=4.0e9"]), engine)
+    assert sorted(made) == [("disc", True), ("pad", False)]
+    assert len(list((tmp_path / "parts").glob("part-*.npz"))) == 3
+    assert not list((tmp_path / "parts").glob(".*"))
+
+
+def test_parts_on_a_dask_cluster_equal_parts_in_this_process():
+    """One task a part on a LocalCluster of two one-thread workers: the same basis as in this
+    process (to round-off: other BLAS threads), each part reported as it finishes."""
+    pytest.importorskip("dask.distributed")
+    from transient.reduce.parts import Engine
+    from transient.sweep.campaign import client_for
+    case = load(PAD, SMALL + ['solver.reduction.method="components"'])
+    here = _reduced(case, None)
+    client, cluster = client_for(None, 2)
+    try:
+        made = []
+        there = _reduced(case, Engine(client, done=lambda task, part: made.append(task.name)))
+    finally:
+        client.close()
+        cluster.close()
+    assert sorted(made) == ["disc", "pad"]
+    np.testing.assert_allclose(there[1], here[1], rtol=1e-9)
+    np.testing.assert_allclose(np.abs(there[0]), np.abs(here[0]), atol=1e-9 * np.abs(here[0]).max())

@@ -49,7 +49,7 @@ class Setup:
     #                           before the sampling (what the cea analyses; no rows0)
 
 
-def prepare(case, check=None, built=None, unsampled=False, analysis=False):
+def prepare(case, check=None, built=None, unsampled=False, analysis=False, parts=None):
     """Model, contact, preload, linearization and (optionally) reduction of a case.
 
     The setup's dense algebra runs on one OpenBLAS thread: its calls are many and mid-sized
@@ -61,9 +61,10 @@ def prepare(case, check=None, built=None, unsampled=False, analysis=False):
     first, a campaign's variants share them). unsampled: also the Setup of a sampled rule's
     candidates (Setup.unsampled), the cea's, from the same stages. analysis: the system is
     linearized, not integrated (the cea's): it gets no critical step and the Setup no rows0
-    (the critical step's eigenvalues were 0.3 s of pad_disc's cea, on its 7734 points)."""
+    (the critical step's eigenvalues were 0.3 s of pad_disc's cea, on its 7734 points).
+    parts: where the components path reduces its parts (reduce.parts.Engine; None: here)."""
     with blas.one_thread(), heap.setup():
-        return _prepare(case, Stages(check), built or Built(None), unsampled, analysis)
+        return _prepare(case, Stages(check), built or Built(None), unsampled, analysis, parts)
 
 
 def _band_keys(case, analysis):
@@ -77,7 +78,7 @@ def _band_keys(case, analysis):
     return [("solver.reduction.fmax", solver.reduction.fmax)] if analysis else []
 
 
-def _prepare(case, stages, built, want_unsampled=False, analysis=False):
+def _prepare(case, stages, built, want_unsampled=False, analysis=False, parts=None):
     solver = case.solver
     components = solver.reduction.enabled and solver.reduction.method == "components"
     if components and rebased(case):
@@ -112,7 +113,7 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False):
         # each part's own basis, the preload solved on their coupling (reduce.components)
         basis, preload = stages.timed("components", components_basis, case, model,
                                       reduction_mass(case, model, None)[0], pairs, contacts,
-                                      patterns, constant)
+                                      patterns, constant, parts)
     else:
         try:
             preload = stages.timed("preload", solve_preload, model.K, model.fixed, constant,

@@ -98,6 +98,9 @@ class PartError(RuntimeError):
         super().__init__(message)
         self.part = part
 
+    def __reduce__(self):        # raised on a Dask worker, it travels back whole
+        return PartError, (self.part, str(self))
+
 
 def _with_statics(Phi, S, M):
     """[Phi, S V]: the static responses S without what the modes hold (twice, for round-off:
@@ -165,22 +168,22 @@ def law_tangent(pairs, contacts):
     return np.maximum(first_tangent(pairs, contacts), contacts.laws(contacts.gap0.copy())[1])
 
 
-def components_basis(case, model, M, pairs, contacts, patterns, constant, mapper=map):
-    """(Basis, Preload) of the components path: each part's PartBasis (mapper(fn, tasks),
-    map by default: one task a part), the preload by Newton in the coupled reduced
-    coordinates, the basis diagonalized on K_lin there."""
+def components_basis(case, model, M, pairs, contacts, patterns, constant, engine=None):
+    """(Basis, Preload) of the components path: each part's PartBasis (engine: a
+    reduce.parts.Engine, where and through which cache; None: in this process), the preload
+    by Newton in the coupled reduced coordinates, the basis diagonalized on K_lin there."""
+    from .parts import Engine, PartTask
     reduction, solver = case.solver.reduction, case.solver
     t0 = time.perf_counter()
     tasks = part_tasks(model, M, pairs, contacts, patterns, constant)
-    args = [task for _, task in tasks]
+    work = [PartTask(*task, reduction.modes_fmax, solver.shift_hz,
+                     reduction.statics_tolerance, solver.linear_solver) for _, task in tasks]
     try:
-        parts = list(mapper(_reduce_part, args, [reduction.modes_fmax] * len(args),
-                            [solver.shift_hz] * len(args),
-                            [reduction.statics_tolerance] * len(args),
-                            [solver.linear_solver] * len(args)))
+        parts = (engine or Engine()).run(work)
     except PartError as exc:
         raise CaseError(case.path, f"parts.{exc.part}", f"its stiffness cannot be factorized "
-                        f"on its own ({exc}): is it held by constraints, or free to move?")
+                        f"on its own ({exc}): is it held by constraints, or free to "
+                        "move?") from None
     t_parts = time.perf_counter() - t0
     widths = [p.T.shape[1] for p in parts]
     X = np.zeros((model.ndof, sum(widths)))
@@ -205,12 +208,6 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, mapper
                   timings, sum(p.n_shapes for p in parts), None, X.shape[1] - n_modes, None,
                   mode_hz)
     return basis, preload
-
-
-def _reduce_part(task, fmax, shift_hz, tol, backend):
-    """part_basis of one task (the unit a worker runs)."""
-    with blas.one_thread():
-        return part_basis(*task, fmax, shift_hz, tol, backend)
 
 
 def _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant):
