@@ -157,3 +157,35 @@ def test_parts_on_a_dask_cluster_equal_parts_in_this_process():
     assert sorted(made) == ["disc", "pad"]
     np.testing.assert_allclose(there[1], here[1], rtol=1e-9)
     np.testing.assert_allclose(np.abs(there[0]), np.abs(here[0]), atol=1e-9 * np.abs(here[0]).max())
+
+
+def test_a_part_larger_than_a_worker_is_refused_naming_its_key():
+    """The cluster's smallest worker bounds each part's reduction (estimated from its cells):
+    a part above it is refused before any is reduced, by the key that sizes it."""
+    from transient.reduce.components import check_parts
+    case = load(PAD, SMALL + ['solver.reduction.method="components"'])
+    model = build_model(case)
+    check_parts(case, model, None)
+    check_parts(case, model, 1e12)
+    with pytest.raises(CaseError, match="worker's memory") as refused:
+        check_parts(case, model, 1e6)
+    assert refused.value.key in ("parts.disc.mesh.divisions", "parts.pad.mesh.divisions")
+
+
+def test_the_memory_bound_takes_the_model_and_its_largest_part():
+    """limits.memory against the components path's need, the model whole and one part's
+    setup at a time: a bound between that and the assembled setup's refuses the assembled
+    case at load, by the meshes' keys, and lets the components one in."""
+    from transient.case.sizes import MODEL_BYTES_PER_ENTRY, entries, generated_cells, \
+        setup_bytes
+    cells = {n: [generated_cells(p.mesh)] for n, p in load(PAD, SMALL).parts.items()}
+    assembled = setup_bytes(sum(cells.values(), []))
+    parts = (MODEL_BYTES_PER_ENTRY * entries(sum(cells.values(), []))
+             + max(setup_bytes(c) for c in cells.values()))
+    assert parts < assembled
+    bound = [f"limits.memory={0.5 * (parts + assembled) / 1e9}"]
+    with pytest.raises(CaseError, match="limits.memory") as refused:
+        load(PAD, SMALL + bound)
+    assert refused.value.key.endswith(".mesh.divisions")
+    load(PAD, SMALL + bound + ['solver.reduction.method="components"',
+                               "solver.reduction.enabled=true"])

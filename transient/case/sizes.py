@@ -14,6 +14,9 @@ TETS_PER_HEX = 6          # the generators split each hex in six tets (Kuhn)
 # setup's multiple of them (factorization, basis, contact): the largest of the setups' measured
 # peaks per entry, from pad_disc to a 1M-dof tet10 brake (docs/performance.md, "Memory")
 BYTES_PER_ENTRY = 130
+# the model alone (K and M assembled, and their COO triplets while they are): the components
+# path's process holds it whole beside one part's setup at a time (pad_disc's model: 24)
+MODEL_BYTES_PER_ENTRY = 30
 
 
 def peak_rss_gb():
@@ -35,31 +38,52 @@ def generated_cells(mesh):
 
 def setup_bytes(cells):
     """Estimated peak memory [bytes] of the model and its setup: cells (count, nodes) pairs."""
-    return sum(BYTES_PER_ENTRY * n * (3 * nodes) ** 2 for n, nodes in cells)
+    return BYTES_PER_ENTRY * entries(cells)
 
 
 def parts_cells(parts):
     """(count, nodes per cell) of each cell block of the parts' meshes (model.Part by name)."""
-    return [(len(c), c.shape[1]) for part in parts.values() for c in part.mesh.cells.values()]
+    return sum(cells_by_part(parts).values(), [])
+
+
+def cells_by_part(parts):
+    """parts_cells of each part, by name."""
+    return {name: [(len(c), c.shape[1]) for c in part.mesh.cells.values()]
+            for name, part in parts.items()}
 
 
 def check_memory(case, cells, keys):
-    """Refuse (CaseError) a model whose estimated setup exceeds limits.memory; keys: the case
-    keys that set the cell counts (divisions, mesh files)."""
-    need, have = setup_bytes(cells), case.limits.memory_bytes
-    if need > have:
-        raise CaseError(case.path, keys[0], f"the model would take about {need / 1e9:.3g} GB "
-                        f"(set by {', '.join(keys)}), more than limits.memory allows "
+    """Refuse (CaseError) a model whose estimated setup exceeds limits.memory. cells: (count,
+    nodes) of each cell block, by part; keys: the case key that sets each part's cells
+    (divisions, a mesh file), by part. The components path (solver.reduction.method) holds
+    the model whole but factorizes one part at a time: its need is the model's and the
+    largest part's setup."""
+    have = case.limits.memory_bytes
+    reduction = case.solver.reduction
+    if reduction.enabled and reduction.method == "components":
+        largest = max(cells, key=lambda name: setup_bytes(cells[name]))
+        need = (MODEL_BYTES_PER_ENTRY * entries(sum(cells.values(), []))
+                + setup_bytes(cells[largest]))
+        named = [keys[largest]] if largest in keys else list(keys.values())
+    else:
+        need, named = setup_bytes(sum(cells.values(), [])), list(keys.values())
+    if need > have and named:
+        raise CaseError(case.path, named[0], f"the model would take about {need / 1e9:.3g} GB "
+                        f"(set by {', '.join(named)}), more than limits.memory allows "
                         f"({have / 1e9:.3g} GB): coarsen the mesh, or raise limits.memory")
+
+
+def entries(cells):
+    """Entries of the element matrices of cells, (count, nodes) pairs."""
+    return sum(n * (3 * nodes) ** 2 for n, nodes in cells)
 
 
 def check_generated(case):
     """The memory bound on the generated meshes, before any is meshed."""
-    counted = [(name, generated_cells(part.mesh)) for name, part in case.parts.items()]
-    counted = [(name, c) for name, c in counted if c is not None]
+    counted = {name: generated_cells(part.mesh) for name, part in case.parts.items()}
+    counted = {name: [c] for name, c in counted.items() if c is not None}
     if counted:
-        check_memory(case, [c for _, c in counted],
-                     [f"parts.{name}.mesh.divisions" for name, _ in counted])
+        check_memory(case, counted, {name: f"parts.{name}.mesh.divisions" for name in counted})
 
 
 def check_steps(case, dt):

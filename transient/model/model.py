@@ -12,7 +12,7 @@ import scipy.sparse as sp
 from ..mesh import generators
 from .assembly import CellBlock, assemble
 from ..mesh.elements import ALIASES, ELEMENTS
-from ..case.sizes import check_memory, parts_cells
+from ..case.sizes import cells_by_part, check_memory
 from ..errors import CaseError
 from .loads import nearest_node, pressure_forces
 from ..mesh.meshfile import MeshFileError, read_mesh
@@ -274,7 +274,7 @@ def build_model(case, structure=None):
     files = [n for n in case.parts if case.parts[n].mesh.kind == "file"]
     if files:
         # the cells read: the memory bound before any matrix is assembled
-        check_memory(case, parts_cells(parts), [f"parts.{n}.mesh.path" for n in files])
+        check_memory(case, cells_by_part(parts), {n: f"parts.{n}.mesh.path" for n in files})
 
     t0 = time.perf_counter()
     blocks = _cell_blocks(case, parts)

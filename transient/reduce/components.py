@@ -18,6 +18,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from ..case.sizes import cells_by_part, setup_bytes
 from ..contact.contactset import first_tangent
 from ..errors import CaseError
 from ..model.dofs import free_block, shifted
@@ -174,12 +175,14 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
     by Newton in the coupled reduced coordinates, the basis diagonalized on K_lin there."""
     from .parts import Engine, PartTask
     reduction, solver = case.solver.reduction, case.solver
+    engine = engine or Engine()
+    check_parts(case, model, engine.budget())
     t0 = time.perf_counter()
     tasks = part_tasks(model, M, pairs, contacts, patterns, constant)
     work = [PartTask(*task, reduction.modes_fmax, solver.shift_hz,
                      reduction.statics_tolerance, solver.linear_solver) for _, task in tasks]
     try:
-        parts = (engine or Engine()).run(work)
+        parts = engine.run(work)
     except PartError as exc:
         raise CaseError(case.path, f"parts.{exc.part}", f"its stiffness cannot be factorized "
                         f"on its own ({exc}): is it held by constraints, or free to "
@@ -208,6 +211,23 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
                   timings, sum(p.n_shapes for p in parts), None, X.shape[1] - n_modes, None,
                   mode_hz)
     return basis, preload
+
+
+def check_parts(case, model, budget):
+    """Refuse a part whose reduction's estimated memory (from its cells) exceeds budget [B],
+    a worker's, naming the key that sizes it; None: no bound here (limits.memory's, at the
+    model, holds the largest part)."""
+    if budget is None:
+        return
+    for name, cells in cells_by_part(model.parts).items():
+        need = setup_bytes(cells)
+        if need > budget:
+            mesh = case.parts[name].mesh
+            key = f"parts.{name}.mesh." + ("path" if mesh.kind == "file" else "divisions")
+            raise CaseError(case.path, key, f"the part's reduction would take about "
+                            f"{need / 1e9:.3g} GB, more than a worker's memory "
+                            f"({budget / 1e9:.3g} GB): workers with more memory, or a coarser "
+                            "mesh of the part")
 
 
 def _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant):

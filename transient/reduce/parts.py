@@ -74,6 +74,15 @@ class Engine:
     cache: object = None
     done: object = None
 
+    def budget(self):
+        """The smallest worker's memory limit [B] on the cluster (None: in this process, or
+        none set), which each part's reduction must fit."""
+        if self.client is None:
+            return None
+        limits = [w.get("memory_limit") or 0
+                  for w in self.client.scheduler_info()["workers"].values()]
+        return min(limits) if limits and min(limits) > 0 else None
+
     def run(self, tasks):
         runner = serial if self.client is None else on_cluster(self.client)
         if self.cache is not None:
