@@ -189,3 +189,67 @@ def test_the_memory_bound_takes_the_model_and_its_largest_part():
     assert refused.value.key.endswith(".mesh.divisions")
     load(PAD, SMALL + bound + ['solver.reduction.method="components"',
                                "solver.reduction.enabled=true"])
+
+
+class _CrashOnce:
+    """A part's task whose first attempt kills its worker process (a node lost mid-task):
+    the marker file says it ran once."""
+
+    def __init__(self, task, marker):
+        self.task, self.marker, self.name = task, str(marker), task.name
+
+    def key(self):
+        return self.task.key()
+
+    def run(self):
+        import os
+        if not os.path.exists(self.marker):
+            open(self.marker, "w").close()
+            os._exit(1)
+        return self.task.run()
+
+
+def test_a_worker_killed_during_the_reduction_is_made_up_bit_for_bit(tmp_path):
+    """The scheduler runs a dead worker's part again on another: the basis equals the one of
+    a cluster that lost none, bit for bit (one-thread workers, the same arithmetic)."""
+    pytest.importorskip("dask.distributed")
+    import sys
+    import cloudpickle
+    from transient.reduce.parts import on_cluster
+    from transient.reduce.components import components_basis
+    from transient.sweep.campaign import client_for
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    case = load(PAD, SMALL + ['solver.reduction.method="components"'])
+    model = build_model(case)
+    from transient.contact.pair import build_contact
+    from transient.contact.contactset import stack
+    from transient.model import constant_load
+
+    class Crashing:
+        def __init__(self, client, crash):
+            self.client, self.crash, self.done, self.cache = client, crash, None, None
+
+        def budget(self):
+            return None
+
+        def run(self, tasks):
+            if self.crash:
+                tasks = [_CrashOnce(t, tmp_path / f"ran-{t.name}") if t.name == "disc" else t
+                         for t in tasks]
+            return on_cluster(self.client)(tasks)
+
+    client, cluster = client_for(None, 2)
+    try:
+        bases = []
+        for crash in (False, True):
+            pairs = build_contact(case, model)
+            basis, _ = components_basis(case, model, model.M, pairs,
+                                        stack(pairs, model.ndof), [], constant_load(case, model),
+                                        Crashing(client, crash))
+            bases.append(basis)
+    finally:
+        client.close()
+        cluster.close()
+    assert (tmp_path / "ran-disc").exists()
+    assert np.array_equal(bases[0].X, bases[1].X)
+    assert np.array_equal(bases[0].omega2, bases[1].omega2)
