@@ -37,6 +37,13 @@ class RunResult:
     meta: dict = None         # what prepare reports: contact points of each pair, reduced dofs
     subdivisions: list = ()   # {"t", "dt", "why"} of each halving of the step
 
+    def summary(self):
+        """What `transient run --json` prints."""
+        return {"file": self.path, "status": self.status, "steps": self.steps,
+                "t_end": self.t_end, "dt": self.dt, "dt_critical": self.dt_critical,
+                "stages": self.stages, "timings": self.timings,
+                "energy_drift": self.energy_drift, "subdivisions": list(self.subdivisions)}
+
 
 @dataclass
 class _Start:
