@@ -25,6 +25,7 @@ from .stages import choose_dt, prepare, stepper
 
 @dataclass(frozen=True)
 class RunResult:
+    """What a run did: its history's path and status, its steps and timings."""
     path: str
     status: str
     steps: int                # steps made from t = 0

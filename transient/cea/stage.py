@@ -26,6 +26,7 @@ FULL_DOFS = 60_000    # free dofs above which the full model's complex LU per sh
 
 @dataclass(frozen=True)
 class Analysis:
+    """The complex modes of a case at steady sliding, and what describes them."""
     modes: object            # ComplexModes up to fmax
     fmax: float              # [Hz]
     ndof: int                # free dofs of the model
