@@ -2,6 +2,7 @@
 returns is what the command line prints, its bad input is a CaseError naming the file and
 the key, and importing it changes nothing."""
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -164,3 +165,20 @@ def test_sweep_runs_the_variants_the_command_would(tmp_path):
     same = make_variants([parse_parameter("initial.impact.velocity=[[1.0,0.0,0.0],"
                                           "[2.0,0.0,0.0]]")])
     assert [v.name for v in same] == [v.name for v in campaign.variants]
+
+
+def test_the_api_pages_example_runs(tmp_path):
+    """docs/api.md's example as a user runs it from a checkout, on a coarser mesh and a
+    shorter run (every load appends them): a test of the calls, not of pad_disc's setup."""
+    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "api.md").read_text(), re.S)
+    assert len(blocks) == 1
+    (tmp_path / "cases").symlink_to(ROOT / "cases")
+    coarser = ("import transient.api\n"
+               "real = transient.api.load\n"
+               f"transient.api.load = lambda path, overrides=(): real(path, [*overrides, "
+               f"*{SMALL + ['solver.t_end=2e-4']!r}])\n")
+    done = subprocess.run([sys.executable, "-c", coarser + blocks[0]], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[-1].split()[:2] == ["pad.h5", "complete"]
+    assert (tmp_path / "pad.h5").is_file()
