@@ -268,7 +268,7 @@ def pair_name(case, pair=None):
     names = list(case.contact)
     if not names:
         raise CaseError(case.path, "contact", "the case has no [contact.NAME] pair")
-    if pair is None:
+    if not pair:
         return names[0]
     if pair not in names:
         raise CaseError(case.path, "contact", f"no pair '{pair}' (pairs: {', '.join(names)})")
