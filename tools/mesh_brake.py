@@ -354,7 +354,11 @@ def main(argv=None):
                         "(default: the lining's thickness, down to the backplate)")
     parser.add_argument("--chamfer", metavar="LENGTH,DEPTH", help="a chamfer at both ends of "
                         "the lining [m]: LENGTH along the friction face, DEPTH up the end")
-    args = parser.parse_args(argv)
+    run_tool(build, parser.parse_args(argv))
+
+
+def run_tool(build, args):
+    """build(args), bad input told in one line and exit code 2 (the package's CaseError)."""
     from transient.errors import CaseError
     try:
         build(args)

@@ -53,13 +53,7 @@ def main(argv=None):
                         "through both linings [m], as tools/mesh_brake.py's")
     parser.add_argument("--chamfer", metavar="LENGTH,DEPTH", help="a chamfer at both ends of "
                         "both linings [m], as tools/mesh_brake.py's")
-    args = parser.parse_args(argv)
-    from transient.errors import CaseError
-    try:
-        build(args)
-    except CaseError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+    mesh_brake.run_tool(build, parser.parse_args(argv))
 
 
 def build(args):

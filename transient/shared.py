@@ -15,6 +15,7 @@ from .reduce.reference import reference_basis, reference_case
 from .reduce.stage import reduction_mass
 from .solve import blas
 from .solve.lowrank import contact_solver
+from .timings import Stages
 
 
 # The spec fields each shareable stage reads, with those of the stages before it
@@ -69,7 +70,6 @@ class Built:
 def build_shared(case, depth, built=None):
     """The Built of a case's first stages to `depth` (one of SHARED), going on from `built`
     (a Built of a shallower depth, for cases equal on its stages' READS)."""
-    from .stages import Stages
     stages = Stages()
     with blas.one_thread():
         model = built.model if built is not None else stages.timed("model", build_model, case)

@@ -10,7 +10,7 @@ import numpy as np
 
 from .case.signals import compile_signals
 from . import heap
-from .case.sizes import check_steps, parts_cells, peak_rss_gb, setup_bytes
+from .case.sizes import check_steps, parts_cells, setup_bytes
 from .contact.contactset import first_tangent, stack
 from .contact.pair import build_contact, contact_stiffness
 from .dynamics import schemes
@@ -26,6 +26,7 @@ from .reduce.basis import rebase
 from .reduce.reference import rebased, reference_basis
 from .reduce.stage import reduce, reduction_mass
 from .shared import Built, factorization
+from .timings import Stages
 from .solve import blas
 from .solve.linsolve import why
 from .solve.preload import PreloadError, solve_preload
@@ -45,27 +46,6 @@ class Setup:
     #                          are X AW q (the product formed only for field output)
     unsampled: object = None  # asked of prepare: a sampled rule's Setup on its candidates,
     #                           before the sampling (what the cea analyses; no rows0)
-
-
-class Stages(dict):
-    """Stage -> seconds, the process's peak memory when each ended (`peaks`, GB), and the check
-    run between stages (a stop requested meanwhile)."""
-
-    def __init__(self, check=None):
-        super().__init__()
-        self.check = check or (lambda: None)
-        self.peaks = {}
-
-    def __setitem__(self, name, seconds):
-        super().__setitem__(name, seconds)
-        self.peaks[name] = peak_rss_gb()
-
-    def timed(self, name, fn, *args):
-        self.check()
-        t0 = time.perf_counter()
-        out = fn(*args)
-        self[name] = time.perf_counter() - t0
-        return out
 
 
 def prepare(case, check=None, built=None, unsampled=False, analysis=False):

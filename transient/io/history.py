@@ -28,6 +28,7 @@ from ..errors import DamagedHistory, RunAborted, interrupted
 from ..kernels.codes import ENERGY_TERMS
 from .attributes import CASE_TEXT, read_attrs, short, write_attrs
 from .checksums import FILTER, create, verify
+from .systems import GROUP as SYSTEM, write_system
 
 CHUNK_BYTES = 2 ** 16      # 64 kB chunks: with the checksum (io.checksums) an append reads,
 #                            checks and writes again whole each chunk it adds to, and 1 MB
@@ -36,7 +37,6 @@ CHUNK_BYTES = 2 ** 16      # 64 kB chunks: with the checksum (io.checksums) an a
 CHECKPOINT = "checkpoint"       # a soft link to the last checkpoint written whole
 CHECKPOINTS = "checkpoints"     # its two slots, written in turn
 GEOMETRY = "geometry"      # fixed arrays written once (contact points, weights, normals)
-SYSTEM = "system"          # the system integrated (io.systems)
 
 
 def _open(path, mode):
@@ -97,7 +97,6 @@ class History:
             for name, value in (geometry or {}).items():
                 create(f, f"{GEOMETRY}/{name}", value)
             if system is not None:
-                from .systems import write_system
                 write_system(f, system)
             write_attrs(f.attrs, meta)
             f.attrs["status"] = "running"

@@ -19,10 +19,11 @@ from ..dynamics.critical import CriticalStep
 from ..dynamics.system import FullSystem, ReducedSystem
 from ..errors import DamagedHistory
 from .checksums import create
-from .history import SYSTEM as GROUP
 
 SKIPPED = ("T",)
 FRICTION_ARRAYS = ("speed", "m", "dm", "turn", "code", "v_eps", "table")
+
+GROUP = "system"           # the history's group of the system integrated
 
 
 def write_system(f, system):

@@ -1,0 +1,26 @@
+"""The setup's stages timed: one home below the stages that run them (stages.prepare) and the
+shared ones a campaign builds once (shared.build_shared)."""
+import time
+
+from .case.sizes import peak_rss_gb
+
+
+class Stages(dict):
+    """Stage -> seconds, the process's peak memory when each ended (`peaks`, GB), and the check
+    run between stages (a stop requested meanwhile)."""
+
+    def __init__(self, check=None):
+        super().__init__()
+        self.check = check or (lambda: None)
+        self.peaks = {}
+
+    def __setitem__(self, name, seconds):
+        super().__setitem__(name, seconds)
+        self.peaks[name] = peak_rss_gb()
+
+    def timed(self, name, fn, *args):
+        self.check()
+        t0 = time.perf_counter()
+        out = fn(*args)
+        self[name] = time.perf_counter() - t0
+        return out
