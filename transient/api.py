@@ -92,7 +92,7 @@ def run(case, path=None, resume=False, progress=False, key=None):
         is what ``transient run --json`` prints.
     """
     check_transient(case)           # before the stages' modules (Numba, SciPy) are imported
-    from .run import run as run_case
+    from .integration import run as run_case
     if path is None:
         path = case.directory / (case.output.file or Path(case.path).with_suffix(".h5").name)
         key = key or "output.file"
@@ -202,7 +202,7 @@ def cea(case, matrices=False):
         ``matrices=True``, ``matrices`` = (M, D, K); ``summary()`` is what
         ``transient cea --json`` prints, but for the total time.
     """
-    from .cea.stage import analyse
+    from .stability.stage import analyse
     return analyse(case, matrices=matrices)
 
 
@@ -279,7 +279,7 @@ def pair_name(case, pair=None):
 class Campaign:
     """A campaign's rows and where they are (`sweep`)."""
     rows: list               # one dict per variant, in variant order: its values, its status
-    variants: list           # sweep.variants.Variant: name, values, label()
+    variants: list           # campaign.variants.Variant: name, values, label()
     table: Path              # sweep.csv (beside it, sweep.json)
 
 
@@ -320,8 +320,8 @@ def sweep(case_path, parameters, out, mode="grid", kind="run", overrides=(), wor
     Campaign
         ``rows`` (one dict per variant), ``variants`` and ``table`` (the CSV's path).
     """
-    from .sweep.campaign import sweep as run_campaign
-    from .sweep.variants import make_variants, parse_parameter
+    from .campaign.campaign import sweep as run_campaign
+    from .campaign.variants import make_variants, parse_parameter
     if isinstance(parameters, dict):
         parameters = [f"{k}={literal(list(v))}" for k, v in parameters.items()]
     variants = make_variants([parse_parameter(t) for t in parameters], mode)

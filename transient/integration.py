@@ -1,4 +1,5 @@
-"""`transient run`: specs -> stages -> a frozen system -> the time loop (march) -> history.
+"""Time integration (`transient run`): specs -> stages -> a frozen system -> the time loop
+(march) -> history.
 
 Stages (each runs only if the scene needs it, and is timed): model, contact, factorization,
 preload, linearization, reduction (and sampling), time step, integration. A resumed run

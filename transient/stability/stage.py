@@ -33,7 +33,7 @@ class Analysis:
     reduced: int             # dofs of the reduced model (0: the full model)
     stages: dict             # stage -> seconds
     meta: dict               # the setup's (dynamics prepare's meta)
-    shapes: list             # the unstable modes described (cea.shapes.describe)
+    shapes: list             # the unstable modes described (stability.shapes.describe)
     model: object = None     # the Model, and
     basis: tuple = None      # (X, A): the modes' coordinates z are X (A z) on the model's dofs
     matrices: tuple = None   # asked for: the linearized (M, D, K) the modes solve
