@@ -101,7 +101,7 @@ def test_bench_measures_a_squeal_against_half_the_step(tmp_path, capsys):
     same frequency to a small fraction of the spectrum's bin (1e-5 measured)."""
     import scipy.linalg as sla
     from transient.case.loading import load
-    from transient.cea.linearize import linearized
+    from transient.stability.linearize import linearized
     from transient.stages import prepare
     setup = prepare(load(CASES / "pad_disc.toml", SQUEAL))
     _, D, K = linearized(setup.system, setup.state)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import h5py
 
-from transient.run import run
+from transient.integration import run
 
 from test_cea import small
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from transient.case.loading import load
-from transient.cea.compare import pair_modes
-from transient.cea.linearize import linearized, preload_pressure
-from transient.cea.stage import analyse, analysed_case
+from transient.stability.compare import pair_modes
+from transient.stability.linearize import linearized, preload_pressure
+from transient.stability.stage import analyse, analysed_case
 from transient.cli import main
 from transient.contact.friction import coefficient, regularized_sign, steady
 from transient.kernels.codes import ATAN, TANH
@@ -128,7 +128,7 @@ def test_linearization_against_finite_differences(full_setup, falling_setup, law
     M, D, K = linearized(system, state)
     rng = np.random.default_rng(1)
     q0, v0 = state.q, np.zeros(system.n)
-    from transient.cea.linearize import _friction_terms
+    from transient.stability.linearize import _friction_terms
     p, kt = preload_pressure(system, state)
     Kf, Df = _friction_terms(system, p, kt)
     for _ in range(3):
@@ -155,7 +155,7 @@ HEX20 = [o for o in SMALL if "element" not in o]
 def test_reduced_complex_modes_match_the_full_model_mode_by_mode():
     """Every mode below fmax that is unstable in the full model's shift-invert Arnoldi or in
     the reduced analysis: the frequency within 0.1% and the real part within 5% of its own
-    (or 5 1/s), and the same stability (cea.compare). The default basis reaches 2 fmax; with
+    (or 5 1/s), and the same stability (stability.compare). The default basis reaches 2 fmax; with
     its modes cut at fmax the weak modes of the band's upper half miss (the issue's figures:
     -37% to +155%), which the same comparison catches. The components path, each part's
     modes to 2 fmax and its interface responses, holds them too."""
@@ -199,7 +199,7 @@ def test_the_unstable_shapes_are_the_same_with_the_pads_modes_beside_the_qz_or_a
         monkeypatch):
     """analysis_of makes the still parts' own modes in a thread beside the dense QZ when the
     process has two cores or more, after it on one (a campaign's worker): the same numbers."""
-    from transient.cea.stage import analysis_of
+    from transient.stability.stage import analysis_of
     from transient.stages import prepare
     case = small("contact.pad_disc.friction.mu=0.4")
     setup = prepare(analysed_case(case), analysis=True)
@@ -235,7 +235,7 @@ def test_frictionless_complex_modes_are_the_tied_modes(capsys):
 def test_nodal_diameter_of_a_disc_wave():
     """A standing wave cos(3 theta) of the disc's axial motion is 3 nodal diameters, all of
     it; a travelling one exp(5 i theta) is 5; energy shares add to one."""
-    from transient.cea.shapes import nodal_diameter, part_shares
+    from transient.stability.shapes import nodal_diameter, part_shares
     from transient.model import build_model
     case = small()
     model = build_model(case)
@@ -282,7 +282,7 @@ def test_plot_cea_bad_mu_is_one_line(tmp_path, capsys, mu, reason):
 def test_a_pad_mode_is_recognized_by_its_mac():
     """A displacement that is the pad's own third mode (alone on its abutments), plus some
     disc motion, matches that mode with MAC 1."""
-    from transient.cea.shapes import matched_part_modes, part_modes
+    from transient.stability.shapes import matched_part_modes, part_modes
     from transient.model import build_model
     model = build_model(small())
     f, Phi, dofs, _ = part_modes(model, "pad", 20000.0)

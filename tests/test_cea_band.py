@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from transient.case.loading import load
-from transient.cea.compare import pair_modes
-from transient.cea.linearize import linearized
-from transient.cea.stage import analyse, analysed_case
+from transient.stability.compare import pair_modes
+from transient.stability.linearize import linearized
+from transient.stability.stage import analyse, analysed_case
 from transient.stages import prepare
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -48,7 +48,7 @@ def full_matrices():
 @pytest.mark.parametrize("cutoff", [16000.0, 32000.0])
 def test_mode_residual_is_that_of_the_full_models_equations(full_matrices, cutoff):
     """The residual each unstable mode reports equals |(K + lam D + lam^2 M) x|_{M^-1} /
-    (|lam|^2 |x|_M) formed on the full model's own linearized matrices (cea.linearize of the
+    (|lam|^2 |x|_M) formed on the full model's own linearized matrices (stability.linearize of the
     full system), x = T z."""
     free, (M, D, K), lumped = full_matrices
     result = analyse(load(PAD, SMALL + [f"solver.reduction.cutoff={cutoff}"]))

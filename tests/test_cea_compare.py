@@ -1,9 +1,9 @@
-"""cea.compare: two analyses' complex modes paired mode by mode, each real part judged against
+"""stability.compare: two analyses' complex modes paired mode by mode, each real part judged against
 its own size with a floor, stability compared outside the floor."""
 import numpy as np
 
-from transient.cea.compare import pair_modes
-from transient.cea.modes import ComplexModes
+from transient.stability.compare import pair_modes
+from transient.stability.modes import ComplexModes
 
 
 def modes(*eigs):

@@ -10,9 +10,9 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from transient.case.loading import load
-from transient.cea.linearize import linearized
-from transient.cea.reference import MAX_NEAR, Unresolved, full_complex_modes
-from transient.cea.stage import analysed_case, analysis_of
+from transient.stability.linearize import linearized
+from transient.stability.reference import MAX_NEAR, Unresolved, full_complex_modes
+from transient.stability.stage import analysed_case, analysis_of
 from transient.cli import main
 from transient.stages import prepare
 

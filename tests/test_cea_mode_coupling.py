@@ -91,7 +91,7 @@ frequencies near 5 Hz.
 import numpy as np
 import pytest
 
-from transient.cea.modes import ComplexModes, complex_modes
+from transient.stability.modes import ComplexModes, complex_modes
 
 MASS = 2.0
 K1, ALPHA1 = 2400.0, np.radians(140.0)
@@ -342,7 +342,7 @@ def reduced_hoffmann(mu, speeds=(), values=(), V=1.0, N0=100.0):
     linear law of k = K3) whose gap is y and whose tangential displacement along the belt's
     sliding (+x) is x, pressed by N0; its modes diagonalize K_lin (Ks with the contact's
     tangent K3). The friction enters only through the contact set (FrictionSet) and
-    cea.linearize, so their conventions are what this checks against the closed forms."""
+    stability.linearize, so their conventions are what this checks against the closed forms."""
     import scipy.sparse as sp
     from transient.case.specs import FrictionSpec
     from transient.contact.contactset import ContactSet, FrictionSet
@@ -373,7 +373,7 @@ def reduced_hoffmann(mu, speeds=(), values=(), V=1.0, N0=100.0):
 
 
 def package_modes(mu, **kw):
-    from transient.cea.linearize import linearized
+    from transient.stability.linearize import linearized
     return complex_modes(*linearized(*reduced_hoffmann(mu, **kw)))
 
 

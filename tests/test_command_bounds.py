@@ -6,13 +6,13 @@ from pathlib import Path
 
 import pytest
 
-import transient.cea.stage
+import transient.stability.stage
 import transient.cli.plotting
 import transient.shared
 import transient.solve.tied
 import transient.stages
 from transient.cli import main
-from transient.sweep.variants import MAX_VARIANTS
+from transient.campaign.variants import MAX_VARIANTS
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 BAR, PAD = (str(CASES / f"{n}.toml") for n in ("bar_impact", "pad_disc"))
@@ -44,7 +44,7 @@ def no_setup(monkeypatch):
     monkeypatch.setattr(transient.stages, "factorization", reached)
     monkeypatch.setattr(transient.shared, "factorization", reached)
     monkeypatch.setattr(transient.solve.tied, "normal_modes", reached)
-    monkeypatch.setattr(transient.cea.stage, "full_complex_modes", reached)
+    monkeypatch.setattr(transient.stability.stage, "full_complex_modes", reached)
 
 
 @pytest.mark.parametrize("command, case, overrides, key", [

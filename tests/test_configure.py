@@ -44,8 +44,8 @@ def test_the_issues_check_passes():
 
 
 def test_importing_the_stages_changes_nothing():
-    out = _state("import transient, transient.stages, transient.run, transient.sweep.campaign, "
-                 "transient.cli", env=_clean_env())
+    out = _state("import transient, transient.stages, transient.integration, "
+                 "transient.campaign.campaign, transient.cli", env=_clean_env())
     assert out == {"environ": True, "advice": True, "iomp": False, "gomp": False,
                    "numba_cache": None}
 

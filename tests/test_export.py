@@ -12,7 +12,7 @@ from transient.cli import main
 from transient.io.export import exported_rows
 from transient.io.history import CASE_TEXT
 from transient.model.model import build_model
-from transient.run import run
+from transient.integration import run
 
 CASE = Path(__file__).resolve().parent.parent / "cases" / "bar_impact.toml"
 FULL = ["output.field=true", "solver.t_end=3e-5"]    # 308 rows (dt 9.77e-8 s), contact from 10 us

@@ -14,7 +14,7 @@ from matplotlib.image import imread
 from transient.cli import main
 from transient.contact.friction import OPEN, SLIP, contact_status, friction_powers
 from transient.io.stored import open_history
-from transient.run import run
+from transient.integration import run
 
 from test_cea import small
 from test_history_plots import CASE as BAR, SHORT

@@ -9,7 +9,7 @@ import pytest
 from transient.case.loading import load
 from transient.io.stored import open_history
 from transient.mesh.meshfile import jacobian_check, read_mesh
-from transient.run import run
+from transient.integration import run
 
 gmsh = pytest.importorskip("gmsh")
 

@@ -10,7 +10,7 @@ from transient.cli import main
 from transient.io.history import History
 from transient.plots.pressure import contact_force, plane_frame, pressure_panels
 from transient.plots.signals import amplitude_spectrum, sample_step, transfer_function
-from transient.run import run
+from transient.integration import run
 from transient.io.stored import open_history
 
 CASE = Path(__file__).resolve().parent.parent / "cases" / "bar_impact.toml"

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from transient.case import load
-from transient.cea.stage import analyse
+from transient.stability.stage import analyse
 from transient.errors import CaseError
 from transient.reduce.stage import ReducedModel, mass_scaled
 from transient.stages import prepare

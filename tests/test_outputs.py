@@ -135,15 +135,15 @@ def _interrupt_in_numba(*args, **kwargs):
 
 
 def test_ctrl_c_landing_in_a_compiled_function_is_an_interrupt(tmp_path, capsys, monkeypatch):
-    import transient.run
+    import transient.integration
     path = tmp_path / "bar.h5"
-    monkeypatch.setattr(transient.run, "prepare", _interrupt_in_numba)
+    monkeypatch.setattr(transient.integration, "prepare", _interrupt_in_numba)
     assert main(["run", BAR, "-o", str(path), "--quiet"]) == 130
     assert capsys.readouterr().err == "interrupted\n" and not path.exists()
     # in a kernel of the time loop: the run is stopped there, as by Ctrl-C between chunks
     monkeypatch.undo()
-    real = transient.run.stepper
-    monkeypatch.setattr(transient.run, "stepper", lambda *args: dataclasses.replace(
+    real = transient.integration.stepper
+    monkeypatch.setattr(transient.integration, "stepper", lambda *args: dataclasses.replace(
         real(*args), advance=_interrupt_in_numba))
     assert main(["run", BAR, "-o", str(path), "--quiet", "--set", "solver.t_end=6e-5"]) == 130
     assert "error: run aborted: interrupted" in capsys.readouterr().err

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from transient.case.loading import load
-from transient.cea.stage import analyse
+from transient.stability.stage import analyse
 from transient.stages import prepare
 
 PAD = Path(__file__).resolve().parent.parent / "cases" / "pad_disc.toml"

@@ -14,7 +14,7 @@ from transient.cli import main
 from transient.dynamics.plan import Plan
 from transient.io.history import summary
 from transient.io.stored import open_history
-from transient.run import run
+from transient.integration import run
 
 DT_BAR = 9.774968030638217e-08        # bar_impact's automatic step: 6e-5 is 613.8 of them
 

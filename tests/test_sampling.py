@@ -168,7 +168,7 @@ def test_a_resumed_sampled_run_equals_an_uninterrupted_one(tmp_path, corrector):
     kernel restart from the state stored (its end forces recomputed there) bit for bit."""
     import h5py
     from transient.case.loading import load
-    from transient.run import run
+    from transient.integration import run
     base = SMALL + ['contact.pad_disc.rule="sampled"', "solver.chunk=50", "output.contact=true",
                     f'solver.corrector="{corrector}"']
     whole = run(load(CASES / "pad_disc.toml", base + ["solver.t_end=1e-3"]), tmp_path / "w.h5")

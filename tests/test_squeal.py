@@ -4,7 +4,7 @@ The small pad and disc of test_cea at mu = 0.4 (the disc turning at 50 rad/s), p
 steady sliding and tapped lightly: in the linear phase, the amplitude of each complex mode in
 the transient, c_j(t) = y_j^H z(t) with y_j its left eigenvector and z = (q - q0, v) the
 first-order state, evolves as exp(lambda_j t). Its fitted growth rate must be the CEA's real
-part of the very system integrated (linearized at its preload by cea.linearize): for the
+part of the very system integrated (linearized at its preload by stability.linearize): for the
 unstable mode (growth) and its flutter partner (decay), with every scheme that integrates
 friction, converging as the step shrinks.
 """
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from transient.cea.linearize import linearized
+from transient.stability.linearize import linearized
 from transient.dynamics.chunks import buffer
 from transient.stages import choose_dt, prepare, stepper
 

@@ -21,7 +21,7 @@ import scipy.linalg as sla
 
 from transient.case.loading import load
 from transient.case.signals import compile_signals
-from transient.cea.linearize import linearized
+from transient.stability.linearize import linearized
 from transient.dynamics.chunks import buffer
 from transient.dynamics.schemes import initial_acceleration, stepper
 from transient.plots.signals import growth_rate, running_amplitude

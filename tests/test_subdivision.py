@@ -15,10 +15,10 @@ from test_cea import small
 from test_resume import assert_same, series
 from test_validation import BAR
 from transient.case.loading import load
-from transient.cea.linearize import linearized
+from transient.stability.linearize import linearized
 from transient.cli import main
 from transient.io.history import summary
-from transient.run import run
+from transient.integration import run
 from transient.stages import prepare
 
 # bar_impact at a step forced above its critical one (1.76e-7 s): it diverges at 4e-7 s, its

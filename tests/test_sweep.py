@@ -13,8 +13,8 @@ import pytest
 from transient.cli import main
 from transient.errors import CaseError
 from transient.io.history import summary
-from transient.sweep.campaign import THREAD_ENV
-from transient.sweep.variants import make_variants, parse_parameter, variant_name
+from transient.campaign.campaign import THREAD_ENV
+from transient.campaign.variants import make_variants, parse_parameter, variant_name
 
 ROOT = Path(__file__).resolve().parent.parent
 PAD = ROOT / "cases" / "pad_disc.toml"
@@ -601,7 +601,7 @@ def test_progress_counts_the_variants_done_and_the_failed(tmp_path):
     """The campaign's bar is told each variant done, and how many failed so far: a step above
     the explicit scheme's critical one is refused at the variant's setup, a row with its
     reason, and the campaign goes on."""
-    from transient.sweep.campaign import sweep
+    from transient.campaign.campaign import sweep
     calls = []
     rows = sweep(PAD, make_variants([parse_parameter("solver.dt=[0.0,1e-3]")], "grid"),
                  tmp_path / "out", "run", SMALL + ['solver.scheme="explicit"'], workers=1,

@@ -14,13 +14,13 @@ import h5py
 import numpy as np
 import pytest
 
-import transient.sweep.campaign as campaign
+import transient.campaign.campaign as campaign
 from transient.case.loading import load
 from transient.cli import main
 from transient.errors import CaseError
-from transient.sweep.folder import LOCK, MARK, holding
-from transient.sweep.outputs import plan
-from transient.sweep.variants import make_variants, parse_parameter, variant_name
+from transient.campaign.folder import LOCK, MARK, holding
+from transient.campaign.outputs import plan
+from transient.campaign.variants import make_variants, parse_parameter, variant_name
 
 ROOT = Path(__file__).resolve().parent.parent
 TWO = ROOT / "cases" / "two_bars.toml"
@@ -113,7 +113,7 @@ def test_a_second_campaign_is_refused_naming_the_holder(tmp_path, capsys, no_clu
 
 def test_a_killed_campaign_leaves_no_lock(tmp_path, no_cluster):
     out = tmp_path / "out"
-    code = ("import sys, time; from pathlib import Path; from transient.sweep.folder import "
+    code = ("import sys, time; from pathlib import Path; from transient.campaign.folder import "
             "holding\nwith holding(Path(sys.argv[1]), 'killed'):\n print('held', flush=True)\n"
             " time.sleep(600)")
     child = subprocess.Popen([sys.executable, "-c", code, str(out)], stdout=subprocess.PIPE,
@@ -143,7 +143,7 @@ def test_campaign_sizes_are_bounded_before_any_list_is_built(monkeypatch, capsys
                                                              no_cluster, params, mode, words):
     """The count comes from the parameters' lengths (no linspace, no list of a billion), in
     Python integers (16**16 is not 0), for grid and zip; no warning on the way."""
-    import transient.sweep.variants as variants
+    import transient.campaign.variants as variants
     made = []
     real = variants.np.linspace
     monkeypatch.setattr(variants.np, "linspace", lambda a, b, n: made.append(n) or real(a, b, n))

@@ -10,7 +10,7 @@ import pytest
 from transient.case.loading import load
 from transient.cli import main
 from transient.io.history import summary
-from transient.run import run
+from transient.integration import run
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 L, C_WAVE, V0 = 0.1, np.sqrt(2.1e11 / 7800.0), 1.0

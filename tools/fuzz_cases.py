@@ -1048,7 +1048,7 @@ def sweep_argv(d, values, out, kind="run", more=()):
 
 def sweep_names(values, kind, keys=None):
     """The files a sweep of these values writes (a variant's are named by its values)."""
-    from transient.sweep.variants import variant_name
+    from transient.campaign.variants import variant_name
     suffixes = {"run": [".h5"], "cea": [".json"], "both": [".h5", ".json"]}[kind]
     return [variant_name({SWEEP_KEY: v, **(keys or {})}) + s for v in values for s in suffixes]
 

@@ -1,7 +1,7 @@
 """How far the reduced basis' modes must reach for the reduced CEA to hold across its band: the
 complex modes of the full model (shift-invert Arnoldi) against the reduced model's with its
 normal modes to several cutoffs (solver.reduction.cutoff = factor x fmax), mode by mode
-(transient.cea.compare: each real part against its own size, 5 1/s floor).
+(transient.stability.compare: each real part against its own size, 5 1/s floor).
 
     python tools/study_cea_band.py CASE --mu 0.3,0.5 [--factors 1,1.5,2] [--set KEY=VALUE ...]
                                   [--reduced-set KEY=VALUE ...] [--out DIR] [--spans]
@@ -27,11 +27,11 @@ import numpy as np
 import scipy.linalg as sla
 
 from transient.case.loading import load
-from transient.cea.compare import pair_modes
-from transient.cea.linearize import linearized
-from transient.cea.modes import ComplexModes
-from transient.cea.reference import full_complex_modes
-from transient.cea.stage import analyse, analysed_case
+from transient.stability.compare import pair_modes
+from transient.stability.linearize import linearized
+from transient.stability.modes import ComplexModes
+from transient.stability.reference import full_complex_modes
+from transient.stability.stage import analyse, analysed_case
 from transient.stages import prepare
 
 

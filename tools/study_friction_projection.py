@@ -35,7 +35,7 @@ def _raw_rows(pair, sliding, ndof):
 
 def analyse(case_path, overrides, variant):
     from transient.case.loading import load
-    from transient.cea.stage import analyse as run
+    from transient.stability.stage import analyse as run
     import transient.contact.contactset as cs
     import transient.contact.pair as pair_module
     case = load(case_path, overrides)

@@ -1,9 +1,25 @@
 """transient: long transient vibrations of elastic solids in contact across non-conforming meshes.
 
-Importing the package changes nothing in the process; `configure()` makes the settings that
-speed it up (the command line calls it first).
+The public API (transient.api): `load`, `prepare`, `run`, `modes`, `cea`, `compat`, `sweep`.
+Importing the package changes nothing in the process and loads none of the stages' modules;
+`configure()` makes the settings that speed it up (the command line calls it first).
 """
 from .settings import configure
 
-__all__ = ["configure"]
+__all__ = ["configure", "load", "prepare", "run", "modes", "cea", "compat", "sweep"]
 __version__ = "0.1.0"
+
+# the API's functions come from transient.api on first use (PEP 562), so that importing the
+# package imports neither the API nor, through it, the case's readers
+_API = frozenset(__all__) - {"configure"}
+
+
+def __getattr__(name):
+    if name in _API:
+        from . import api
+        return getattr(api, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | _API)

@@ -1,7 +1,7 @@
 """The stages of a case up to the time integration: specs -> model -> contact -> factorization
 -> preload -> linearization -> reduction (and sampling) -> a frozen system and its initial
 state. `prepare` runs each stage only if the scene needs it, and times it; `simulate` integrates
-a prepared setup in memory (tests and benchmarks); `run.run` streams it to a history.
+a prepared setup in memory (tests and benchmarks); `integration.run` streams it to a history.
 """
 import time
 from dataclasses import dataclass

@@ -5,8 +5,7 @@ import sys
 import time
 from pathlib import Path
 
-from ..case.checks import check_transient, check_two_surfaces
-from ..case.loading import load
+from .. import api
 from ..settings import configure
 from ..errors import CaseError, FactorizationError, stop_reason
 from .parser import build_parser
@@ -15,41 +14,22 @@ from .sweeping import cmd_sweep
 
 
 def cmd_modes(args):
-    from ..contact.pair import build_contact
-    from ..mesh.meshfile import write_vtu
-    from ..model.band import check_modes_band
-    from ..model.model import build_model
-    from ..solve.tied import contact_modes
     t0 = time.perf_counter()
-    case = load(args.case, args.overrides)
-    if case.output.vtu:
-        from ..io.lock import check_writable
-        check_writable(case.directory / case.output.vtu, "output.vtu")
-    model = build_model(case)
-    check_modes_band(case, model)
-    pairs = build_contact(case, model)
-    modes, tie = contact_modes(case, model, pairs)
-    stage_times = {f"contact.{p.name}.{k}": v for p in pairs for k, v in p.timings.items()}
-    timings = {**model.timings, **stage_times, **tie.timings, **modes.timings,
-               "total": time.perf_counter() - t0}
-    if case.output.vtu:
-        _write_modes_vtu(case, model, modes, write_vtu)
-    contact = [_pair_summary(p) for p in pairs]
+    case = api.load(args.case, args.overrides)
+    result = api.modes(case)
+    timings = {**result.timings, "total": time.perf_counter() - t0}
+    tie, contact = result.tie, result.contact
     if args.json:
-        print(json.dumps({"frequencies_hz": modes.frequencies.tolist(), "ndof": model.ndof,
-                          "free_dofs": int((~model.fixed).sum()), "backend": modes.backend,
-                          "contact": contact, "tie": tie.kind, "held": tie.held,
-                          "held_of": tie.dofs,
-                          "timings": timings}))
+        print(json.dumps({**result.summary(), "timings": timings}))
         return 0
-    print(f"{case.path}: {model.ndof} dofs ({int((~model.fixed).sum())} free), "
-          f"{len(model.parts)} part(s), factorization: {modes.backend}")
+    print(f"{case.path}: {result.ndof} dofs ({result.free_dofs} free), "
+          f"{result.parts} part(s), factorization: {result.backend}")
     for c in contact:
         print(f"  contact {c['pair']}: {_tie_text(tie, c)}, rule {c['rule']} "
               f"({c['points']} points)" + (f", regularized eps = {c['eps']:.3g}"
                                            if c["regularized"] else ""))
     print(f"{'mode':>5} {'frequency [Hz]':>16}")
-    for i, f in enumerate(modes.frequencies, 1):
+    for i, f in enumerate(result.frequencies, 1):
         print(f"{i:>5} {f:16.6g}")
     print("time: " + ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()))
     return 0
@@ -65,18 +45,13 @@ def _tie_text(tie, pair):
 
 
 def cmd_cea(args):
-    from ..cea.stage import analyse
     t0 = time.perf_counter()
-    case = load(args.case, args.overrides)
-    result = analyse(case)
+    case = api.load(args.case, args.overrides)
+    result = api.cea(case)
     modes = result.modes
     total = time.perf_counter() - t0
     if args.json:
-        print(json.dumps({"modes": modes.table(), "ndof": result.ndof,
-                          "reduced": result.reduced, "fmax_hz": result.fmax,
-
-                          "unstable_shapes": result.shapes, "stages": result.stages,
-                          "total": total}))
+        print(json.dumps({**result.summary(), "total": total}))
         return 0
     friction = {n: c.friction for n, c in case.contact.items() if c.friction.active}
     cutoff = result.meta.get("modes_fmax_hz")
@@ -109,55 +84,15 @@ def cmd_cea(args):
     return 0
 
 
-def _pair_summary(pair):
-    out = {"pair": pair.name, "rule": pair.spec.rule, "regularized": pair.spec.regularized,
-           "k": pair.k, "points": pair.rule.n_points, "area": pair.rule.area, "eps": pair.eps,
-           "kept": pair.compat.kept(pair.eps) if pair.compat else None,
-           "law": pair.spec.law.kind}
-    if pair.coarse is not None:
-        out["coarse"] = {"m": len(pair.coarse.chosen), "energy_error": pair.coarse.energy_error,
-                         "weighting": pair.coarse.weighting,
-                         "setup_s": pair.timings["coarse_rule"]}
-    return out
-
-
-def _write_modes_vtu(case, model, modes, write_vtu):
-    data = {f"mode_{i + 1:03d}_{f:.1f}Hz": modes.shapes[:, i].reshape(-1, 3)
-            for i, f in enumerate(modes.frequencies)}
-    write_vtu(case.directory / case.output.vtu, model.mesh(), point_data=data)
-
-
 def cmd_compat(args):
     import numpy as np
-    from ..contact.pair import build_pair
-    from ..model.model import build_model
     t0 = time.perf_counter()
-    case = load(args.case, args.overrides)
-    names = list(case.contact)
-    if not names:
-        raise CaseError(case.path, "contact", "the case has no [contact.NAME] pair")
-    name = args.pair or names[0]
-    if name not in names:
-        raise CaseError(case.path, "contact", f"no pair '{name}' (pairs: {', '.join(names)})")
-    check_two_surfaces(case, name)
-    model = build_model(case)
-    t1 = time.perf_counter()
-    pair = build_pair(case, model, name, need_compatibility=True)
-    setup = time.perf_counter() - t1
-    comp, fine = pair.compat, pair.interface.fine
-    eps_grid = np.logspace(-16, 0, 65)
-    out = {"pair": name, "n_points": fine.n_points, "area": fine.area, "n_dof_1": comp.n1,
-           "n_dof_2": comp.n2, "sigma_max": float(comp.sigma.max()),
-           "singular_values": comp.normalized.tolist(),
-           "compatibility": {"eps": eps_grid.tolist(), "C": comp.curve(eps_grid).tolist()},
-           "eps": pair.eps, "eps_source": pair.eps_source, "kept": comp.kept(pair.eps),
-           "coarse": None if pair.coarse is None else {
-               "m": len(pair.coarse.chosen), "energy_error": pair.coarse.energy_error,
-               "setup_s": pair.timings["coarse_rule"], "rank": pair.coarse.rank,
-               "weighting": pair.coarse.weighting, "area_error": pair.coarse.area_error},
-           "setup_s": setup, "timings": {**model.timings, **pair.timings,
-                                         **pair.interface.timings, **comp.timings,
-                                         "total": time.perf_counter() - t0}}
+    case = api.load(args.case, args.overrides)
+    result = api.compat(case, args.pair)
+    pair, comp, setup = result.pair, result.compatibility, result.setup_s
+    fine, name = pair.interface.fine, pair.name
+    out = result.summary(np.logspace(-16, 0, 65))
+    out["timings"]["total"] = time.perf_counter() - t0
     if args.json:
         print(json.dumps(out))
         return 0
@@ -210,22 +145,12 @@ def _model_line(meta):
 
 
 def cmd_run(args):
-    import os
-    from pathlib import Path
-    case = load(args.case, args.overrides)
-    check_transient(case)           # before the stages' modules (Numba, SciPy) are imported
-    from ..run import run
-    path = Path(args.output) if args.output else case.directory / (
-        case.output.file or Path(case.path).with_suffix(".h5").name)
+    case = api.load(args.case, args.overrides)
     quiet = args.quiet or args.json or os.environ.get("CI") or not sys.stderr.isatty()
-    result = run(case, path, resume=args.resume, progress=not quiet,
-                 key="-o" if args.output else "output.file")
+    result = api.run(case, args.output, resume=args.resume, progress=not quiet,
+                     key="-o" if args.output else None)
     if args.json:
-        print(json.dumps({"file": result.path, "status": result.status, "steps": result.steps,
-                          "t_end": result.t_end, "dt": result.dt,
-                          "dt_critical": result.dt_critical, "stages": result.stages,
-                          "timings": result.timings, "energy_drift": result.energy_drift,
-                          "subdivisions": list(result.subdivisions)}))
+        print(json.dumps(result.summary()))
     else:
         step = f"{result.dt:.4g} s"
         if result.subdivisions:

@@ -95,7 +95,7 @@ def parse_values(text):
     """'START:STOP:COUNT' (COUNT values, ends included) or 'A,B,...' -> finite floats, at most
     a sweep's MAX_VARIANTS of them (each is one analysis), counted before any list is built;
     ValueError saying what was expected."""
-    from ..sweep.variants import MAX_VARIANTS
+    from ..campaign.variants import MAX_VARIANTS
     if ":" in text:
         parts = text.split(":")
         try:
@@ -134,7 +134,7 @@ def _finite(text):
 
 
 def _plot_cea(args):
-    from ..cea.stage import analyse, analysed_case
+    from ..stability.stage import analyse, analysed_case
     from ..plots.cea import mode_figure, mu_map_figure, stability_figure
     from ..plots.render import RenderingUnavailable
     case = load(args.case, args.overrides)

@@ -6,27 +6,26 @@ from pathlib import Path
 
 
 def cmd_sweep(args):
-    from ..sweep.campaign import sweep
-    from ..sweep.variants import make_variants, parse_parameter
-    variants = make_variants([parse_parameter(t) for t in args.param], args.mode or "grid")
-    bar = None
-    if not args.json and sys.stderr.isatty() and not os.environ.get("CI"):
-        from tqdm import tqdm
-        bar = tqdm(total=len(variants), unit="variant", desc="sweep")
+    from .. import api
+    bars = []
+    shown = not args.json and sys.stderr.isatty() and not os.environ.get("CI")
 
     def progress(done, total, failed):
-        if bar is not None:
+        if shown and not bars:
+            from tqdm import tqdm
+            bars.append(tqdm(total=total, unit="variant", desc="sweep"))
+        for bar in bars:
             bar.n = done
             bar.set_postfix(failed=failed)
             bar.refresh()
 
-    rows = sweep(args.case, variants, args.out, args.kind, args.overrides, args.workers,
-                 args.scheduler, args.resume, progress,
-                 None if args.json else lambda text: print(text, flush=True),
-                 command=" ".join(["transient"] + args.argv))
-    if bar is not None:
+    campaign = api.sweep(args.case, args.param, args.out, args.mode or "grid", args.kind,
+                         args.overrides, args.workers, args.scheduler, args.resume, progress,
+                         None if args.json else lambda text: print(text, flush=True),
+                         command=" ".join(["transient"] + args.argv))
+    for bar in bars:
         bar.close()
-    table = Path(args.out) / "sweep.csv"
+    rows, variants, table = campaign.rows, campaign.variants, campaign.table
     if args.json:
         print(json.dumps({"rows": rows}))
     else:

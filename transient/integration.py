@@ -1,4 +1,5 @@
-"""`transient run`: specs -> stages -> a frozen system -> the time loop (march) -> history.
+"""Time integration (`transient run`): specs -> stages -> a frozen system -> the time loop
+(march) -> history.
 
 Stages (each runs only if the scene needs it, and is timed): model, contact, factorization,
 preload, linearization, reduction (and sampling), time step, integration. A resumed run
@@ -25,6 +26,7 @@ from .stages import choose_dt, prepare, stepper
 
 @dataclass(frozen=True)
 class RunResult:
+    """What a run did: its history's path and status, its steps and timings."""
     path: str
     status: str
     steps: int                # steps made from t = 0
@@ -36,6 +38,13 @@ class RunResult:
     energy_drift: float
     meta: dict = None         # what prepare reports: contact points of each pair, reduced dofs
     subdivisions: list = ()   # {"t", "dt", "why"} of each halving of the step
+
+    def summary(self):
+        """What `transient run --json` prints."""
+        return {"file": self.path, "status": self.status, "steps": self.steps,
+                "t_end": self.t_end, "dt": self.dt, "dt_critical": self.dt_critical,
+                "stages": self.stages, "timings": self.timings,
+                "energy_drift": self.energy_drift, "subdivisions": list(self.subdivisions)}
 
 
 @dataclass

@@ -49,7 +49,7 @@ def build_shared(case_path, overrides, depth, built=None, kind="run"):
     built once, going on from a shallower group's `built`. A cea campaign's basis is made as
     its analyses make theirs, on the sampled rules' candidates: no points sampled for it."""
     from ..case.loading import load
-    from ..cea.stage import analysed_case
+    from ..stability.stage import analysed_case
     from ..shared import build_shared
     configure()
     case = load(case_path, overrides)
@@ -57,7 +57,7 @@ def build_shared(case_path, overrides, depth, built=None, kind="run"):
 
 
 def _run(case, out, built, on_setup=None, resume=False):
-    from ..run import run
+    from ..integration import run
     result = run(case, Path(out), resume=resume, progress=False, key="--out", built=built,
                  on_setup=on_setup)
     return {"status": result.status, "steps": result.steps, "dt": result.dt,
@@ -80,7 +80,7 @@ def summary(path):
 
 
 def _cea(case, out, built):
-    from ..cea.stage import analyse
+    from ..stability.stage import analyse
     result = analyse(case, built=built)
     return {"status": "complete", "stages": sorted(result.stages),
             **_modes_written(result, case, out)}
@@ -88,7 +88,7 @@ def _cea(case, out, built):
 
 def _both(case, out, built):
     """The run, and the complex modes from its setup before the time integration."""
-    from ..cea.stage import analysis_of
+    from ..stability.stage import analysis_of
     modes = Path(out).with_suffix(".json")
     found = {}
 

@@ -4,7 +4,7 @@ The first-order pencil A z = lambda B z, A = [[0, I], [-K, -D]], B = [[I, 0], [0
 inverted about complex shifts sigma on the imaginary axis: (A - sigma B) z = b needs only
 (K + sigma D + sigma^2 M) x = -b2 - (D + sigma M) b1, then y = b1 + sigma x, so one complex
 sparse LU of n dofs per shift. ARPACK (scipy eigs) finds the eigenvalues nearest each shift.
-Floating parts' rigid modes are taken out first (cea.rigid): ARPACK does not converge on them.
+Floating parts' rigid modes are taken out first (stability.rigid): ARPACK does not converge on them.
 """
 import numpy as np
 import scipy.sparse as sp
@@ -47,7 +47,7 @@ def full_complex_modes(M, D, K, fmax, rigid=(), shifts=SHIFTS, k=12):
     Shifts i 2 pi f at `shifts` frequencies spread over [0, fmax]; each asks for the k nearest
     eigenvalues, doubled until the farthest lies beyond the spacing of the shifts (so the discs
     searched overlap and no eigenvalue of its band is missed), and keeps those of its band.
-    rigid: each part's rigid motions on the free dofs (cea.rigid.rigid_motions), the ones
+    rigid: each part's rigid motions on the free dofs (stability.rigid.rigid_motions), the ones
     found floating deflated. Raises Unresolved past MAX_RESTARTS or MAX_NEAR.
     """
     n = K.shape[0]

@@ -4,7 +4,7 @@ The embedded cluster is a dask.distributed LocalCluster of N worker processes of
 each, with BLAS, MKL, OpenMP and Numba at one thread set in their environment before they
 start (so that a worker is the one-thread `transient run` it stands for, and N of them share
 the cores), and each task makes transient.configure's settings in its worker before any stage
-(sweep.tasks); the Numba cache is shared, its first compile serialized by transient.jit's lock.
+(campaign.tasks); the Numba cache is shared, its first compile serialized by transient.jit's lock.
 --scheduler ADDRESS runs the same tasks on an existing cluster instead (dask-jobqueue on
 SLURM: docs/commands.md). Variants equal on the fields a first stage reads (shared.READS: the
 model's structure, the contact pairs' geometry, the factorization with the contact's low-rank

@@ -26,20 +26,27 @@ FULL_DOFS = 60_000    # free dofs above which the full model's complex LU per sh
 
 @dataclass(frozen=True)
 class Analysis:
+    """The complex modes of a case at steady sliding, and what describes them."""
     modes: object            # ComplexModes up to fmax
     fmax: float              # [Hz]
     ndof: int                # free dofs of the model
     reduced: int             # dofs of the reduced model (0: the full model)
     stages: dict             # stage -> seconds
     meta: dict               # the setup's (dynamics prepare's meta)
-    shapes: list             # the unstable modes described (cea.shapes.describe)
+    shapes: list             # the unstable modes described (stability.shapes.describe)
     model: object = None     # the Model, and
     basis: tuple = None      # (X, A): the modes' coordinates z are X (A z) on the model's dofs
+    matrices: tuple = None   # asked for: the linearized (M, D, K) the modes solve
 
     def displacement(self, j):
         """(ndof,) complex displacement of mode j (0-based)."""
         X, A = self.basis
         return X @ (A @ self.modes.vectors[:, j])
+
+    def summary(self):
+        """What `transient cea --json` prints, but for the total time."""
+        return {"modes": self.modes.table(), "ndof": self.ndof, "reduced": self.reduced,
+                "fmax_hz": self.fmax, "unstable_shapes": self.shapes, "stages": self.stages}
 
 
 def analysed_case(case):
@@ -55,9 +62,10 @@ def fmax_of(case):
         solver.modes.fmax or solver.reduction.fmax)
 
 
-def analyse(case, check=None, built=None):
+def analyse(case, check=None, built=None, matrices=False):
     """Complex modes of a case at its steady sliding state (Analysis); built: its first
-    stages' results when built already (shared.Built: a campaign's variants share them)."""
+    stages' results when built already (shared.Built: a campaign's variants share them);
+    matrices: keep the linearized (M, D, K) in the Analysis."""
     from ..model import build_model
     from ..shared import Built
     from ..stages import prepare
@@ -72,13 +80,13 @@ def analyse(case, check=None, built=None):
         _bounded(case, int((~built.model.fixed).sum()))
     setup = prepare(analysed_case(case), check, built, analysis=True)
     stages.update(setup.stages)
-    return analysis_of(case, setup, stages)
+    return analysis_of(case, setup, stages, matrices)
 
 
-def analysis_of(case, setup, stages=None):
+def analysis_of(case, setup, stages=None, matrices=False):
     """The Analysis of a case from its setup (prepare's: of analysed_case(case), or a sampled
     rule's Setup.unsampled, the same arithmetic before the sampling); stages: the setup's
-    seconds, which the analysis's own join."""
+    seconds, which the analysis's own join; matrices: as analyse's."""
     stages = dict(stages or {})
     system = setup.system
     if not system.reduced:
@@ -116,7 +124,7 @@ def analysis_of(case, setup, stages=None):
                 row["residual"] = float(rho)
         stages["shapes"] = time.perf_counter() - t0
     return Analysis(modes, fmax, int(ndof), system.n if system.reduced else 0, stages,
-                    setup.meta, shapes, model, basis)
+                    setup.meta, shapes, model, basis, (M, D, K) if matrices else None)
 
 
 def _alone(model, part, fmax):

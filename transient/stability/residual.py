@@ -3,7 +3,7 @@ carries it.
 
 A reduced mode (lambda, z) expands to x = T z on the model's dofs. With K_lin the structure's
 stiffness and the contact's tangent at the preload, K_f and D_f the friction's stiffness and
-damping there (cea.linearize) and the reduced damping's forces M T diag(d) z, the residual
+damping there (stability.linearize) and the reduced damping's forces M T diag(d) z, the residual
 r = (K_lin + K_f) x + lambda (M T diag(d) z + D_f x) + lambda^2 M x vanishes for a mode of the
 full model; the Galerkin projection leaves it orthogonal to the basis. Its size relative to the
 inertia forces, rho = |r|_{M^-1} / (|lambda|^2 |x|_M) (lumped mass norms on the free dofs), is

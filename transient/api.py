@@ -1,0 +1,330 @@
+"""The public Python API: `transient.load`, `prepare`, `run`, `modes`, `cea`, `compat` and
+`sweep`, what a script or a notebook calls and what every command of the command line calls
+before it prints. A thin layer over the stages: each function takes a case (`load`'s), runs the
+stages it needs and returns a plain object of arrays.
+
+The stages' modules (Numba, SciPy) are imported by the functions that need them, so that
+`import transient` stays light and a case's bad input is refused before they load.
+"""
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from .case.checks import check_transient, check_two_surfaces
+from .case.loading import literal
+from .case.loading import load as _load
+from .errors import CaseError
+
+
+def load(path, overrides=()):
+    """Read, override and validate a case file.
+
+    Parameters
+    ----------
+    path : str or Path
+        The case's TOML file.
+    overrides : sequence of str
+        ``"dotted.key=TOML_LITERAL"`` assignments applied before validation, as the command
+        line's ``--set`` (``"solver.t_end=2e-3"``).
+
+    Returns
+    -------
+    Case
+        The frozen specs of every table, defaults filled, in SI units.
+
+    Raises
+    ------
+    CaseError
+        Any bad input: it names the file, the key and what was expected.
+    """
+    return _load(path, list(overrides))
+
+
+def prepare(case):
+    """The stages of a case up to its time integration, in memory.
+
+    The model, the contact pairs, the factorization, the preload, the linearization and,
+    when the case asks for it, the reduction and the sampling: each runs only if the scene
+    needs it.
+
+    Parameters
+    ----------
+    case : Case
+        From `load`.
+
+    Returns
+    -------
+    Setup
+        ``system`` (the frozen reduced or full system), ``state`` (its initial state),
+        ``model`` (the model's sparse stiffness ``model.K`` and mass ``model.M`` [SI], its
+        ``fixed`` dofs), ``basis`` (a reduced model's coordinates on the model's dofs),
+        ``stages`` (seconds of each stage) and ``meta`` (what the stages report).
+    """
+    from .stages import prepare as prepare_stages
+    return prepare_stages(case)
+
+
+def run(case, path=None, resume=False, progress=False, key=None):
+    """Integrate a case to ``solver.t_end``, streaming its history to an HDF5 file.
+
+    Parameters
+    ----------
+    case : Case
+        From `load`.
+    path : str or Path, optional
+        The history; by default ``output.file`` of the case, or the case's name with
+        ``.h5``, next to the case file.
+    resume : bool
+        Continue the run the history holds (it must be of the same case) instead of
+        starting anew; a resumed run equals a fresh one bit for bit.
+    progress : bool
+        Show a progress bar on standard error.
+    key : str, optional
+        What errors call the path (the command line's ``-o``); by default ``path``, or
+        ``output.file`` when the path is the case's.
+
+    Returns
+    -------
+    RunResult
+        ``path`` (the history), ``status`` (``complete``, or ``aborted: REASON`` for a run
+        that stopped early and kept its history), ``steps``, ``t_end`` [s], ``dt`` [s],
+        ``dt_critical`` [s], ``energy_drift``, ``stages`` and ``timings`` [s]; ``summary()``
+        is what ``transient run --json`` prints.
+    """
+    check_transient(case)           # before the stages' modules (Numba, SciPy) are imported
+    from .integration import run as run_case
+    if path is None:
+        path = case.directory / (case.output.file or Path(case.path).with_suffix(".h5").name)
+        key = key or "output.file"
+    return run_case(case, Path(path), resume=resume, progress=progress, key=key or "path")
+
+
+@dataclass(frozen=True)
+class NormalModes:
+    """The normal modes of a case with its contact pairs tied (`modes`)."""
+    frequencies: object      # (n,) [Hz], ascending
+    shapes: object           # (ndof, n) mass-normalized, zero on fixed dofs
+    ndof: int
+    free_dofs: int
+    parts: int
+    backend: str             # the factorization used
+    tie: object              # solve.tied.Tie: how the pairs were tied
+    contact: list            # one dict per pair: rule, points, eps, law, coarse rule
+    timings: dict            # stage -> seconds
+    vtu: str = None          # the ParaView file written when output.vtu asks for it
+    K: object = None         # with matrices=True: the model's stiffness [N/m] and mass [kg]
+    M: object = None         # (sparse, every dof, before the contact), and its fixed dofs
+    fixed: object = None
+
+    def summary(self):
+        """What ``transient modes --json`` prints, but for the total time."""
+        return {"frequencies_hz": self.frequencies.tolist(), "ndof": self.ndof,
+                "free_dofs": self.free_dofs, "backend": self.backend, "contact": self.contact,
+                "tie": self.tie.kind, "held": self.tie.held, "held_of": self.tie.dofs,
+                "timings": dict(self.timings)}
+
+
+def modes(case, matrices=False):
+    """Normal modes of a case, its contact pairs tied as ``solver.modes.tie`` says.
+
+    Parameters
+    ----------
+    case : Case
+        From `load`.
+    matrices : bool
+        Also return the model's sparse stiffness and mass.
+
+    Returns
+    -------
+    NormalModes
+        ``frequencies`` [Hz] and mass-normalized ``shapes`` (one column per mode on the
+        model's dofs); with ``output.vtu`` the shapes are also written for ParaView.
+    """
+    from .contact.pair import build_contact
+    from .model.band import check_modes_band
+    from .model.model import build_model
+    from .solve.tied import contact_modes
+    if case.output.vtu:
+        from .io.lock import check_writable
+        check_writable(case.directory / case.output.vtu, "output.vtu")
+    model = build_model(case)
+    check_modes_band(case, model)
+    pairs = build_contact(case, model)
+    found, tie = contact_modes(case, model, pairs)
+    stage_times = {f"contact.{p.name}.{k}": v for p in pairs for k, v in p.timings.items()}
+    vtu = None
+    if case.output.vtu:
+        from .mesh.meshfile import write_vtu
+        vtu = str(case.directory / case.output.vtu)
+        write_vtu(vtu, model.mesh(), point_data={
+            f"mode_{i + 1:03d}_{f:.1f}Hz": found.shapes[:, i].reshape(-1, 3)
+            for i, f in enumerate(found.frequencies)})
+    asked = (model.K, model.M, model.fixed) if matrices else (None, None, None)
+    return NormalModes(found.frequencies, found.shapes, model.ndof, int((~model.fixed).sum()),
+                       len(model.parts), found.backend, tie, [_pair_summary(p) for p in pairs],
+                       {**model.timings, **stage_times, **tie.timings, **found.timings},
+                       vtu, *asked)
+
+
+def _pair_summary(pair):
+    out = {"pair": pair.name, "rule": pair.spec.rule, "regularized": pair.spec.regularized,
+           "k": pair.k, "points": pair.rule.n_points, "area": pair.rule.area, "eps": pair.eps,
+           "kept": pair.compat.kept(pair.eps) if pair.compat else None,
+           "law": pair.spec.law.kind}
+    if pair.coarse is not None:
+        out["coarse"] = {"m": len(pair.coarse.chosen), "energy_error": pair.coarse.energy_error,
+                         "weighting": pair.coarse.weighting,
+                         "setup_s": pair.timings["coarse_rule"]}
+    return out
+
+
+def cea(case, matrices=False):
+    """Complex modes of a case at steady sliding with friction: which modes can squeal.
+
+    The case's setup is linearized at its preload with the disc sliding; the complex modes
+    come from QZ on the reduced model, or shift-invert Arnoldi on the full one
+    (``solver.reduction.enabled = false``, the reference for small cases).
+
+    Parameters
+    ----------
+    case : Case
+        From `load`.
+    matrices : bool
+        Also return the linearized mass, damping and stiffness the modes solve.
+
+    Returns
+    -------
+    Analysis
+        ``modes`` (``eigenvalues`` [1/s], ``frequency_hz``, ``real`` growth rates [1/s],
+        ``damping_ratio``, ``unstable``, ``vectors`` in the system's coordinates),
+        ``displacement(j)`` (mode j on the model's dofs), ``shapes`` (the unstable modes
+        described), ``fmax`` [Hz], ``ndof``, ``reduced``, ``stages`` [s], and with
+        ``matrices=True``, ``matrices`` = (M, D, K); ``summary()`` is what
+        ``transient cea --json`` prints, but for the total time.
+    """
+    from .stability.stage import analyse
+    return analyse(case, matrices=matrices)
+
+
+@dataclass(frozen=True)
+class InterfaceCompatibility:
+    """The compatibility of a contact pair's interface (`compat`)."""
+    pair: object             # contact.pair.ContactPair: its rules, eps and coarse rule
+    compatibility: object    # contact.compatibility.Compatibility: sigma, shapes, C(eps)
+    setup_s: float           # the pair's stages [s]
+    timings: dict            # stage -> seconds
+
+    def summary(self, eps_grid):
+        """What ``transient compat --json`` prints (C(eps) on eps_grid), but for the total
+        time."""
+        comp, fine, pair = self.compatibility, self.pair.interface.fine, self.pair
+        coarse = pair.coarse
+        return {"pair": pair.name, "n_points": fine.n_points, "area": fine.area,
+                "n_dof_1": comp.n1, "n_dof_2": comp.n2, "sigma_max": float(comp.sigma.max()),
+                "singular_values": comp.normalized.tolist(),
+                "compatibility": {"eps": list(map(float, eps_grid)),
+                                  "C": comp.curve(eps_grid).tolist()},
+                "eps": pair.eps, "eps_source": pair.eps_source, "kept": comp.kept(pair.eps),
+                "coarse": None if coarse is None else {
+                    "m": len(coarse.chosen), "energy_error": coarse.energy_error,
+                    "setup_s": pair.timings["coarse_rule"], "rank": coarse.rank,
+                    "weighting": coarse.weighting, "area_error": coarse.area_error},
+                "setup_s": self.setup_s, "timings": dict(self.timings)}
+
+
+def compat(case, pair=None):
+    """Compatibility of a contact pair's interface: the gap energy's spectrum and C(eps).
+
+    Parameters
+    ----------
+    case : Case
+        From `load`.
+    pair : str, optional
+        The pair's name (``[contact.NAME]``); by default the case's first.
+
+    Returns
+    -------
+    InterfaceCompatibility
+        ``compatibility`` (``sigma`` ascending [N/m], ``normalized``, the interface
+        ``shapes``, ``kept(eps)`` and ``curve(eps)`` = C(eps)), ``pair`` (its fine rule, its
+        ``eps`` and the greedy rule when the case asks for one), ``setup_s`` and ``timings``
+        [s].
+    """
+    from .contact.pair import build_pair
+    from .model.model import build_model
+    name = pair_name(case, pair)
+    check_two_surfaces(case, name)
+    model = build_model(case)
+    t0 = time.perf_counter()
+    built = build_pair(case, model, name, need_compatibility=True)
+    setup = time.perf_counter() - t0
+    comp = built.compat
+    return InterfaceCompatibility(built, comp, setup, {
+        **model.timings, **built.timings, **built.interface.timings, **comp.timings})
+
+
+def pair_name(case, pair=None):
+    """The contact pair a command names (the case's first by default), checked to exist."""
+    names = list(case.contact)
+    if not names:
+        raise CaseError(case.path, "contact", "the case has no [contact.NAME] pair")
+    if not pair:
+        return names[0]
+    if pair not in names:
+        raise CaseError(case.path, "contact", f"no pair '{pair}' (pairs: {', '.join(names)})")
+    return pair
+
+
+@dataclass(frozen=True)
+class Campaign:
+    """A campaign's rows and where they are (`sweep`)."""
+    rows: list               # one dict per variant, in variant order: its values, its status
+    variants: list           # campaign.variants.Variant: name, values, label()
+    table: Path              # sweep.csv (beside it, sweep.json)
+
+
+def sweep(case_path, parameters, out, mode="grid", kind="run", overrides=(), workers=2,
+          scheduler=None, resume=False, progress=None, announce=None, command=None):
+    """A campaign: the case run (or analysed) for every variant of the parameters, on Dask.
+
+    Parameters
+    ----------
+    case_path : str or Path
+        The case file (each variant is loaded from it on a worker).
+    parameters : sequence of str, or dict
+        ``"KEY=VALUES"`` as the command line's ``--param`` (a TOML value or list, or
+        ``start:stop:count``), or a dict of dotted key -> list of values.
+    out : str or Path
+        The campaign's folder: a history per variant, ``sweep.csv`` and ``sweep.json``.
+    mode : str
+        ``grid`` (every combination) or ``zip`` (the lists paired).
+    kind : str
+        ``run`` (a history per variant) or ``cea`` (complex modes per variant).
+    overrides : sequence of str
+        ``--set`` assignments applied to every variant, before its own.
+    workers : int
+        Worker processes of the embedded cluster.
+    scheduler : str, optional
+        The address of an existing Dask scheduler instead.
+    resume : bool
+        Keep the variants the folder holds complete, run the others.
+    progress : callable, optional
+        ``progress(done, total, failed)`` after each variant.
+    announce : callable, optional
+        ``announce(text)`` says where the Dask dashboard is.
+    command : str, optional
+        What the folder's lock says holds it.
+
+    Returns
+    -------
+    Campaign
+        ``rows`` (one dict per variant), ``variants`` and ``table`` (the CSV's path).
+    """
+    from .campaign.campaign import sweep as run_campaign
+    from .campaign.variants import make_variants, parse_parameter
+    if isinstance(parameters, dict):
+        parameters = [f"{k}={literal(list(v))}" for k, v in parameters.items()]
+    variants = make_variants([parse_parameter(t) for t in parameters], mode)
+    rows = run_campaign(case_path, variants, out, kind, list(overrides), workers, scheduler,
+                        resume, progress, announce, command)
+    return Campaign(rows, variants, Path(out) / "sweep.csv")
