@@ -144,7 +144,7 @@ def test_parts_on_a_dask_cluster_equal_parts_in_this_process():
     process (to round-off: other BLAS threads), each part reported as it finishes."""
     pytest.importorskip("dask.distributed")
     from transient.reduce.parts import Engine
-    from transient.sweep.campaign import client_for
+    from transient.campaign.campaign import client_for
     case = load(PAD, SMALL + ['solver.reduction.method="components"'])
     here = _reduced(case, None)
     client, cluster = client_for(None, 2)
@@ -217,7 +217,7 @@ def test_a_worker_killed_during_the_reduction_is_made_up_bit_for_bit(tmp_path):
     import cloudpickle
     from transient.reduce.parts import on_cluster
     from transient.reduce.components import components_basis
-    from transient.sweep.campaign import client_for
+    from transient.campaign.campaign import client_for
     cloudpickle.register_pickle_by_value(sys.modules[__name__])
     case = load(PAD, SMALL + ['solver.reduction.method="components"'])
     model = build_model(case)
@@ -253,3 +253,28 @@ def test_a_worker_killed_during_the_reduction_is_made_up_bit_for_bit(tmp_path):
     assert (tmp_path / "ran-disc").exists()
     assert np.array_equal(bases[0].X, bases[1].X)
     assert np.array_equal(bases[0].omega2, bases[1].omega2)
+
+
+def test_the_commands_reduce_the_parts_through_a_cache_and_refuse_it_when_assembled(
+        tmp_path, capsys):
+    """`transient cea --cache DIR`: a line a part as it is reduced, then as it is read back;
+    the model line says the parts were reduced on their own. The options of the parts asked
+    of an assembled case: one line naming the option, exit 2."""
+    from transient.cli import main
+    args = ["cea", PAD, "--cache", str(tmp_path / "parts"), "--set",
+            'solver.reduction.method="components"', "--set", "contact.pad_disc.friction.mu=0.4"]
+    args += [a for o in SMALL for a in ("--set", o)]
+    assert main(args) == 0
+    first = capsys.readouterr()
+    assert sorted(line.split(":")[0] for line in first.err.splitlines()
+                  if "reduced in" in line) == ["part disc", "part pad"]
+    assert "each part reduced on its own" in first.out
+    assert main(args) == 0
+    second = capsys.readouterr()
+    assert sorted(line for line in second.err.splitlines() if line) == [
+        "part disc: read back from the cache", "part pad: read back from the cache"]
+    # the same modes, to the last digit printed (the stages' seconds aside)
+    assert second.out.splitlines()[:-1] == first.out.splitlines()[:-1]
+    assert main(["cea", PAD, "--workers", "2"]) == 2
+    refused = capsys.readouterr().err.strip().splitlines()
+    assert len(refused) == 1 and "--workers" in refused[0]

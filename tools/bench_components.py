@@ -22,7 +22,7 @@ import json, resource, sys, time
 import transient
 transient.configure()
 from transient.case.loading import load
-from transient.cea.stage import analyse
+from transient.stability.stage import analyse
 t0 = time.perf_counter()
 a = analyse(load(sys.argv[1], sys.argv[2:]))
 seconds = time.perf_counter() - t0

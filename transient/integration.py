@@ -66,7 +66,7 @@ class _Start:
 
 
 def run(case, path, resume=False, progress=None, key="output.file", built=None,
-        on_setup=None, note=None):
+        on_setup=None, note=None, parts=None):
     """Integrate a case to solver.t_end, streaming to the HDF5 file at path (named by key in
     errors: '-o' or output.file). The output is checked and held (io.lock) before the first
     stage; a resumed run continues the system stored in the history. Returns a RunResult; a
@@ -75,13 +75,15 @@ def run(case, path, resume=False, progress=None, key="output.file", built=None,
     when built already (a campaign's variants share them: shared.Built). on_setup(setup):
     called with a new run's setup (with Setup.unsampled) before the integration: a campaign's
     variant analyses its modes there. note(line): how a subdivided step is told (stderr).
+    parts: where the components path reduces its parts (reduce.parts.Engine; None: here).
     """
     check_transient(case)
     t_start = time.perf_counter()
     # the stop requests are held from here: over the setup a Ctrl-C ends the run at once, or
     # at the next stage if it landed where it was swallowed, and leaves no file
     with stop_requests(at_once=True) as stop, writing(path, key, resume):
-        start = _resume(case, path, stop) if resume else _new(case, path, stop, built, on_setup)
+        start = (_resume(case, path, stop) if resume
+                 else _new(case, path, stop, built, on_setup, parts))
 
         def timings(kernel, threads):
             return {"setup": sum(start.stages.values()), "kernel": kernel,
@@ -98,8 +100,8 @@ def _case_meta(case):
             "overrides": list(case.overrides)}
 
 
-def _new(case, path, stop, built=None, on_setup=None):
-    setup = prepare(case, stop.check, built, unsampled=on_setup is not None)
+def _new(case, path, stop, built=None, on_setup=None, parts=None):
+    setup = prepare(case, stop.check, built, unsampled=on_setup is not None, parts=parts)
     if on_setup is not None:
         on_setup(setup)
     system, output = setup.system, case.output

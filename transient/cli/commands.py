@@ -44,20 +44,31 @@ def _tie_text(tie, pair):
     return f"tied, k = {pair['k']:.3g} Pa/m"
 
 
+def _parts(args, quiet=False):
+    """The API's keywords of where the components path reduces its parts, and a line on
+    standard error as each part is reduced (unless quiet)."""
+    def on_part(name, seconds, cached):
+        print(f"part {name}: " + ("read back from the cache" if cached
+                                  else f"reduced in {seconds:.1f} s"), file=sys.stderr)
+    return {"workers": args.workers, "scheduler": args.scheduler, "cache": args.cache,
+            "on_part": None if quiet else on_part}
+
+
 def cmd_cea(args):
     t0 = time.perf_counter()
     case = api.load(args.case, args.overrides)
-    result = api.cea(case)
+    result = api.cea(case, **_parts(args))
     modes = result.modes
     total = time.perf_counter() - t0
     if args.json:
         print(json.dumps({**result.summary(), "total": total}))
         return 0
     friction = {n: c.friction for n, c in case.contact.items() if c.friction.active}
-    cutoff = result.meta.get("modes_fmax_hz")
-    what = (f"reduced model {result.reduced} dofs" + (f" (its modes to {cutoff:g} Hz)"
-                                                      if cutoff else "")
-            if result.reduced else "full model (shift-invert Arnoldi)")
+    what = "full model (shift-invert Arnoldi)"
+    if result.reduced:
+        notes = _basis_notes(result.meta)
+        what = f"reduced model {result.reduced} dofs" + (f" ({'; '.join(notes)})" if notes
+                                                          else "")
     print(f"{case.path}: {result.ndof} free dofs, {what}, complex modes to "
           f"{result.fmax:g} Hz; " + (", ".join(
               f"contact {n}: mu = {f.mu:g}" if not f.speeds else f"contact {n}: mu(v) table"
@@ -114,6 +125,20 @@ def cmd_compat(args):
     return 0
 
 
+def _basis_notes(meta):
+    """What the model line says of a reduced basis: its modes' reach, the parts reduced on
+    their own, its band modes' residual in the whole model (from meta or a history's
+    attributes, any of which may be missing)."""
+    notes = []
+    if meta.get("modes_fmax_hz"):
+        notes.append(f"its modes to {meta['modes_fmax_hz']:g} Hz")
+    if meta.get("reduction_method") == "components":
+        notes.append("each part reduced on its own")
+    if meta.get("band_residual") is not None:
+        notes.append(f"its band modes' residual in the whole model {meta['band_residual']:.1e}")
+    return notes
+
+
 def _model_line(meta):
     """What was integrated: the reduced model's size and each pair's contact points (from a
     resumed history's attributes, any of which may be missing)."""
@@ -123,8 +148,9 @@ def _model_line(meta):
         to = (f" to {meta['modes_fmax_hz']:g} Hz" if meta.get("modes_fmax_hz") else "")
         parts.append(f"reduced model {meta['reduced_dofs']} dofs "
                      f"({meta.get('normal_modes', '?')} modes{to} and {kept} of {asked} static "
-                     "shapes" + ("; the others lie in the span of the rest)" if kept < asked
-                                 else ")"))
+                     "shapes" + ("; the others lie in the span of the rest" if kept < asked
+                                 else "") + "".join(f"; {n}" for n in _basis_notes(meta)[
+                                     1 if meta.get("modes_fmax_hz") else 0:]) + ")")
     for name, mu in (meta.get("basis_mu") or {}).items():
         parts.append(f"its basis and sampled points made at mu = {mu:g} on {name}, then given "
                      "this preload")
@@ -148,7 +174,7 @@ def cmd_run(args):
     case = api.load(args.case, args.overrides)
     quiet = args.quiet or args.json or os.environ.get("CI") or not sys.stderr.isatty()
     result = api.run(case, args.output, resume=args.resume, progress=not quiet,
-                     key="-o" if args.output else None)
+                     key="-o" if args.output else None, **_parts(args, quiet))
     if args.json:
         print(json.dumps(result.summary()))
     else:

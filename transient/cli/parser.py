@@ -11,6 +11,17 @@ def _case_args(p):
                    "parts.upper.mesh.divisions=[3,3,3] (repeatable)")
 
 
+def _parts_args(p):
+    """Where the components path (solver.reduction.method) reduces its parts."""
+    p.add_argument("--workers", type=int, default=0, help="components path: reduce the parts "
+                   "on an embedded Dask cluster of N one-thread processes, one task a part "
+                   "(default 0: in this process)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="components path: reduce the parts "
+                   "on an existing Dask scheduler (tcp://HOST:PORT) instead")
+    p.add_argument("--cache", metavar="DIR", help="components path: keep each part's "
+                   "reduction in DIR and read back the parts a later case makes the same")
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="transient", description="Long transient vibrations "
                                      "of elastic solids in contact across non-conforming meshes.")
@@ -23,6 +34,7 @@ def build_parser():
                        "linearized at steady sliding with friction, which of them grow")
     _case_args(p)
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    _parts_args(p)
     p = sub.add_parser("run", help="transient: preload, then time integration to solver.t_end, "
                        "streamed to an HDF5 history")
     _case_args(p)
@@ -32,6 +44,7 @@ def build_parser():
                    "output file from its last checkpoint (after an abort, or to a later t_end)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
+    _parts_args(p)
     p = sub.add_parser("info", help="summary of an HDF5 history")
     p.add_argument("file", help="HDF5 file written by transient run")
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")

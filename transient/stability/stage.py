@@ -62,10 +62,11 @@ def fmax_of(case):
         solver.modes.fmax or solver.reduction.fmax)
 
 
-def analyse(case, check=None, built=None, matrices=False):
+def analyse(case, check=None, built=None, matrices=False, parts=None):
     """Complex modes of a case at its steady sliding state (Analysis); built: its first
     stages' results when built already (shared.Built: a campaign's variants share them);
-    matrices: keep the linearized (M, D, K) in the Analysis."""
+    matrices: keep the linearized (M, D, K) in the Analysis; parts: where the components
+    path reduces its parts (reduce.parts.Engine; None: here)."""
     from ..model import build_model
     from ..shared import Built
     from ..stages import prepare
@@ -78,7 +79,7 @@ def analyse(case, check=None, built=None, matrices=False):
         built = Built(build_model(case))
         stages["model"] = time.perf_counter() - t0
         _bounded(case, int((~built.model.fixed).sum()))
-    setup = prepare(analysed_case(case), check, built, analysis=True)
+    setup = prepare(analysed_case(case), check, built, analysis=True, parts=parts)
     stages.update(setup.stages)
     return analysis_of(case, setup, stages, matrices)
 
