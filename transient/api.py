@@ -326,7 +326,8 @@ class Campaign:
 
 
 def sweep(case_path, parameters, out, mode="grid", kind="run", overrides=(), workers=2,
-          scheduler=None, resume=False, progress=None, announce=None, command=None):
+          scheduler=None, resume=False, progress=None, announce=None, command=None,
+          cache=None):
     """A campaign: the case run (or analysed) for every variant of the parameters, on Dask.
 
     Parameters
@@ -356,6 +357,10 @@ def sweep(case_path, parameters, out, mode="grid", kind="run", overrides=(), wor
         ``announce(text)`` says where the Dask dashboard is.
     command : str, optional
         What the folder's lock says holds it.
+    cache : str or Path, optional
+        With ``solver.reduction.method = "components"``: the folder where each part's
+        reduction is kept and read back, shared by the variants (a lining campaign reduces
+        the pad for each modulus and the other parts once).
 
     Returns
     -------
@@ -368,7 +373,8 @@ def sweep(case_path, parameters, out, mode="grid", kind="run", overrides=(), wor
         parameters = [f"{k}={literal(list(v))}" for k, v in parameters.items()]
     variants = make_variants([parse_parameter(t) for t in parameters], mode)
     rows = run_campaign(case_path, variants, out, kind, list(overrides), workers, scheduler,
-                        resume, progress, announce, command)
+                        resume, progress, announce, command,
+                        None if cache is None else str(Path(cache).resolve()))
     return Campaign(rows, variants, Path(out) / "sweep.csv")
 
 

@@ -78,7 +78,9 @@ def build_shared(case, depth, built=None):
             geometry = stages.timed("contact", lambda: [build_geometry(case, model, name)
                                                         for name in case.contact])
         solver = built.solver if built is not None else None
-        if depth in ("factorization", "basis") and case.contact and solver is None:
+        components = case.solver.reduction.method == "components"
+        if (depth in ("factorization", "basis") and case.contact and solver is None
+                and not components):
             solver = stages.timed("factorization", factorization, case, model,
                                   stack(geometry, model.ndof))
         basis = (stages.timed("basis", shared_basis, case, model, geometry, solver)

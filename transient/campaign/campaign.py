@@ -98,11 +98,12 @@ def client_for(scheduler, workers):
 
 
 def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, scheduler=None,
-          resume=False, progress=None, announce=print, command=None):
+          resume=False, progress=None, announce=print, command=None, cache=None):
     """Run the variants; returns their rows (in variant order) and writes the campaign's
     files in out, which it holds meanwhile (command: what the lock says holds it).
     progress(done, total, failed) after each variant; announce(text) says where the dashboard
-    is."""
+    is; cache: the folder of the components path's parts (reduce.parts.cached), which the
+    variants share."""
     if kind not in KINDS:
         raise CaseError(WHERE, "--kind", f"expected one of {', '.join(KINDS)}, got '{kind}'")
     check_cluster(scheduler, workers)
@@ -127,7 +128,7 @@ def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, schedul
                 if announce:
                     announce(f"dask dashboard: {client.dashboard_link}")
                 shared = _gather(client, case_path, overrides, variants, todo.todo, out, kind,
-                                 rows, progress, keys)
+                                 rows, progress, keys, cache)
             finally:
                 client.close()
                 if cluster is not None:
@@ -137,7 +138,8 @@ def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, schedul
     return table
 
 
-def _gather(client, case_path, overrides, variants, todo, out, kind, rows, progress, keys):
+def _gather(client, case_path, overrides, variants, todo, out, kind, rows, progress, keys,
+            cache=None):
     """Submit the variants to do (name -> 'fresh' or 'continue') and collect their rows;
     returns how many results of each stage were built to be shared. Fresh variants equal on a
     stage's key (two or more) take its result from a task of its own, which goes on from the
@@ -165,7 +167,7 @@ def _gather(client, case_path, overrides, variants, todo, out, kind, rows, progr
                 built[v.name] = before[v.name] = future
     futures = {client.submit(run_variant, str(case_path), list(overrides) + v.overrides(),
                              str(outputs(out, v.name, kind)[0]), kind, built.get(v.name),
-                             todo[v.name] == "continue",
+                             todo[v.name] == "continue", cache,
                              key=f"{v.name}-{time.time_ns()}", pure=False): v
                for v in variants if v.name in todo}
     failed = 0

@@ -21,20 +21,25 @@ from ..settings import configure
 KINDS = ("run", "cea", "both")
 
 
-def run_variant(case_path, overrides, out, kind, built=None, resume=False):
+def run_variant(case_path, overrides, out, kind, built=None, resume=False, cache=None):
     """The row of one variant: status, seconds, the stages it ran and the summary numbers of
     its kind. out: its history (run, both) or its complex modes (cea). built: the first
     stages' results it shares with others (shared.Built), or None to build them. resume:
-    continue its history (its complex modes, if any, are complete already)."""
+    continue its history (its complex modes, if any, are complete already). cache: the
+    folder where the components path keeps its parts (reduce.parts.cached), or None."""
     configure()
     t0 = time.perf_counter()
     try:
         from ..case.loading import load
         case = load(case_path, overrides)
+        parts = None
+        if cache is not None:
+            from ..reduce.parts import Engine
+            parts = Engine(cache=Path(cache))
         if resume:
             row = _run(case, out, None, resume=True)
         else:
-            row = {"run": _run, "cea": _cea, "both": _both}[kind](case, out, built)
+            row = {"run": _run, "cea": _cea, "both": _both}[kind](case, out, built, parts)
     except CaseError as exc:
         row = {"status": f"refused: {exc.key}: {exc.message}",
                "refusal": {"file": exc.path, "key": exc.key, "message": exc.message}}
@@ -56,10 +61,10 @@ def build_shared(case_path, overrides, depth, built=None, kind="run"):
     return build_shared(analysed_case(case) if kind == "cea" else case, depth, built)
 
 
-def _run(case, out, built, on_setup=None, resume=False):
+def _run(case, out, built, parts=None, on_setup=None, resume=False):
     from ..integration import run
     result = run(case, Path(out), resume=resume, progress=False, key="--out", built=built,
-                 on_setup=on_setup)
+                 on_setup=on_setup, parts=parts)
     return {"status": result.status, "steps": result.steps, "dt": result.dt,
             "kernel_s": result.timings.get("kernel"), "energy_drift": result.energy_drift,
             "stages": sorted(result.stages), **summary(out)}
@@ -79,14 +84,14 @@ def summary(path):
     return {k: (None if v != v else v) for k, v in numbers.items()}        # NaN: None
 
 
-def _cea(case, out, built):
+def _cea(case, out, built, parts=None):
     from ..stability.stage import analyse
-    result = analyse(case, built=built)
+    result = analyse(case, built=built, parts=parts)
     return {"status": "complete", "stages": sorted(result.stages),
             **_modes_written(result, case, out)}
 
 
-def _both(case, out, built):
+def _both(case, out, built, parts=None):
     """The run, and the complex modes from its setup before the time integration."""
     from ..stability.stage import analysis_of
     modes = Path(out).with_suffix(".json")
@@ -94,7 +99,7 @@ def _both(case, out, built):
 
     def analyse(setup):
         found.update(_modes_written(analysis_of(case, setup.unsampled or setup), case, modes))
-    return {**_run(case, out, built, analyse), **found}
+    return {**_run(case, out, built, parts, analyse), **found}
 
 
 def _modes_written(analysis, case, path):

@@ -96,6 +96,8 @@ def build_parser():
                    "cea (its complex modes) or both (the two from one setup)")
     p.add_argument("--workers", type=int, default=2, help="worker processes of the embedded "
                    "Dask cluster, one thread each (default 2)")
+    p.add_argument("--cache", metavar="DIR", help="components path: the folder where each "
+                   "part's reduction is kept and read back, shared by the variants")
     p.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler "
                    "(tcp://HOST:PORT) instead of the embedded cluster")
     p.add_argument("--out", metavar="DIR", required=True, help="directory of the variants' "

@@ -22,7 +22,7 @@ def cmd_sweep(args):
     campaign = api.sweep(args.case, args.param, args.out, args.mode or "grid", args.kind,
                          args.overrides, args.workers, args.scheduler, args.resume, progress,
                          None if args.json else lambda text: print(text, flush=True),
-                         command=" ".join(["transient"] + args.argv))
+                         command=" ".join(["transient"] + args.argv), cache=args.cache)
     for bar in bars:
         bar.close()
     rows, variants, table = campaign.rows, campaign.variants, campaign.table
