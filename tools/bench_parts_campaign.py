@@ -1,0 +1,105 @@
+"""A countermeasure campaign on the pads' lining, the components path against the assembled
+one: N lining moduli, the complex modes of each.
+
+- assembled, back to back: `transient cea` of each variant in one process after the other;
+- assembled, swept: `transient sweep --kind cea` on W workers;
+- components, swept through a parts cache: `transient sweep --kind cea --cache DIR` on W
+  workers, each variant reducing the parts the lining changes and reading the others back.
+
+Each is timed from a child process (start-up included), in that order; the cache starts
+empty. The unstable modes of the first variant are compared between the paths.
+
+    python tools/bench_parts_campaign.py [CASE] [--moduli 3e9:8e9:10] [--material lining]
+                                         [--mu 0.4] [--workers 2] [--set key=value ...]
+                                         [--markdown FILE]
+"""
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+COMPONENTS = 'solver.reduction.method="components"'
+
+
+def transient(args):
+    t0 = time.perf_counter()
+    done = subprocess.run([sys.executable, "-m", "transient"] + args, cwd=ROOT,
+                          capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit(f"transient {args[0]} failed ({done.returncode}): {done.stderr.strip()}")
+    return time.perf_counter() - t0, done.stdout
+
+
+def sets(overrides):
+    return [a for o in overrides for a in ("--set", o)]
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("case", nargs="?", default=str(ROOT / "cases" / "brake_corner.toml"))
+    parser.add_argument("--moduli", default="3e9:8e9:10")
+    parser.add_argument("--material", default="lining")
+    parser.add_argument("--mu", type=float, default=0.4)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--markdown")
+    args = parser.parse_args(argv)
+    import numpy as np
+    from transient.case.loading import load
+    start, stop, count = args.moduli.split(":")
+    moduli = np.linspace(float(start), float(stop), int(count))
+    pairs = [n for n, c in load(args.case, args.set).contact.items()
+             if c.law.kind != "bilateral"]
+    overrides = args.set + [f"contact.{p}.friction.mu={args.mu}" for p in pairs]
+    key = f"materials.{args.material}.E"
+    work = Path(tempfile.mkdtemp(prefix="bench_parts_"))
+    load0, rows = os.getloadavg()[0], {}
+    try:
+        t0, first = time.perf_counter(), None
+        for E in moduli:
+            _, out = transient(["cea", args.case, "--json"] + sets(overrides + [f"{key}={E}"]))
+            first = first or json.loads(out)
+        rows["assembled, back to back"] = time.perf_counter() - t0
+        grid = [f"{key}={json.dumps([float(E) for E in moduli])}"]
+        rows[f"assembled, sweep on {args.workers} workers"], _ = transient(
+            ["sweep", args.case, "--kind", "cea", "--out", str(work / "assembled"),
+             "--workers", str(args.workers), "--param", grid[0]] + sets(overrides))
+        rows[f"components, sweep on {args.workers} workers, parts cache"], _ = transient(
+            ["sweep", args.case, "--kind", "cea", "--out", str(work / "components"),
+             "--workers", str(args.workers), "--cache", str(work / "parts"),
+             "--param", grid[0]] + sets(overrides + [COMPONENTS]))
+        swept = sorted((work / "components").glob("*.json"))
+        swept = [p for p in swept if p.name != "sweep.json"]
+        parts = len(list((work / "parts").glob("part-*.npz")))
+        ref = [m for m in first["modes"] if m["unstable"]]
+        mine = [m for m in json.loads(swept[0].read_text())["modes"] if m["unstable"]]
+    finally:
+        load1 = os.getloadavg()[0]
+        shutil.rmtree(work, ignore_errors=True)
+    base = rows["assembled, back to back"]
+    lines = [f"{len(moduli)} moduli of {key} on {Path(args.case).name} (mu {args.mu}), load "
+             f"{load0:.1f}-{load1:.1f}; {parts} parts reduced in all", "",
+             "| path | seconds | against back to back |", "|---|---|---|"]
+    lines += [f"| {name} | {s:.0f} | {base / s:.2f}x |" for name, s in rows.items()]
+    nearest = [min(mine, key=lambda b: abs(b["frequency_hz"] - a["frequency_hz"]))
+               for a in ref] if mine else []
+    lines += ["", f"unstable modes of the first modulus ({len(ref)} assembled, {len(mine)} "
+              "components), assembled -> the nearest of components: " + ", ".join(
+                  f"{a['frequency_hz']:.0f} Hz {a['real']:.1f} -> {b['frequency_hz']:.0f} Hz "
+                  f"{b['real']:.1f} 1/s" for a, b in zip(ref, nearest))]
+    table = "\n".join(lines)
+    print(table)
+    if args.markdown:
+        with open(args.markdown, "a") as f:
+            f.write(table + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
