@@ -142,6 +142,19 @@ def test_cea_equals_the_commands_json(small_pad, capsys):
         assert np.linalg.norm(r) <= 1e-8 * np.linalg.norm(scale)
 
 
+def test_a_mu_map_equals_the_cea_of_each_variant():
+    """mu_map shares the model, the contact and the factorization among its values: each
+    analysis equals `cea` of the case at that mu, bit for bit."""
+    case = transient.load(PAD, SMALL)
+    found = transient.mu_map(case, [0.2, 0.4])
+    assert len(found) == 2
+    for mu, analysis in zip([0.2, 0.4], found):
+        alone = transient.cea(transient.load(PAD, SMALL + [f"contact.pad_disc.friction.mu={mu}"]))
+        assert np.array_equal(analysis.modes.eigenvalues, alone.modes.eigenvalues)
+    with pytest.raises(CaseError, match="mus"):
+        transient.mu_map(case, [-0.1])
+
+
 def test_compat_equals_the_commands_json(capsys):
     result = transient.compat(transient.load(CUBE))
     out = cli_json(capsys, "compat", CUBE)

@@ -248,6 +248,44 @@ def cea(case, matrices=False, workers=0, scheduler=None, cache=None, on_part=Non
         return analyse(case, matrices=matrices, parts=parts)
 
 
+def mu_map(case, mus, pair=None):
+    """The complex modes of a case at each of several friction coefficients on one pair,
+    sharing the model, the contact's geometry and the factorization (and the basis, for
+    variants equal on a ``basis_mu``), as ``transient plot cea --mu`` maps them.
+
+    Parameters
+    ----------
+    case : Case
+        From `load`; its own friction is not among the map's unless given in ``mus``.
+    mus : sequence of float
+        The friction coefficients (>= 0).
+    pair : str, optional
+        The pair whose ``friction.mu`` varies; by default the case's first.
+
+    Returns
+    -------
+    list of Analysis
+        One per value of ``mus``, as `cea` returns it.
+    """
+    from .shared import build_shared, stage_key
+    from .stability.stage import analyse, analysed_case
+    name = pair_name(case, pair)
+    if not len(mus) or min(mus) < 0:
+        raise CaseError(case.path, "mus", "expected friction coefficients >= 0")
+    # every variant is checked at load before the first analysis
+    variants = [_load(case.path, list(case.overrides) + [f"contact.{name}.friction.mu={mu!r}"])
+                for mu in mus]
+    built = basis = key = None
+    if case.solver.reduction.enabled:
+        analysed = analysed_case(case)
+        built = build_shared(analysed, "factorization")
+        if any(c.friction.basis_mu for c in case.contact.values()):
+            basis = build_shared(analysed, "basis", built)
+            key = stage_key(case, "basis")
+    return [analyse(v, built=basis if key is not None and stage_key(v, "basis") == key
+                    else built) for v in variants]
+
+
 @dataclass(frozen=True)
 class InterfaceCompatibility:
     """The compatibility of a contact pair's interface (`compat`)."""

@@ -134,7 +134,7 @@ def _finite(text):
 
 
 def _plot_cea(args):
-    from ..stability.stage import analyse, analysed_case
+    from .. import api
     from ..plots.cea import mode_figure, mu_map_figure, stability_figure
     from ..plots.render import RenderingUnavailable
     case = load(args.case, args.overrides)
@@ -151,34 +151,17 @@ def _plot_cea(args):
             raise CaseError(case.path, "--mu", str(exc)) from None
         if not mus or min(mus) < 0:
             raise CaseError(case.path, "--mu", "expected friction coefficients >= 0")
-        # every variant is checked at load before the first analysis
-        variants = [load(args.case, args.overrides + [f"contact.{pair}.friction.mu={mu!r}"])
-                    for mu in mus]
     out = Path(args.out)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise CaseError(case.path, "--out", f"cannot create: {exc}") from None
     stem = Path(case.path).stem
-    # the values of mu share the model, the contact's geometry and the factorization (the
-    # full model, a small case's reference, is bounded by analyse before its setup), and the
-    # basis when the case makes it at a basis_mu (those equal on its key), built as transient
-    # cea builds them (the sampled rules on their candidates)
-    from ..shared import build_shared, stage_key
-    built = basis = None
-    if case.solver.reduction.enabled:
-        analysed = analysed_case(case)
-        built = build_shared(analysed, "factorization")
-        if any(c.friction.basis_mu for c in case.contact.values()):
-            basis = build_shared(analysed, "basis", built)
-    key = stage_key(case, "basis") if basis is not None else None
-
-    def shared(v):
-        return basis if key is not None and stage_key(v, "basis") == key else built
-    result = analyse(case, built=shared(case))
-    mu = case.contact[pair].friction.mu
+    # the map's values share their stages (api.mu_map), each checked at load before any
+    analyses = api.mu_map(case, mus, pair) if mus else []
+    result, own = api.cea(case), case.contact[pair].friction.mu
     paths = [out / f"{stem}_stability.png"]
-    stability_figure(result, paths[0], f"{stem}: complex modes at mu = {mu:g}")
+    stability_figure(result, paths[0], f"{stem}: complex modes at mu = {own:g}")
     try:
         for row in result.shapes:
             j = row["mode"] - 1
@@ -191,7 +174,6 @@ def _plot_cea(args):
         print(f"error: {exc}", file=sys.stderr)
         return 1
     if mus:
-        analyses = [analyse(v, built=shared(v)) for v in variants]
         path = out / f"{stem}_mu_map.png"
         mu_map_figure(mus, analyses, path, f"{stem}: complex modes against mu ({pair})")
         paths.append(path)
