@@ -7,7 +7,6 @@ The stages' modules (Numba, SciPy) are imported by the functions that need them,
 `import transient` stays light and a case's bad input is refused before they load.
 """
 import time
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -74,7 +73,8 @@ def prepare(case, workers=0, scheduler=None, cache=None, on_part=None):
         ``stages`` (seconds of each stage) and ``meta`` (what the stages report).
     """
     from .stages import prepare as prepare_stages
-    with _parts(case, workers, scheduler, cache, on_part) as parts:
+    from .reduce.parts import engine_for
+    with engine_for(case, workers, scheduler, cache, on_part) as parts:
         return prepare_stages(case, parts=parts)
 
 
@@ -97,18 +97,8 @@ def run(case, path=None, resume=False, progress=False, key=None, workers=0, sche
     key : str, optional
         What errors call the path (the command line's ``-o``); by default ``path``, or
         ``output.file`` when the path is the case's.
-    workers : int
-        With ``solver.reduction.method = "components"``: reduce the parts on an embedded
-        Dask cluster of this many one-thread worker processes, one task a part (0: in this
-        process).
-    scheduler : str, optional
-        Or on an existing Dask cluster at this address (``tcp://HOST:PORT``).
-    cache : str or Path, optional
-        A folder where each part's reduction is kept under the key of what it is made from,
-        and read back when a later case makes the same part (a pad campaign reduces the pad
-        alone).
-    on_part : callable, optional
-        ``on_part(name, seconds, cached)`` as each part is reduced or read back.
+    workers, scheduler, cache, on_part
+        Where the components path reduces its parts, as `prepare` says.
 
     Returns
     -------
@@ -123,7 +113,8 @@ def run(case, path=None, resume=False, progress=False, key=None, workers=0, sche
     if path is None:
         path = case.directory / (case.output.file or Path(case.path).with_suffix(".h5").name)
         key = key or "output.file"
-    with _parts(case, workers, scheduler, cache, on_part) as parts:
+    from .reduce.parts import engine_for
+    with engine_for(case, workers, scheduler, cache, on_part) as parts:
         return run_case(case, Path(path), resume=resume, progress=progress, key=key or "path",
                         parts=parts)
 
@@ -220,18 +211,8 @@ def cea(case, matrices=False, workers=0, scheduler=None, cache=None, on_part=Non
         From `load`.
     matrices : bool
         Also return the linearized mass, damping and stiffness the modes solve.
-    workers : int
-        With ``solver.reduction.method = "components"``: reduce the parts on an embedded
-        Dask cluster of this many one-thread worker processes, one task a part (0: in this
-        process).
-    scheduler : str, optional
-        Or on an existing Dask cluster at this address (``tcp://HOST:PORT``).
-    cache : str or Path, optional
-        A folder where each part's reduction is kept under the key of what it is made from,
-        and read back when a later case makes the same part (a pad campaign reduces the pad
-        alone).
-    on_part : callable, optional
-        ``on_part(name, seconds, cached)`` as each part is reduced or read back.
+    workers, scheduler, cache, on_part
+        Where the components path reduces its parts, as `prepare` says.
 
     Returns
     -------
@@ -244,7 +225,8 @@ def cea(case, matrices=False, workers=0, scheduler=None, cache=None, on_part=Non
         ``transient cea --json`` prints, but for the total time.
     """
     from .stability.stage import analyse
-    with _parts(case, workers, scheduler, cache, on_part) as parts:
+    from .reduce.parts import engine_for
+    with engine_for(case, workers, scheduler, cache, on_part) as parts:
         return analyse(case, matrices=matrices, parts=parts)
 
 
@@ -414,39 +396,3 @@ def sweep(case_path, parameters, out, mode="grid", kind="run", overrides=(), wor
                         resume, progress, announce, command,
                         None if cache is None else str(Path(cache).resolve()))
     return Campaign(rows, variants, Path(out) / "sweep.csv")
-
-
-@contextmanager
-def _parts(case, workers, scheduler, cache, on_part):
-    """The reduce.parts.Engine of the components path for one call (None: the parts in this
-    process, uncached), its Dask client closed at the end. Asked of an assembled case, the
-    options are refused: its basis is made in this process, whole."""
-    if not (workers or scheduler or cache):
-        yield None
-        return
-    reduction = case.solver.reduction
-    if not (reduction.enabled and reduction.method == "components"):
-        option = "--workers" if workers else "--scheduler" if scheduler else "--cache"
-        raise CaseError("command line", option, "reduces the parts of the components path: "
-                        "set solver.reduction.enabled = true and solver.reduction.method = "
-                        '"components"')
-    from .campaign.campaign import check_cluster, client_for
-    from .reduce.parts import Engine
-    if cache is not None:
-        cache = Path(cache)
-        if cache.exists() and not cache.is_dir():
-            raise CaseError("command line", "--cache", f"{cache} is not a folder")
-    done = None if on_part is None else (
-        lambda task, part: on_part(task.name, sum(part.seconds.values()),
-                                   "cache" in part.seconds))
-    client = cluster = None
-    if workers or scheduler:
-        check_cluster(scheduler, workers)
-        client, cluster = client_for(scheduler, workers)
-    try:
-        yield Engine(client, cache, done)
-    finally:
-        if client is not None:
-            client.close()
-        if cluster is not None:
-            cluster.close()

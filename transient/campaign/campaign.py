@@ -23,6 +23,7 @@ import time
 from contextlib import ExitStack
 from pathlib import Path
 
+from ..cluster import THREAD_ENV, check_cluster, client_for  # noqa: F401 (THREAD_ENV: tests)
 from ..errors import CaseError
 from .folder import MARK, check_out, holding, write_whole
 from .folder import modes_file
@@ -30,8 +31,6 @@ from .outputs import is_sweep_csv, is_sweep_json, outputs, plan
 from .tasks import KINDS, build_shared, cea_summary, run_variant
 from .variants import WHERE
 
-THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-              "NUMBA_NUM_THREADS": "1"}
 FIRST = ("variant", "status", "seconds")
 
 
@@ -55,46 +54,6 @@ def check_variants(case_path, overrides, variants, kind):
         cases[v.name] = case
         keys[v.name] = {stage: stage_key(case, stage) for stage in SHARED}
     return cases, keys
-
-
-def check_cluster(scheduler, workers):
-    """Refuse a scheduler address that is not one, or fewer than one worker, before any work
-    (a Client would raise its own ValueError only once the variants are checked)."""
-    if scheduler is None:
-        if workers < 1:
-            raise CaseError(WHERE, "--workers", f"expected at least 1, got {workers}")
-        return
-    try:
-        from distributed.comm import get_address_host_port
-    except ImportError:
-        raise CaseError(WHERE, "sweep", "needs dask.distributed: pip install "
-                        "\"transient[sweep]\" (or dask[distributed])") from None
-    if scheduler.partition("://")[0] == "ucx":       # its own host and port rules
-        return
-    try:
-        _, port = get_address_host_port(scheduler)
-        if not 0 < port < 65536:
-            raise ValueError(f"port {port} out of range")
-    except ValueError as exc:
-        raise CaseError(WHERE, "--scheduler", f"expected an address such as "
-                        f"tcp://HOST:PORT, got '{scheduler}' ({exc})") from None
-
-
-def client_for(scheduler, workers):
-    """(client, cluster or None): a Client on the scheduler, or on a new LocalCluster."""
-    try:
-        from dask.distributed import Client, LocalCluster
-    except ImportError:
-        raise CaseError(WHERE, "sweep", "needs dask.distributed: pip install "
-                        "\"transient[sweep]\" (or dask[distributed])") from None
-    if scheduler is not None:
-        try:
-            return Client(scheduler, timeout="30s"), None
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise CaseError(WHERE, "--scheduler", f"cannot reach {scheduler}: {exc}") from None
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           env=THREAD_ENV, dashboard_address=":0", silence_logs=50)
-    return Client(cluster), cluster
 
 
 def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, scheduler=None,

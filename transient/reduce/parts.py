@@ -10,15 +10,114 @@ a reduction made by other code is never read as this one's.
 import hashlib
 import os
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..cluster import WHERE
+from ..errors import CaseError
+from ..model.dofs import shifted
+from ..solve import blas
+from ..solve.linsolve import FactorizationError, factorize
+from ..solve.modes import normal_modes, shift_sigma
+from .basis import MODES_TOL, flexible_shapes
+
 # the modules whose arithmetic makes a part's reduction: their source is in its key
-_SOURCES = ("reduce/components.py", "reduce/basis.py", "solve/modes.py", "solve/lanczos.py",
+_SOURCES = ("reduce/parts.py", "reduce/basis.py", "solve/modes.py", "solve/lanczos.py",
             "solve/linsolve.py", "model/dofs.py")
 _FIELDS = ("T", "Kr", "mode_hz", "n_shapes", "n_static")
+
+
+@dataclass(frozen=True)
+class PartBasis:
+    """One part's reduction: T (n, r) on its free dofs, T^T M T = I, its first n_modes
+    columns the part's normal modes; Kr = T^T K T."""
+    name: str
+    T: np.ndarray
+    Kr: np.ndarray
+    mode_hz: np.ndarray      # (n_modes,) [Hz]
+    n_shapes: int            # interface shapes kept (contact_shapes at the tolerance)
+    n_static: int            # static directions asked beyond the interface shapes
+    seconds: dict            # factorization, modes, interface, statics, orthonormalization
+
+
+def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"):
+    """The PartBasis of one part from its own matrices on its free dofs: K, M (n, n) sparse,
+    interface (E (n, k), Cc (m, k), stiffness (m,)) the loads that span the contact's on the
+    part, C = Cc E^T its rows, the law's w k_t at each row (None: no contact on the part),
+    loads (n, s) the static loads to respond to.
+
+    Its own factorization of K - sigma M (the small shift keeps a floating part solvable) gives
+    the modes and the responses beyond them; the interface's are kept by their flexibility
+    against the contact law's (basis.flexible_shapes)."""
+    seconds, t0 = {}, time.perf_counter()
+
+    def lap(stage):
+        nonlocal t0
+        seconds[stage], t0 = time.perf_counter() - t0, time.perf_counter()
+    sigma = shift_sigma(-shift_hz)
+    try:
+        solve = factorize(shifted(K, M, sigma), backend, definite=True)
+    except FactorizationError as exc:
+        raise PartError(name, str(exc)) from None
+    lap("factorization")
+    modes = normal_modes(K, M, None, count=40, fmax=fmax, shift=-shift_hz, solve=solve,
+                         tol=MODES_TOL)
+    lap("modes")
+    Phi = modes.shapes
+    MPhi = M @ Phi
+
+    def beyond(b):
+        """(K - sigma M)^-1 beyond the modes, P^T (K - sigma M)^-1 P with P = I - M Phi Phi^T:
+        the loads without their modal part, so that a floating part's rigid motion (1/sigma,
+        1e8 times its elastic response) never enters the responses only to be subtracted
+        (its eigenvalue, round-off of the largest, is not known to that precision)."""
+        x = solve(np.asfortranarray(b - MPhi @ (Phi.T @ b)))
+        return x - Phi @ (MPhi.T @ x)
+    columns, n_shapes = [], 0
+    if interface is not None:
+        E, Cc, stiffness = interface
+        KE = beyond(E)
+        shapes, _ = flexible_shapes(E.T @ KE, Cc, stiffness, tol, KE.__matmul__)
+        columns.append(shapes)
+        n_shapes = shapes.shape[1]
+    lap("interface")
+    if loads.shape[1]:
+        columns.append(beyond(loads))
+    lap("statics")
+    T = _with_statics(Phi, np.hstack(columns) if columns else np.zeros((len(Phi), 0)), M)
+    Kr = T.T @ (K @ T)
+    lap("orthonormalization")
+    return PartBasis(name, T, 0.5 * (Kr + Kr.T), modes.frequencies, n_shapes,
+                     int(loads.shape[1]), seconds)
+
+
+class PartError(RuntimeError):
+    def __init__(self, part, message):
+        super().__init__(message)
+        self.part = part
+
+    def __reduce__(self):        # raised on a Dask worker, it travels back whole
+        return PartError, (self.part, str(self))
+
+
+def _with_statics(Phi, S, M):
+    """[Phi, S V]: the static responses S without what the modes hold (twice, for round-off:
+    on a floating part they are dominated by its rigid motion), their dependent directions
+    dropped, M-orthonormal."""
+    if not S.shape[1]:
+        return Phi
+    for _ in range(2):
+        S = S - Phi @ ((M @ Phi).T @ S)
+    G = S.T @ (M @ S)
+    norms = np.sqrt(np.maximum(np.diag(G), 0.0))
+    big = norms > 1e-12 * norms.max()
+    S, G = S[:, big] / norms[big], G[np.ix_(big, big)] / np.outer(norms[big], norms[big])
+    lam, V = np.linalg.eigh(0.5 * (G + G.T))
+    keep = lam > 1e-12 * max(lam.max(), 1.0)
+    return np.hstack([Phi, S @ (V[:, keep] / np.sqrt(lam[keep]))])
 
 
 @dataclass(frozen=True)
@@ -35,8 +134,6 @@ class PartTask:
     backend: str
 
     def run(self):
-        from ..solve import blas
-        from .components import part_basis
         with blas.one_thread():
             return part_basis(self.name, self.K, self.M, self.interface, self.loads,
                               self.fmax, self.shift_hz, self.tol, self.backend)
@@ -142,7 +239,6 @@ def cached(runner, folder):
     folder = Path(folder)
 
     def run(tasks, done=None):
-        from .components import PartBasis
         out, todo = [None] * len(tasks), []
         for i, task in enumerate(tasks):
             path = folder / f"part-{task.key()}.npz"
@@ -164,3 +260,39 @@ def cached(runner, folder):
             os.replace(part, path)
         return out
     return run
+
+
+@contextmanager
+def engine_for(case, workers=0, scheduler=None, cache=None, on_part=None):
+    """The Engine of the components path for one call of the API (None: the parts in this
+    process, uncached), its Dask client closed at the end; on_part(name, seconds, cached) as
+    each part is done. Asked of an assembled case, the options are refused: its basis is made
+    in this process, whole."""
+    if not (workers or scheduler or cache):
+        yield None
+        return
+    reduction = case.solver.reduction
+    if not (reduction.enabled and reduction.method == "components"):
+        option = "--workers" if workers else "--scheduler" if scheduler else "--cache"
+        raise CaseError(WHERE, option, "reduces the parts of the components path: "
+                        "set solver.reduction.enabled = true and solver.reduction.method = "
+                        '"components"')
+    from ..cluster import check_cluster, client_for
+    if cache is not None:
+        cache = Path(cache)
+        if cache.exists() and not cache.is_dir():
+            raise CaseError("command line", "--cache", f"{cache} is not a folder")
+    done = None if on_part is None else (
+        lambda task, part: on_part(task.name, sum(part.seconds.values()),
+                                   "cache" in part.seconds))
+    client = cluster = None
+    if workers or scheduler:
+        check_cluster(scheduler, workers)
+        client, cluster = client_for(scheduler, workers)
+    try:
+        yield Engine(client, cache, done)
+    finally:
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()
