@@ -7,7 +7,7 @@ one: N lining moduli, the complex modes of each.
   workers, each variant reducing the parts the lining changes and reading the others back.
 
 Each is timed from a child process (start-up included), in that order; the cache starts
-empty. The unstable modes of the first variant are compared between the paths.
+empty. Each variant's unstable modes are compared between the two sweeps.
 
     python tools/bench_parts_campaign.py [CASE] [--moduli 3e9:8e9:10] [--material lining]
                                          [--mu 0.4] [--workers 2] [--set key=value ...]
@@ -61,10 +61,9 @@ def main(argv=None):
     work = Path(tempfile.mkdtemp(prefix="bench_parts_"))
     load0, rows = os.getloadavg()[0], {}
     try:
-        t0, first = time.perf_counter(), None
+        t0 = time.perf_counter()
         for E in moduli:
-            _, out = transient(["cea", args.case, "--json"] + sets(overrides + [f"{key}={E}"]))
-            first = first or json.loads(out)
+            transient(["cea", args.case, "--json"] + sets(overrides + [f"{key}={E}"]))
         rows["assembled, back to back"] = time.perf_counter() - t0
         grid = [f"{key}={json.dumps([float(E) for E in moduli])}"]
         rows[f"assembled, sweep on {args.workers} workers"], _ = transient(
@@ -74,11 +73,15 @@ def main(argv=None):
             ["sweep", args.case, "--kind", "cea", "--out", str(work / "components"),
              "--workers", str(args.workers), "--cache", str(work / "parts"),
              "--param", grid[0]] + sets(overrides + [COMPONENTS]))
-        swept = sorted((work / "components").glob("*.json"))
-        swept = [p for p in swept if p.name != "sweep.json"]
         parts = len(list((work / "parts").glob("part-*.npz")))
-        ref = [m for m in first["modes"] if m["unstable"]]
-        mine = [m for m in json.loads(swept[0].read_text())["modes"] if m["unstable"]]
+        # each variant's unstable modes, assembled against components (the same variant)
+        rows_a = json.loads((work / "assembled" / "sweep.json").read_text())["rows"]
+        compared = []
+        for row in rows_a:
+            a, c = (json.loads((work / kind / row["output"]).read_text())["modes"]
+                    for kind in ("assembled", "components"))
+            compared.append((row["variant"], [m for m in a if m["unstable"]],
+                             [m for m in c if m["unstable"]]))
     finally:
         load1 = os.getloadavg()[0]
         shutil.rmtree(work, ignore_errors=True)
@@ -87,12 +90,12 @@ def main(argv=None):
              f"{load0:.1f}-{load1:.1f}; {parts} parts reduced in all", "",
              "| path | seconds | against back to back |", "|---|---|---|"]
     lines += [f"| {name} | {s:.0f} | {base / s:.2f}x |" for name, s in rows.items()]
-    nearest = [min(mine, key=lambda b: abs(b["frequency_hz"] - a["frequency_hz"]))
-               for a in ref] if mine else []
-    lines += ["", f"unstable modes of the first modulus ({len(ref)} assembled, {len(mine)} "
-              "components), assembled -> the nearest of components: " + ", ".join(
-                  f"{a['frequency_hz']:.0f} Hz {a['real']:.1f} -> {b['frequency_hz']:.0f} Hz "
-                  f"{b['real']:.1f} 1/s" for a, b in zip(ref, nearest))]
+    for name, ref, mine in compared:
+        nearest = [min(mine, key=lambda b: abs(b["frequency_hz"] - a["frequency_hz"]))
+                   for a in ref] if mine else []
+        lines.append(f"- {name}: {len(ref)} unstable assembled, {len(mine)} components; " +
+                     ", ".join(f"{a['frequency_hz']:.0f} Hz {a['real']:.2f} -> "
+                               f"{b['real']:.2f} 1/s" for a, b in zip(ref, nearest)))
     table = "\n".join(lines)
     print(table)
     if args.markdown:
