@@ -139,26 +139,6 @@ def test_a_cached_part_is_read_back_and_only_a_changed_part_is_reduced_again(tmp
     assert not list((tmp_path / "parts").glob(".*"))
 
 
-def test_parts_on_a_dask_cluster_equal_parts_in_this_process():
-    """One task a part on a LocalCluster of two one-thread workers: the same basis as in this
-    process (to round-off: other BLAS threads), each part reported as it finishes."""
-    pytest.importorskip("dask.distributed")
-    from transient.reduce.parts import Engine
-    from transient.campaign.campaign import client_for
-    case = load(PAD, SMALL + ['solver.reduction.method="components"'])
-    here = _reduced(case, None)
-    client, cluster = client_for(None, 2)
-    try:
-        made = []
-        there = _reduced(case, Engine(client, done=lambda task, part: made.append(task.name)))
-    finally:
-        client.close()
-        cluster.close()
-    assert sorted(made) == ["disc", "pad"]
-    np.testing.assert_allclose(there[1], here[1], rtol=1e-9)
-    np.testing.assert_allclose(np.abs(there[0]), np.abs(here[0]), atol=1e-9 * np.abs(here[0]).max())
-
-
 def test_a_part_larger_than_a_worker_is_refused_naming_its_key():
     """The cluster's smallest worker bounds each part's reduction (estimated from its cells):
     a part above it is refused before any is reduced, by the key that sizes it."""
@@ -209,15 +189,17 @@ class _CrashOnce:
         return self.task.run()
 
 
-def test_a_worker_killed_during_the_reduction_is_made_up_bit_for_bit(tmp_path):
-    """The scheduler runs a dead worker's part again on another: the basis equals the one of
-    a cluster that lost none, bit for bit (one-thread workers, the same arithmetic)."""
+def test_parts_on_a_cluster_equal_parts_here_and_a_killed_worker_is_made_up(tmp_path):
+    """One task a part on a LocalCluster of two one-thread workers: the same basis as in this
+    process (to round-off: other BLAS threads), each part reported as it finishes. The
+    scheduler runs a dead worker's part again on another: the basis then equals the one of
+    the cluster that lost none, bit for bit (one-thread workers, the same arithmetic)."""
     pytest.importorskip("dask.distributed")
     import sys
     import cloudpickle
-    from transient.reduce.parts import on_cluster
+    from transient.reduce.parts import Engine, on_cluster
     from transient.reduce.components import components_basis
-    from transient.campaign.campaign import client_for
+    from transient.cluster import client_for
     cloudpickle.register_pickle_by_value(sys.modules[__name__])
     case = load(PAD, SMALL + ['solver.reduction.method="components"'])
     model = build_model(case)
@@ -238,8 +220,15 @@ def test_a_worker_killed_during_the_reduction_is_made_up_bit_for_bit(tmp_path):
                          for t in tasks]
             return on_cluster(self.client)(tasks)
 
+    here = _reduced(case, None)
     client, cluster = client_for(None, 2)
     try:
+        made = []
+        there = _reduced(case, Engine(client, done=lambda task, part: made.append(task.name)))
+        assert sorted(made) == ["disc", "pad"]
+        np.testing.assert_allclose(there[1], here[1], rtol=1e-9)
+        np.testing.assert_allclose(np.abs(there[0]), np.abs(here[0]),
+                                   atol=1e-9 * np.abs(here[0]).max())
         bases = []
         for crash in (False, True):
             pairs = build_contact(case, model)
