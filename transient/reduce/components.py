@@ -19,11 +19,12 @@ import scipy.sparse as sp
 
 from ..case.sizes import cells_by_part, setup_bytes
 from ..contact.contactset import first_tangent
+from ..dynamics.critical import critical_tangent
 from ..errors import CaseError
 from ..model.dofs import free_block
 from ..solve import blas
 from ..solve.preload import Preload
-from .basis import Basis
+from .basis import Basis, flexible_shapes
 from .parts import Engine, PartError, PartTask
 from .sampling import ReducedPreloadError, reduced_preload
 
@@ -107,17 +108,50 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
         Ct = contacts.observe_tangential(X)[0] if contacts.friction is not None else None
     preload = _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant)
     w = contacts.weights
-    K_lin = Kr + (Cr.T * (w * preload.tangent)) @ Cr
-    omega2, A = sla.eigh(0.5 * (K_lin + K_lin.T))
-    mode_hz = np.sort(np.concatenate([p.mode_hz for p in parts]))
+    with blas.every_core():
+        K_lin = Kr + (Cr.T * (w * preload.tangent)) @ Cr
+        omega2, A = sla.eigh(0.5 * (K_lin + K_lin.T))
+        rows, stiffness = [Cr], w * critical_tangent(contacts, preload.tangent)
+        if contacts.friction is not None:
+            rows += list(contacts.observe_tangential(X))
+        loads = X.T @ np.stack([constant] + list(patterns), axis=1)
+        A, omega2, n_modes, n_shapes = condensed(
+            K_lin, omega2, A, reduction.modes_fmax, np.vstack(rows),
+            np.tile(stiffness, len(rows)), loads, X.T @ (M @ preload.u),
+            reduction.statics_tolerance)
     timings = {"parts": t_parts, "coupling": time.perf_counter() - t0 - t_parts,
                "part_seconds": {p.name: sum(p.seconds.values()) for p in parts},
-               "part_stages": {p.name: p.seconds for p in parts}}
-    n_modes = len(mode_hz)
-    basis = Basis(X, A, np.maximum(omega2, 0.0), n_modes, sum(p.n_static for p in parts),
-                  timings, sum(p.n_shapes for p in parts), None, X.shape[1] - n_modes, None,
-                  mode_hz)
+               "part_stages": {p.name: p.seconds for p in parts},
+               "synthesis_dofs": int(X.shape[1])}
+    basis = Basis(X, A, np.maximum(omega2, 0.0), n_modes, loads.shape[1] + 1, timings,
+                  n_shapes, None, len(omega2) - n_modes, None,
+                  np.sqrt(np.maximum(omega2[:n_modes], 0.0)) / (2 * np.pi))
     return basis, preload
+
+
+def condensed(K_lin, omega2, A, cutoff, rows, stiffness, loads, q, tol):
+    """The coupled synthesis condensed again, as the assembled basis is made on the whole
+    model (double modal synthesis): in the parts' coordinates (M = I, K_lin = A diag(omega2)
+    A^T), the coupled modes to the cutoff, the contact shapes of the flexibility beyond them
+    (basis.flexible_shapes on the rows, the law's stiffness at the preload), the responses
+    beyond them to the loads, and the preload q itself. The reduced model is then the size of
+    the assembled one, not the sum of the parts' bases. Returns (A2 (R, n), omega2 (n,) of
+    K_lin on it ascending, the modes kept, the contact shapes kept)."""
+    keep = omega2 <= (2 * np.pi * cutoff) ** 2
+    Am, Ab = A[:, keep], A[:, ~keep]
+    H = (Ab / omega2[~keep]) @ Ab.T
+    shapes, _ = flexible_shapes(H, rows, stiffness, tol, H.__matmul__)
+    S = np.hstack([shapes, H @ loads, (q - Am @ (Am.T @ q))[:, None]])
+    for _ in range(2):            # what the modes hold, out (twice, for round-off)
+        S -= Am @ (Am.T @ S)
+    norms = np.linalg.norm(S, axis=0)
+    S = S[:, norms > 1e-12 * max(norms.max(), 1e-300)]
+    S /= np.linalg.norm(S, axis=0)
+    lam, V = np.linalg.eigh(S.T @ S)
+    big = lam > 1e-12 * max(lam.max(), 1.0)
+    W = np.hstack([Am, S @ (V[:, big] / np.sqrt(lam[big]))])
+    omega2, V = np.linalg.eigh(W.T @ (K_lin @ W))
+    return W @ V, omega2, int(keep.sum()), shapes.shape[1]
 
 
 def check_parts(case, model, budget):
