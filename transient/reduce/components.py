@@ -106,9 +106,9 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
     with blas.every_core():
         Cr = contacts.observe(X)
         Ct = contacts.observe_tangential(X)[0] if contacts.friction is not None else None
-    preload = _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant)
     w = contacts.weights
-    with blas.every_core():
+    with blas.every_core():         # dense algebra in reduced coordinates, no solve beside it
+        preload = _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant)
         K_lin = Kr + (Cr.T * (w * preload.tangent)) @ Cr
         omega2, A = sla.eigh(0.5 * (K_lin + K_lin.T))
         rows, stiffness = [Cr], w * critical_tangent(contacts, preload.tangent)

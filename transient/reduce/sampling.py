@@ -18,10 +18,13 @@ the columns formed only for the points it takes (memory N x m, not N^2, nor feat
 stops at the relative residual asked: the tolerance sets the number of points.
 """
 import time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
+
+from ..solve.preload import STALE
 
 
 @dataclass(frozen=True)
@@ -268,18 +271,31 @@ def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter, Ct=None, start=None)
         return r, g, p, kt
 
     r, g, p, kt = residual(q)
+    held, factors = None, None
     for it in range(max_iter + 1):
         res = np.linalg.norm(r) / scale
         if res <= tol:
             return q, g, p, kt, it, float(res)
         if it < max_iter:
             d = kt if start is None or it else np.maximum(kt, start)
-            tangent = Kr + (Cr.T * (w * d)) @ Cr
-            if Ct is not None:
-                tangent += (Ct.T * (w * m * d)) @ Cr
             try:
-                dq = np.linalg.solve(tangent, r)
-            except np.linalg.LinAlgError:
+                if start is None:
+                    tangent = Kr + (Cr.T * (w * d)) @ Cr
+                    if Ct is not None:
+                        tangent += (Ct.T * (w * m * d)) @ Cr
+                    dq = np.linalg.solve(tangent, r)
+                else:
+                    # from the undeformed state: the tangent (its P x n^2 product the cost
+                    # of an iteration) kept while the laws' tangents move less than STALE
+                    if held is None or np.max(np.abs(d - held)) > STALE * np.max(held):
+                        tangent = Kr + (Cr.T * (w * d)) @ Cr
+                        if Ct is not None:
+                            tangent += (Ct.T * (w * m * d)) @ Cr
+                        with warnings.catch_warnings():
+                            warnings.simplefilter("error", sla.LinAlgWarning)
+                            factors, held = sla.lu_factor(tangent, check_finite=False), d
+                    dq = sla.lu_solve(factors, r, check_finite=False)
+            except (np.linalg.LinAlgError, sla.LinAlgWarning):
                 raise ReducedPreloadError(
                     "the preload tangent in the reduced coordinates is singular: too few "
                     "contact points or statics hold the parts") from None
