@@ -111,9 +111,9 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False, parts=No
         cs = built.solver or stages.timed("factorization", factorization, case, model, contacts)
     if components:
         # each part's own basis, the preload solved on their coupling (reduce.components)
-        basis, preload = stages.timed("components", components_basis, case, model,
-                                      reduction_mass(case, model, None)[0], pairs, contacts,
-                                      patterns, constant, parts)
+        M = reduction_mass(case, model, None)[0]
+        basis, preload = stages.timed("components", components_basis, case, model, M, pairs,
+                                      contacts, patterns, constant, parts)
     else:
         try:
             preload = stages.timed("preload", solve_preload, model.K, model.fixed, constant,
@@ -140,9 +140,8 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False, parts=No
     names = tuple(model.sensor_names) if case.output.sensors else ()
     if solver.reduction.enabled:
         if components:
-            red, elsewhere = reduce(case, model, reduction_mass(case, model, None)[0], pairs,
-                                    contacts, preload, patterns, v0, None, None, stages,
-                                    basis=basis), False
+            red, elsewhere = reduce(case, model, M, pairs, contacts, preload, patterns, v0,
+                                    None, None, stages, basis=basis), False
         else:
             red, elsewhere = _assembled(case, stages, built, model, pairs, contacts, preload,
                                         patterns, v0, cs, tangent)

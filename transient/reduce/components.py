@@ -105,15 +105,15 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
     Kr = sla.block_diag(*[p.Kr for p in parts])
     with blas.every_core():
         Cr = contacts.observe(X)
-        Ct = contacts.observe_tangential(X)[0] if contacts.friction is not None else None
+        tangential = (list(contacts.observe_tangential(X)) if contacts.friction is not None
+                      else [])
+        Ct = tangential[0] if tangential else None
     w = contacts.weights
     with blas.every_core():         # dense algebra in reduced coordinates, no solve beside it
         preload = _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant)
         K_lin = Kr + (Cr.T * (w * preload.tangent)) @ Cr
         omega2, A = sla.eigh(0.5 * (K_lin + K_lin.T))
-        rows, stiffness = [Cr], w * critical_tangent(contacts, preload.tangent)
-        if contacts.friction is not None:
-            rows += list(contacts.observe_tangential(X))
+        rows, stiffness = [Cr] + tangential, w * critical_tangent(contacts, preload.tangent)
         loads = X.T @ np.stack([constant] + list(patterns), axis=1)
         A, omega2, n_modes, n_shapes = condensed(
             K_lin, omega2, A, reduction.modes_fmax, np.vstack(rows),
