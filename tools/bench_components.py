@@ -14,6 +14,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
+from tables import publish  # noqa: E402  (a sibling in tools/)
+
 ROOT = Path(__file__).resolve().parent.parent
 METHODS = ("assembled", "components")
 
@@ -31,7 +35,7 @@ print(json.dumps({"seconds": seconds, "stages": a.stages, "reduced": a.reduced,
                   "ndof": a.ndof, "peak_gb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
                   / 1e6, "parts": a.meta.get("basis_timings", {}).get("part_stages"),
                   "real": m.eigenvalues.real.tolist(), "hz": m.frequency_hz.tolist(),
-                  "unstable": m.unstable.tolist(), "fmax": a.fmax}))
+                  "fmax": a.fmax}))
 """
 
 
@@ -45,19 +49,15 @@ def analysed(case, overrides, method):
 
 
 def compared(ref, other):
-    """(unstable modes of ref below fmax, worst frequency error, worst real error over its
-    allowance) of other's modes, each paired with the nearest of ref's in frequency."""
-    import numpy as np
-    hz, real = np.array(other["hz"]), np.array(other["real"])
-    worst_f, worst_r, count = 0.0, 0.0, 0
-    for f, r, u in zip(ref["hz"], ref["real"], ref["unstable"]):
-        if not u or f > ref["fmax"]:
-            continue
-        count += 1
-        j = int(np.argmin(np.abs(hz - f)))
-        worst_f = max(worst_f, abs(hz[j] / f - 1))
-        worst_r = max(worst_r, abs(real[j] - r) / max(0.02 * abs(r), 5.0))
-    return count, worst_f, worst_r
+    """(unstable modes below fmax in either, worst frequency error, worst real error over
+    2% of its own or 5 1/s) of other against ref, paired by stability.compare.pair_modes."""
+    from transient.stability.compare import pair_modes
+    from transient.stability.modes import ComplexModes
+    pairs = pair_modes(*(ComplexModes(np.array(r["real"]) + 2j * np.pi * np.array(r["hz"]),
+                                      None) for r in (ref, other)), ref["fmax"])
+    return (len(pairs), max((abs(p.frequency_error) for p in pairs), default=0.0),
+            max((abs(p.real_error) / max(0.02 * abs(p.real), 5.0) for p in pairs),
+                default=0.0))
 
 
 def markdown(case, mu, rows, load):
@@ -92,13 +92,7 @@ def main(argv=None):
                   f"{runs[m]['peak_gb']:.2f} GB, {count} unstable, frequency {worst_f:.1e}, "
                   f"real {worst_r:.2f} of allowed; parts {runs[m]['parts']}", flush=True)
     load = 0.5 * (load0 + os.getloadavg()[0])
-    table = markdown(args.case, args.mu, rows, load)
-    print(table)
-    if args.markdown:
-        with open(args.markdown, "a") as f:
-            f.write(table + "\n")
-    if args.json:
-        Path(args.json).write_text(json.dumps(rows, indent=1))
+    publish(markdown(args.case, args.mu, rows, load), args.markdown, args.json, rows)
     return 0
 
 

@@ -51,7 +51,10 @@ def main(argv=None):
     parser.add_argument("--markdown")
     args = parser.parse_args(argv)
     import numpy as np
+    from tables import publish
     from transient.case.loading import load
+    from transient.stability.compare import pair_modes
+    from transient.stability.modes import ComplexModes
     start, stop, count = args.moduli.split(":")
     moduli = np.linspace(float(start), float(stop), int(count))
     pairs = [n for n, c in load(args.case, args.set).contact.items()
@@ -80,8 +83,7 @@ def main(argv=None):
         for row in rows_a:
             a, c = (json.loads((work / kind / row["output"]).read_text())["modes"]
                     for kind in ("assembled", "components"))
-            compared.append((row["variant"], [m for m in a if m["unstable"]],
-                             [m for m in c if m["unstable"]]))
+            compared.append((row["variant"], a, c))
     finally:
         load1 = os.getloadavg()[0]
         shutil.rmtree(work, ignore_errors=True)
@@ -91,16 +93,15 @@ def main(argv=None):
              "| path | seconds | against back to back |", "|---|---|---|"]
     lines += [f"| {name} | {s:.0f} | {base / s:.2f}x |" for name, s in rows.items()]
     for name, ref, mine in compared:
-        nearest = [min(mine, key=lambda b: abs(b["frequency_hz"] - a["frequency_hz"]))
-                   for a in ref] if mine else []
-        lines.append(f"- {name}: {len(ref)} unstable assembled, {len(mine)} components; " +
-                     ", ".join(f"{a['frequency_hz']:.0f} Hz {a['real']:.2f} -> "
-                               f"{b['real']:.2f} 1/s" for a, b in zip(ref, nearest)))
-    table = "\n".join(lines)
-    print(table)
-    if args.markdown:
-        with open(args.markdown, "a") as f:
-            f.write(table + "\n")
+        # stability.compare.pair_modes: every mode unstable in either, with its nearest
+        pairs = pair_modes(*(ComplexModes(np.array([m["real"] + 2j * np.pi * m["frequency_hz"]
+                                                    for m in modes]), None)
+                             for modes in (ref, mine)), np.inf)
+        lines.append(f"- {name}: {sum(p.unstable for p in pairs)} unstable assembled, "
+                     f"{sum(p.other_unstable for p in pairs)} components; " + ", ".join(
+                         f"{p.frequency_hz:.0f} Hz {p.real:.2f} -> {p.other_real:.2f} 1/s"
+                         for p in pairs))
+    publish("\n".join(lines), args.markdown)
     return 0
 
 

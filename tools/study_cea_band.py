@@ -18,7 +18,6 @@ shift, PARDISO's when installed.
 """
 import argparse
 import hashlib
-import json
 import sys
 import time
 from pathlib import Path
@@ -26,6 +25,7 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg as sla
 
+from tables import publish  # noqa: E402  (a sibling in tools/)
 from transient.case.loading import load
 from transient.stability.compare import pair_modes
 from transient.stability.linearize import linearized
@@ -160,13 +160,7 @@ def main(argv=None):
     rows = study(args.case, args.overrides, [float(m) for m in args.mu.split(",")],
                  [float(f) for f in args.factors.split(",")], args.out, args.spans,
                  args.reduced)
-    table = markdown(args.case, rows)
-    print(table)
-    if args.markdown:
-        with open(args.markdown, "a") as f:
-            f.write(table + "\n")
-    if args.json:
-        Path(args.json).write_text(json.dumps(rows, indent=1))
+    publish(markdown(args.case, rows), args.markdown, args.json, rows)
     return 0
 
 
