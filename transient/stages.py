@@ -61,7 +61,7 @@ def prepare(case, check=None, built=None, unsampled=False, analysis=False, parts
     first, a campaign's variants share them). unsampled: also the Setup of a sampled rule's
     candidates (Setup.unsampled), the cea's, from the same stages. analysis: the system is
     linearized, not integrated (the cea's): it gets no critical step and the Setup no rows0
-    (the critical step's eigenvalues were 0.3 s of pad_disc's cea, on its 7734 points).
+    (the critical step's eigenvalues are dense work an analysis does not use).
     parts: where the components path reduces its parts (reduce.parts.Engine; None: here)."""
     with blas.one_thread(), heap.setup():
         return _prepare(case, Stages(check), built or Built(None), unsampled, analysis, parts)
@@ -149,7 +149,7 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False, parts=No
         if elsewhere:
             meta["basis_mu"] = {name: c.friction.basis_mu for name, c in case.contact.items()
                                 if c.friction.basis_mu}
-        # the rows and operators on the reduced coordinates (0.8 s for the cea's 7734 points)
+        # the rows and operators on the reduced coordinates
         system, state = stages.timed("reduced_system", _reduced, case, red, patterns, signals,
                                      sensors, names, not analysis)
         if want_unsampled and red.unsampled is not None:

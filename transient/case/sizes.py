@@ -15,7 +15,7 @@ TETS_PER_HEX = 6          # the generators split each hex in six tets (Kuhn)
 # peaks per entry, from pad_disc to a 1M-dof tet10 brake (docs/performance.md, "Memory")
 BYTES_PER_ENTRY = 130
 # the model alone (K and M assembled, and their COO triplets while they are): the components
-# path's process holds it whole beside one part's setup at a time (pad_disc's model: 24)
+# path's process holds it whole beside one part's setup at a time (docs/performance.md)
 MODEL_BYTES_PER_ENTRY = 30
 
 

@@ -72,8 +72,9 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
     def beyond(b):
         """(K - sigma M)^-1 beyond the modes, P^T (K - sigma M)^-1 P with P = I - M Phi Phi^T:
         the loads without their modal part, so that a floating part's rigid motion (1/sigma,
-        1e8 times its elastic response) never enters the responses only to be subtracted
-        (its eigenvalue, round-off of the largest, is not known to that precision)."""
+        orders of magnitude above its elastic response) never enters the responses only to
+        be subtracted (its eigenvalue, round-off of the largest, is not known to that
+        precision)."""
         x = solve(np.asfortranarray(b - MPhi @ (Phi.T @ b)))
         return x - Phi @ (MPhi.T @ x)
     columns, n_shapes = [], 0
