@@ -359,19 +359,23 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols, out=
     return flexible_shapes(H, Cc, stiffness, tol, response, solves)
 
 
-def flexible_shapes(H, Cc, stiffness, tol, response, solves=False):
+def flexible_shapes(H, Cc, stiffness, tol, response, solves=False, gram=None):
     """The contact shapes of a flexibility H = E^T K^-1 E (k x k, beyond the modes) of the
     load basis E of the rows Cc (m x k: C = Cc E^T), the law's stiffness (m,) at the points:
     with Y = D^1/2 Cc H^1/2, mu the eigenvalues of Y Y^T; response(Z) gives K^-1 E Z, and the
     shapes kept (mu >= tol) are response(X^T u_i). solves: response solves (its products on
-    one thread). Returns (shapes (n, r), mu (k,) descending)."""
+    one thread). gram: Cc^T D Cc when the caller forms it cheaper (Cc, stiffness unused).
+    Returns (shapes (n, r), mu (k,) descending)."""
     lam, W = np.linalg.eigh(0.5 * (H + H.T))
     root = (W * np.sqrt(np.maximum(lam, 0.0))) @ W.T
-    X = np.sqrt(np.maximum(stiffness, 0.0))[:, None] * Cc
     # Y Y^T and Y^T Y = H^1/2 X^T X H^1/2 share their eigenvalues mu: the k x k one is the
     # cheap one (m >= k), and X^T u_i = X^T Y v_i / sqrt(mu_i) = X^T X H^1/2 v_i / sqrt(mu_i)
-    XtX = X.T @ X
-    X = None       # points x rho (0.40 GB at 1M dofs): not held while the shapes are solved
+    if gram is None:
+        X = np.sqrt(np.maximum(stiffness, 0.0))[:, None] * Cc
+        XtX = X.T @ X
+        X = None   # points x rho (0.40 GB at 1M dofs): not held while the shapes are solved
+    else:
+        XtX = gram
     mu, Q = np.linalg.eigh(root @ XtX @ root)
     mu, Q = np.maximum(mu[::-1], 0.0), Q[:, ::-1]
     kept = mu >= tol

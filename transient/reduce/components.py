@@ -26,7 +26,7 @@ from ..solve import blas
 from ..solve.preload import Preload
 from .basis import Basis, flexible_shapes
 from .parts import Engine, PartError, PartTask
-from .sampling import ReducedPreloadError, reduced_preload
+from .sampling import PairBlocks, ReducedPreloadError, pair_gram, reduced_preload
 
 
 def part_tasks(model, M, pairs, contacts, patterns, constant):
@@ -110,15 +110,15 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
         Ct = tangential[0] if tangential else None
     w = contacts.weights
     with blas.every_core():         # dense algebra in reduced coordinates, no solve beside it
-        preload = _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant)
-        K_lin = Kr + (Cr.T * (w * preload.tangent)) @ Cr
+        preload = _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant,
+                           PairBlocks(contacts, Cr, Ct))
+        K_lin = PairBlocks(contacts, Cr).stiffness(Kr, w * preload.tangent)
         omega2, A = sla.eigh(0.5 * (K_lin + K_lin.T))
         rows, stiffness = [Cr] + tangential, w * critical_tangent(contacts, preload.tangent)
         loads = X.T @ np.stack([constant] + list(patterns), axis=1)
         A, omega2, n_modes, n_shapes = condensed(
-            K_lin, omega2, A, reduction.modes_fmax, np.vstack(rows),
-            np.tile(stiffness, len(rows)), loads, X.T @ (M @ preload.u),
-            reduction.statics_tolerance)
+            K_lin, omega2, A, reduction.modes_fmax, pair_gram(contacts, rows, stiffness),
+            loads, X.T @ (M @ preload.u), reduction.statics_tolerance)
     timings = {"parts": t_parts, "coupling": time.perf_counter() - t0 - t_parts,
                "part_seconds": {p.name: sum(p.seconds.values()) for p in parts},
                "part_stages": {p.name: p.seconds for p in parts},
@@ -129,18 +129,18 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
     return basis, preload
 
 
-def condensed(K_lin, omega2, A, cutoff, rows, stiffness, loads, q, tol):
+def condensed(K_lin, omega2, A, cutoff, gram, loads, q, tol):
     """The coupled synthesis condensed again, as the assembled basis is made on the whole
     model (double modal synthesis): in the parts' coordinates (M = I, K_lin = A diag(omega2)
     A^T), the coupled modes to the cutoff, the contact shapes of the flexibility beyond them
-    (basis.flexible_shapes on the rows, the law's stiffness at the preload), the responses
+    (basis.flexible_shapes on the rows' gram, the law's stiffness at the preload), the responses
     beyond them to the loads, and the preload q itself. The reduced model is then the size of
     the assembled one, not the sum of the parts' bases. Returns (A2 (R, n), omega2 (n,) of
     K_lin on it ascending, the modes kept, the contact shapes kept)."""
     keep = omega2 <= (2 * np.pi * cutoff) ** 2
     Am, Ab = A[:, keep], A[:, ~keep]
     H = (Ab / omega2[~keep]) @ Ab.T
-    shapes, _ = flexible_shapes(H, rows, stiffness, tol, H.__matmul__)
+    shapes, _ = flexible_shapes(H, None, None, tol, H.__matmul__, gram=gram)
     S = np.hstack([shapes, H @ loads, (q - Am @ (Am.T @ q))[:, None]])
     for _ in range(2):            # what the modes hold, out (twice, for round-off)
         S -= Am @ (Am.T @ S)
@@ -171,10 +171,10 @@ def check_parts(case, model, budget):
                             "mesh of the part")
 
 
-def _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant):
+def _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant, blocks):
     """The Preload of the coupled reduced model: Newton from the undeformed state, its first
     step at least at each pair's k (first_tangent: an exponential law is far softer at zero
-    gap than where the load takes it)."""
+    gap than where the load takes it); blocks: the rows' PairBlocks."""
     t0 = time.perf_counter()
     g0 = contacts.gap0
     if not np.any(constant):
@@ -186,7 +186,7 @@ def _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant):
         q, g, p, kt, it, res = reduced_preload(Kr, X.T @ constant, Cr, contacts,
                                                np.zeros(Kr.shape[0]), newton.tolerance,
                                                newton.max_iter, Ct,
-                                               first_tangent(pairs, contacts))
+                                               first_tangent(pairs, contacts), blocks)
     except ReducedPreloadError as exc:
         raise CaseError(case.path, "loads", str(exc)) from None
     return Preload(X @ q, g, p, kt, it, res, time.perf_counter() - t0)

@@ -251,12 +251,14 @@ def sample_contact(contacts, candidate, omega2, Cr, q0, gap, pressure, tangent, 
                    s)
 
 
-def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter, Ct=None, start=None):
+def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter, Ct=None, start=None,
+                    blocks=None):
     """Newton on fr + Cr^T (w p(Cr q + g0)) - Kr q = 0 (dense: a reduced model); with the
     tangential rows Ct, plus the friction of steady sliding Ct^T (w p m), whose stiffness the
     tangent holds (dense and small here: exact Newton). start: (P,) the tangent the first step
     takes at least, with a backtracking line search (from the undeformed state, as
-    solve_preload), or None (from a preload close by: plain Newton)."""
+    solve_preload), or None (from a preload close by: plain Newton). blocks: with start, the
+    rows' PairBlocks (with Ct), which form the tangent; None: the whole rows."""
     q = q.copy()
     scale = max(np.linalg.norm(fr), 1e-300)
     w = contacts.weights
@@ -288,9 +290,12 @@ def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter, Ct=None, start=None)
                     # from the undeformed state: the tangent (its P x n^2 product the cost
                     # of an iteration) kept while the laws' tangents move less than STALE
                     if held is None or np.max(np.abs(d - held)) > STALE * np.max(held):
-                        tangent = Kr + (Cr.T * (w * d)) @ Cr
-                        if Ct is not None:
-                            tangent += (Ct.T * (w * m * d)) @ Cr
+                        if blocks is None:
+                            tangent = Kr + (Cr.T * (w * d)) @ Cr
+                            if Ct is not None:
+                                tangent += (Ct.T * (w * m * d)) @ Cr
+                        else:
+                            tangent = blocks.stiffness(Kr, w * d)
                         with warnings.catch_warnings():
                             warnings.simplefilter("error", sla.LinAlgWarning)
                             factors, held = sla.lu_factor(tangent, check_finite=False), d
@@ -313,3 +318,43 @@ def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter, Ct=None, start=None)
             q = trial
     raise ReducedPreloadError(f"the preload in the reduced coordinates did not converge in "
                               f"{max_iter} Newton iterations (residual {res:.1e})")
+
+
+
+class PairBlocks:
+    """The contact stiffness of reduced coordinates a pair at a time: in the parts'
+    coordinates a pair's rows see only its two parts' shapes, so Cr^T diag(wd) Cr (and the
+    steady sliding's Ct^T diag(wd m) Cr) is a sum of blocks that small. The rows' blocks are
+    cut once, for every Newton iteration."""
+
+    def __init__(self, contacts, Cr, Ct=None):
+        self.blocks = []
+        for s in contacts.slices.values():
+            seen = np.any(Cr[s] != 0.0, axis=0)
+            if Ct is not None:
+                seen |= np.any(Ct[s] != 0.0, axis=0)
+            c = np.flatnonzero(seen)
+            normal = Cr[s][:, c]
+            rows = (normal if Ct is None
+                    else normal + contacts.friction.m[s, None] * Ct[s][:, c])
+            self.blocks.append((s, np.ix_(c, c), normal, rows))
+
+    def stiffness(self, Kr, wd):
+        """Kr + the contact's tangent at the points' law stiffness wd (P,)."""
+        K = Kr.copy()
+        for s, block, normal, rows in self.blocks:
+            K[block] += (rows.T * wd[s]) @ normal
+        return K
+
+
+def pair_gram(contacts, rows, d):
+    """sum over rows R of R^T diag(d) R (d >= 0 (P,), its negative entries as zero), a
+    pair's block at a time (as PairBlocks): the rows in the parts' coordinates."""
+    n = rows[0].shape[1]
+    gram = np.zeros((n, n))
+    root = np.sqrt(np.maximum(d, 0.0))
+    for s in contacts.slices.values():
+        c = np.flatnonzero(np.logical_or.reduce([np.any(R[s] != 0.0, axis=0) for R in rows]))
+        block = np.vstack([R[s][:, c] for R in rows]) * np.tile(root[s], len(rows))[:, None]
+        gram[np.ix_(c, c)] += block.T @ block      # one symmetric rank-k product (syrk)
+    return gram
