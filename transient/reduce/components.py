@@ -31,10 +31,12 @@ from .sampling import PairBlocks, ReducedPreloadError, pair_gram, reduced_preloa
 
 def part_tasks(model, M, pairs, contacts, patterns, constant):
     """(dofs, (name, K, M, interface, loads)) of each part: the arguments of part_basis on
-    the part's free dofs, which sit at dofs. The interface loads are the contact's: with
+    the part's free dofs, which sit at dofs. The interface loads E are the contact's: with
     factored rows (a regularized rule, C = L B^T) the columns of B on the part, the traces of
-    the (1-eps)-compatible shapes, whose count eps sets, not the mesh; else a unit load on
-    each dof the rows touch. With friction, the tangential rows' loads too."""
+    the (1-eps)-compatible shapes, fewer than the dofs the rows touch (their count grows
+    with the interface's mesh all the same); else a unit load on
+    each dof the rows touch. With friction, the tangential rows' loads too. The rows reach
+    the task as their gram in E's coordinates (k x k), not point by point."""
     free = ~model.fixed
     f = contacts.friction
     scale = contacts.weights * law_tangent(pairs, contacts)
@@ -63,12 +65,18 @@ def part_tasks(model, M, pairs, contacts, patterns, constant):
             Ep = E_all[dofs].tocsc()
             cols = np.flatnonzero(np.diff(Ep.indptr))
             E, Cc = Ep[:, cols], rows[:, cols]
-        touch = np.flatnonzero(np.diff(Cc.tocsr().indptr))
-        interface = ((E.toarray(), Cc.tocsr()[touch].toarray(), scale[touch]) if len(cols)
-                     else None)
+        interface = (sp.csc_matrix(E), _gram(Cc.tocsr(), scale)) if len(cols) else None
         out.append((dofs, (name, free_block(model.K, dofs), free_block(M, dofs), interface,
                            loads[dofs])))
     return out
+
+
+def _gram(Cc, stiffness):
+    """Cc^T diag(stiffness) Cc (k, k) of the rows Cc (m, k) sparse that touch the part, its
+    negative stiffness as zero (basis.flexible_shapes' X^T X)."""
+    touch = np.flatnonzero(np.diff(Cc.indptr))
+    X = np.sqrt(np.maximum(stiffness[touch], 0.0))[:, None] * Cc[touch].toarray()
+    return X.T @ X
 
 
 def law_tangent(pairs, contacts):

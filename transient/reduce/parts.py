@@ -45,9 +45,11 @@ class PartBasis:
 
 def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"):
     """The PartBasis of one part from its own matrices on its free dofs: K, M (n, n) sparse,
-    interface (E (n, k), Cc (m, k), stiffness (m,)) the loads that span the contact's on the
-    part, C = Cc E^T its rows, the law's w k_t at each row (None: no contact on the part),
-    loads (n, s) the static loads to respond to.
+    interface (E (n, k) sparse, G (k, k)) the loads that span the contact's on the part and
+    the rows' gram in them, G = Cc^T diag(w k_t) Cc with C = Cc E^T the part's rows and w k_t
+    the law's stiffness at each (None: no contact on the part): a task holds no array the
+    size of the contact points, nor a dense one of the interface; loads (n, s) the static
+    loads to respond to.
 
     Its own factorization of K - sigma M (the small shift keeps a floating part solvable) gives
     the modes and the responses beyond them; the interface's are kept by their flexibility
@@ -79,9 +81,10 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
         return x - Phi @ (MPhi.T @ x)
     columns, n_shapes = [], 0
     if interface is not None:
-        E, Cc, stiffness = interface
-        KE = beyond(E)
-        shapes, _ = flexible_shapes(E.T @ KE, Cc, stiffness, tol, KE.__matmul__)
+        E, G = interface
+        KE = beyond(E.toarray())
+        shapes, _ = flexible_shapes(np.asarray(E.T @ KE), None, None, tol, KE.__matmul__,
+                                    gram=G)
         columns.append(shapes)
         n_shapes = shapes.shape[1]
     lap("interface")
@@ -127,7 +130,7 @@ class PartTask:
     name: str
     K: object                # (n, n) sparse, the part's free dofs
     M: object
-    interface: tuple         # (E, Cc, stiffness) or None
+    interface: tuple         # (E sparse, G) or None
     loads: np.ndarray        # (n, s)
     fmax: float              # the cutoff its modes reach [Hz]
     shift_hz: float
@@ -149,7 +152,8 @@ class PartTask:
         arrays = [self.K.data, self.K.indices, self.K.indptr, self.M.data, self.M.indices,
                   self.M.indptr, self.loads]
         if self.interface is not None:
-            arrays += list(self.interface)
+            E, G = self.interface
+            arrays += [E.data, E.indices, E.indptr, np.array(E.shape), G]
         for a in arrays:
             a = np.ascontiguousarray(a)
             h.update(repr((a.dtype.str, a.shape)).encode())
