@@ -99,6 +99,13 @@ def test_pad_disc_preload_and_modes_match_the_assembled_path():
     assert a.meta["band_residual"] < 1e-4
     assert c.meta["band_residual"] < 0.1
     assert c.meta["reduction_method"] == "components"
+    # each part's interface statics: what the flexibility criterion dropped is below its
+    # tolerance, and the contact's directions on the part are not all kept
+    tol = load(PAD).solver.reduction.statics_tolerance
+    interfaces = c.meta["basis_timings"]["part_interfaces"]
+    assert sorted(interfaces) == ["disc", "pad"]
+    for i in interfaces.values():
+        assert 0 < i["kept"] <= i["loads"] and 0.0 <= i["statics_error"] < tol
 
 
 def test_a_basis_at_another_friction_is_refused_with_components():

@@ -127,13 +127,19 @@ def cmd_compat(args):
 
 def _basis_notes(meta):
     """What the model line says of a reduced basis: its modes' reach, the parts reduced on
-    their own, its band modes' residual in the whole model (from meta or a history's
-    attributes, any of which may be missing)."""
+    their own and their interface statics' error (the largest flexibility dropped), its band
+    modes' residual in the whole model (from meta or a history's attributes, any of which may
+    be missing)."""
     notes = []
     if meta.get("modes_fmax_hz"):
         notes.append(f"its modes to {meta['modes_fmax_hz']:g} Hz")
     if meta.get("reduction_method") == "components":
         notes.append("each part reduced on its own")
+        interfaces = (meta.get("basis_timings") or {}).get("part_interfaces") or {}
+        if interfaces:
+            worst = max(i["statics_error"] for i in interfaces.values())
+            notes.append(f"its interfaces' statics within {worst:.1e} of the contact's "
+                         "flexibility")
     if meta.get("band_residual") is not None:
         notes.append(f"its band modes' residual in the whole model {meta['band_residual']:.1e}")
     return notes

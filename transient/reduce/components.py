@@ -130,7 +130,11 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
     timings = {"parts": t_parts, "coupling": time.perf_counter() - t0 - t_parts,
                "part_seconds": {p.name: sum(p.seconds.values()) for p in parts},
                "part_stages": {p.name: p.seconds for p in parts},
-               "synthesis_dofs": int(X.shape[1])}
+               "synthesis_dofs": int(X.shape[1]),
+               "part_interfaces": {p.name: {"loads": len(p.interface_mu), "kept": p.n_shapes,
+                                            "statics_error": p.statics_error(
+                                                reduction.statics_tolerance)}
+                                   for p in parts}}
     basis = Basis(X, A, np.maximum(omega2, 0.0), n_modes, loads.shape[1] + 1, timings,
                   n_shapes, None, len(omega2) - n_modes, None,
                   np.sqrt(np.maximum(omega2[:n_modes], 0.0)) / (2 * np.pi))

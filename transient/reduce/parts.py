@@ -27,7 +27,7 @@ from .basis import MODES_TOL, flexible_shapes
 # the modules whose arithmetic makes a part's reduction: their source is in its key
 _SOURCES = ("reduce/parts.py", "reduce/basis.py", "solve/modes.py", "solve/lanczos.py",
             "solve/linsolve.py", "model/dofs.py")
-_FIELDS = ("T", "Kr", "mode_hz", "n_shapes", "n_static")
+_FIELDS = ("T", "Kr", "mode_hz", "n_shapes", "n_static", "interface_mu")
 
 
 @dataclass(frozen=True)
@@ -41,6 +41,17 @@ class PartBasis:
     n_shapes: int            # interface shapes kept (contact_shapes at the tolerance)
     n_static: int            # static directions asked beyond the interface shapes
     seconds: dict            # factorization, modes, interface, statics, orthonormalization
+    interface_mu: np.ndarray = None   # (k,) descending: the interface loads' flexibility
+    #                                   against the law's (flexible_shapes' mu); the largest
+    #                                   dropped is the interface statics' error
+
+    def statics_error(self, tol):
+        """The largest flexibility of an interface direction dropped (below tol), relative to
+        the contact law's: the error of the part's contact stiffness against the responses
+        to every contact direction (0: none dropped)."""
+        mu = self.interface_mu
+        dropped = mu[mu < tol] if mu is not None else ()
+        return float(dropped.max()) if len(dropped) else 0.0
 
 
 def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"):
@@ -79,12 +90,12 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
         precision)."""
         x = solve(np.asfortranarray(b - MPhi @ (Phi.T @ b)))
         return x - Phi @ (MPhi.T @ x)
-    columns, n_shapes = [], 0
+    columns, n_shapes, mu = [], 0, np.zeros(0)
     if interface is not None:
         E, G = interface
         KE = beyond(E.toarray())
-        shapes, _ = flexible_shapes(np.asarray(E.T @ KE), None, None, tol, KE.__matmul__,
-                                    gram=G)
+        shapes, mu = flexible_shapes(np.asarray(E.T @ KE), None, None, tol, KE.__matmul__,
+                                     gram=G)
         columns.append(shapes)
         n_shapes = shapes.shape[1]
     lap("interface")
@@ -95,7 +106,7 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
     Kr = T.T @ (K @ T)
     lap("orthonormalization")
     return PartBasis(name, T, 0.5 * (Kr + Kr.T), modes.frequencies, n_shapes,
-                     int(loads.shape[1]), seconds)
+                     int(loads.shape[1]), seconds, mu)
 
 
 class PartError(RuntimeError):
@@ -251,7 +262,7 @@ def cached(runner, folder):
                 with np.load(path) as data:
                     out[i] = PartBasis(task.name, data["T"], data["Kr"], data["mode_hz"],
                                        int(data["n_shapes"]), int(data["n_static"]),
-                                       {"cache": 0.0})
+                                       {"cache": 0.0}, data["interface_mu"])
                 if done is not None:
                     done(task, out[i])
             else:
