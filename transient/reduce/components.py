@@ -104,12 +104,7 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
                         f"on its own ({exc}): is it held by constraints, or free to "
                         "move?") from None
     t_parts = time.perf_counter() - t0
-    widths = [p.T.shape[1] for p in parts]
-    X = np.zeros((model.ndof, sum(widths)))
-    start = 0
-    for (dofs, _), p in zip(tasks, parts):
-        X[dofs, start:start + p.T.shape[1]] = p.T
-        start += p.T.shape[1]
+    X = synthesis(model.ndof, [dofs for dofs, _ in tasks], [p.T for p in parts])
     Kr = sla.block_diag(*[p.Kr for p in parts])
     with blas.every_core():
         Cr = contacts.observe(X)
@@ -139,6 +134,19 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
                   n_shapes, None, len(omega2) - n_modes, None,
                   np.sqrt(np.maximum(omega2[:n_modes], 0.0)) / (2 * np.pi))
     return basis, preload
+
+
+def synthesis(ndof, dofs, bases):
+    """X (ndof, sum of the widths) sparse, CSC: each part's basis T (n_p, w_p) on its dofs,
+    zero elsewhere. Held dense it would be ndof times every part's width; this way it is
+    the parts' bases side by side, no more."""
+    widths = [T.shape[1] for T in bases]
+    counts = np.repeat([len(d) for d in dofs], widths)
+    indptr = np.concatenate([[0], np.cumsum(counts)])
+    index = np.int32 if indptr[-1] < np.iinfo(np.int32).max else np.int64
+    indices = np.concatenate([np.tile(d.astype(index), w) for d, w in zip(dofs, widths)])
+    data = np.concatenate([np.asarray(T).ravel(order="F") for T in bases])
+    return sp.csc_matrix((data, indices, indptr.astype(index)), shape=(ndof, sum(widths)))
 
 
 def condensed(K_lin, omega2, A, cutoff, gram, loads, q, tol):
