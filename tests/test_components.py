@@ -4,6 +4,7 @@ end to end against one bar of their whole length, a floating bar between two cla
 pad_disc's reduced modes and preload against the assembled path's."""
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from transient.case.loading import load
 from transient.errors import CaseError
@@ -293,3 +294,13 @@ def test_a_lining_campaign_reduces_the_disc_once(tmp_path):
     alone = api.cea(load(PAD, overrides + ["materials.lining.E=4.0e9"]), cache=tmp_path / "parts")
     swept = json.loads((tmp_path / "sweep" / campaign.rows[0]["output"]).read_text())
     assert [m["frequency_hz"] for m in swept["modes"]] == alone.modes.frequency_hz.tolist()
+
+
+def test_a_part_with_no_static_direction_keeps_its_modes():
+    """A part with no load on it and no interface direction kept (a coarse statics tolerance)
+    has its modes alone as basis, not an error."""
+    from transient.reduce.parts import _with_statics
+    rng = np.random.default_rng(0)
+    Phi = np.linalg.qr(rng.standard_normal((12, 3)))[0]
+    T = _with_statics(Phi, np.zeros((12, 2)), sp.identity(12, format="csr"))
+    assert np.array_equal(T, Phi)

@@ -129,6 +129,8 @@ def _with_statics(Phi, S, M):
     G = S.T @ (M @ S)
     norms = np.sqrt(np.maximum(np.diag(G), 0.0))
     big = norms > 1e-12 * norms.max()
+    if not big.any():          # no load on the part and no interface direction kept
+        return Phi
     S, G = S[:, big] / norms[big], G[np.ix_(big, big)] / np.outer(norms[big], norms[big])
     lam, V = np.linalg.eigh(0.5 * (G + G.T))
     keep = lam > 1e-12 * max(lam.max(), 1.0)
