@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..case.checks import check_two_surfaces
+from .. import api
 from ..case.loading import load
 from ..errors import CaseError
 
@@ -134,7 +134,6 @@ def _finite(text):
 
 
 def _plot_cea(args):
-    from .. import api
     from ..plots.cea import mode_figure, mu_map_figure, stability_figure
     from ..plots.render import RenderingUnavailable
     case = load(args.case, args.overrides)
@@ -307,32 +306,19 @@ def cmd_export(args):
 
 
 def _plot_compat(args):
-    from ..contact.pair import build_pair
-    from ..model.model import build_model
     from ..plots.compat import RenderingUnavailable, check_shapes, parse_shapes, plot_compat
     try:
         shapes = parse_shapes(args.shapes) if args.shapes is not None else None
     except ValueError as exc:
         raise CaseError(args.case, "--shapes", str(exc)) from None
-    case = load(args.case, args.overrides)
-    names = list(case.contact)
-    if not names:
-        raise CaseError(case.path, "contact", "the case has no [contact.NAME] pair")
-    if args.pair is not None and args.pair not in names:
-        raise CaseError(case.path, "contact", f"no pair '{args.pair}' "
-                        f"(pairs: {', '.join(names)})")
-    for name in names:
-        if args.pair in (None, name):
-            check_two_surfaces(case, name)
-    model = build_model(case)
-    pairs = [build_pair(case, model, name, need_compatibility=True)
-             for name in names if args.pair in (None, name)]
-    for pair in pairs:
+    case = api.load(args.case, args.overrides)
+    found = api.compat_pairs(case, None if args.pair is None else [args.pair])
+    for pair in (f.pair for f in found):
         try:
             check_shapes(shapes or [], pair.compat)
         except ValueError as exc:
             raise CaseError(case.path, "--shapes", f"pair '{pair.name}': {exc}") from None
-    for pair in pairs:
+    for pair in (f.pair for f in found):
         try:
             paths = plot_compat(pair, args.out, shapes)
         except RenderingUnavailable as exc:
