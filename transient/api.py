@@ -1,9 +1,10 @@
 """The public Python API: what a script or a notebook calls and what every command of the
 command line calls before it prints. A thin layer over the stages: each function takes a case
-(`load`'s), runs the stages it needs and returns a plain object of arrays.
+(`load`'s) or a run's history, runs the stages it needs and returns a plain object of arrays.
 
 Here: `transient.load`, `prepare`, `run`, `modes`, `cea`, `mu_map` and `sweep`; on an interface,
-`compat` and `compat_pairs` (api_interface).
+`compat` and `compat_pairs` (api_interface); on a run's history, `history`, `summary` and
+`export` (api_results).
 
 The stages' modules (Numba, SciPy) are imported by the functions that need them, so that
 `import transient` stays light and a case's bad input is refused before they load.
@@ -12,13 +13,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .api_interface import InterfaceCompatibility, compat, compat_pairs, pair_name
+from .api_results import export, history, summary
 from .case.checks import check_transient
 from .case.loading import literal
 from .case.loading import load as _load
 from .errors import CaseError
 
 __all__ = ["load", "prepare", "run", "modes", "cea", "mu_map", "compat", "compat_pairs",
-           "sweep", "NormalModes", "InterfaceCompatibility", "Campaign"]
+           "sweep", "history", "summary", "export", "NormalModes", "InterfaceCompatibility",
+           "Campaign"]
 
 
 def load(path, overrides=()):

@@ -211,9 +211,8 @@ def _peak_line(meta):
 
 
 def cmd_info(args):
-    from ..io.report import format_summary
-    from ..io.stored import read_summary
-    d = read_summary(args.file)
+    from .report import format_summary
+    d = api.summary(args.file)
     print(json.dumps(d) if args.json else format_summary(d))
     return 0
 

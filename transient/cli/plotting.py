@@ -1,5 +1,5 @@
 """`transient plot KIND` and `transient export`: pictures and ParaView files of a case or a
-history; the drawing lives in transient/plots, the files in transient/io."""
+history; the numbers come from the API (transient.api), the drawing from transient/plots."""
 import sys
 from pathlib import Path
 
@@ -31,8 +31,7 @@ def _plot_sweep(args):
 
 def _plot_friction(args):
     from ..plots.friction import friction_figure, friction_series
-    from ..io.stored import open_history
-    stored = open_history(args.file)
+    stored = api.history(args.file)
     series = friction_series(stored, args.pair)
     path = _png_path(args, stored.path)
     rows = []
@@ -49,8 +48,7 @@ def _plot_friction(args):
 
 def _plot_spectrogram(args):
     from ..plots.history import MIN_SEGMENT, one_series, select_series, spectrogram_figure
-    from ..io.stored import open_history
-    stored = open_history(args.file)
+    stored = api.history(args.file)
     _check_fmax(stored, args.fmax)
     name = (one_series(stored, args.series, "--series") if args.series
             else select_series(stored, None)[0])
@@ -77,8 +75,7 @@ def _pair_of(stored, text, key, what):
 
 def _plot_envelope(args):
     from ..plots.history import envelope_figure, select_series
-    from ..io.stored import open_history
-    stored = open_history(args.file)
+    stored = api.history(args.file)
     names = select_series(stored, args.series)
     window = _pair_of(stored, args.window, "--window", "times [s]")
     band = _pair_of(stored, args.band, "--band", "frequencies [Hz]")
@@ -230,8 +227,7 @@ def _plot_modal_frf(args):
 
 def _plot_history(args):
     from ..plots.history import history_figure, select_series
-    from ..io.stored import open_history
-    stored = open_history(args.file)
+    stored = api.history(args.file)
     names = select_series(stored, args.series)
     path = _png_path(args, stored.path)
     _save(lambda: history_figure(stored, names, path), path)
@@ -240,8 +236,7 @@ def _plot_history(args):
 
 def _plot_spectrum(args):
     from ..plots.history import select_series, spectrum_figure
-    from ..io.stored import open_history
-    stored = open_history(args.file)
+    stored = api.history(args.file)
     _check_fmax(stored, args.fmax)
     names = select_series(stored, args.series)
     path = _png_path(args, stored.path)
@@ -251,8 +246,7 @@ def _plot_spectrum(args):
 
 def _plot_frf(args):
     from ..plots.history import MIN_SEGMENT, frf_figure, one_series
-    from ..io.stored import open_history
-    stored = open_history(args.file)
+    stored = api.history(args.file)
     _check_fmax(stored, args.fmax)
     source = one_series(stored, args.input, "--input")
     response = one_series(stored, args.output, "--output")
@@ -271,8 +265,7 @@ def _check_fmax(stored, fmax):
 
 def _plot_pressure(args):
     from ..plots.history import pressure_figure, pressure_panels
-    from ..io.stored import open_history
-    histories = [open_history(f) for f in args.file]
+    histories = [api.history(f) for f in args.file]
     if args.labels is not None and len(args.labels) != len(histories):
         raise CaseError(histories[0].path, "--labels", f"expected one label per file "
                         f"({len(histories)}), got {len(args.labels)}")
@@ -296,11 +289,7 @@ def _save(draw, path):
 
 
 def cmd_export(args):
-    from ..io.export import export
-    try:
-        paths = export(args.file, args.out, args.format, args.every)
-    except OSError as exc:
-        raise CaseError(args.out or args.file, "--out", f"cannot write: {exc}") from None
+    paths = api.export(args.file, args.out, args.format, args.every)
     print("\n".join(str(p) for p in paths))
     return 0
 
