@@ -4,7 +4,7 @@ command line calls before it prints. A thin layer over the stages: each function
 
 Here: `transient.load`, `prepare`, `run`, `modes`, `cea`, `mu_map` and `sweep`; on an interface,
 `compat` and `compat_pairs` (api_interface); on a run's history, `history`, `summary` and
-`export` (api_results).
+`export` (api_results); studies of a case, `bench` and `compare_modes` (api_studies).
 
 The stages' modules (Numba, SciPy) are imported by the functions that need them, so that
 `import transient` stays light and a case's bad input is refused before they load.
@@ -14,14 +14,15 @@ from pathlib import Path
 
 from .api_interface import InterfaceCompatibility, compat, compat_pairs, pair_name
 from .api_results import export, history, summary
+from .api_studies import Bench, bench, compare_modes
 from .case.checks import check_transient
 from .case.loading import literal
 from .case.loading import load as _load
 from .errors import CaseError
 
 __all__ = ["load", "prepare", "run", "modes", "cea", "mu_map", "compat", "compat_pairs",
-           "sweep", "history", "summary", "export", "NormalModes", "InterfaceCompatibility",
-           "Campaign"]
+           "sweep", "history", "summary", "export", "bench", "compare_modes", "NormalModes",
+           "InterfaceCompatibility", "Campaign", "Bench"]
 
 
 def load(path, overrides=()):

@@ -6,7 +6,6 @@ from pathlib import Path
 import numpy as np
 
 from .. import api
-from ..case.loading import load
 from ..errors import CaseError
 
 
@@ -133,7 +132,7 @@ def _finite(text):
 def _plot_cea(args):
     from ..plots.cea import mode_figure, mu_map_figure, stability_figure
     from ..plots.render import RenderingUnavailable
-    case = load(args.case, args.overrides)
+    case = api.load(args.case, args.overrides)
     names = list(case.contact)
     pair = args.pair or (names[0] if names else None)
     if pair is None or pair not in names:
@@ -180,25 +179,15 @@ def _plot_cea(args):
 def _plot_modal_frf(args):
     from ..io.lock import check_writable
     from ..plots.modal import modal_frf_figure
-    from ..studies.modal import compare
-    case = load(args.case, args.overrides)
-    against = load(args.case, args.overrides + args.against)
-    sensors = list(case.sensors)
-    for key, name in (("--input", args.input), ("--output", args.output)):
-        if name not in sensors:
-            raise CaseError(case.path, key, f"expected a sensor of the case ("
-                            f"{', '.join(sensors) or 'none'}), got '{name}'")
-    if not 0 <= args.damping < 1:
-        raise CaseError(case.path, "--damping", f"expected a ratio in [0, 1), got "
-                        f"{args.damping}")
-    if args.fmax is not None and not args.fmax > 0:
-        raise CaseError(case.path, "--fmax", f"expected a frequency > 0 [Hz], got {args.fmax}")
+    case = api.load(args.case, args.overrides)
+    against = api.load(args.case, args.overrides + args.against)
     labels = args.labels or ["case", " ".join(args.against) or "case"]
     if len(labels) != 2:
         raise CaseError(case.path, "--labels", f"expected two labels, got {len(labels)}")
     path = Path(args.png or f"{Path(case.path).stem}_modal_frf.png")
     check_writable(path, "-o")
-    result = compare(case, against, args.input, args.output, args.damping, args.fmax)
+    result = api.compare_modes(case, against, args.input, args.output, args.damping,
+                               args.fmax)
     fa, fb = result.frequencies
     paired = result.partner >= 0
     by = "order" if np.isnan(result.mac).all() else "MAC"
