@@ -183,17 +183,25 @@ def test_sweep_runs_the_variants_the_command_would(tmp_path):
 
 
 def test_the_api_pages_example_runs(tmp_path):
-    """docs/api.md's example as a user runs it from a checkout, on a coarser mesh and a
-    shorter run (every load appends them): a test of the calls, not of pad_disc's setup."""
+    """docs/api.md's examples as a user runs them from a checkout, one after the other as the
+    page reads, on a coarser mesh and a shorter run (every load appends them): a test of the
+    calls, not of pad_disc's setup."""
     blocks = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "api.md").read_text(), re.S)
-    assert len(blocks) == 1
+    assert len(blocks) == 3
     (tmp_path / "cases").symlink_to(ROOT / "cases")
     coarser = ("import transient.api\n"
                "real = transient.api.load\n"
                f"transient.api.load = lambda path, overrides=(): real(path, [*overrides, "
                f"*{SMALL + ['solver.t_end=2e-4']!r}])\n")
-    done = subprocess.run([sys.executable, "-c", coarser + blocks[0]], cwd=tmp_path,
+    script = "\nprint('-- next example')\n".join(blocks)
+    done = subprocess.run([sys.executable, "-c", coarser + script], cwd=tmp_path,
                           capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr
-    assert done.stdout.splitlines()[-1].split()[:2] == ["pad.h5", "complete"]
-    assert (tmp_path / "pad.h5").is_file()
+    outputs = [part.splitlines() for part in done.stdout.split("-- next example\n")]
+    assert outputs[0][-1].split()[:2] == ["pad.h5", "complete"]
+    assert (tmp_path / "pad.h5").is_file() and (tmp_path / "pad_export").is_dir()
+    # the history's rows and series, then the bench's rows, the reference first
+    assert outputs[1][0].split()[:2] == [str(transient.summary(tmp_path / "pad.h5")["steps"]),
+                                         "complete"]
+    assert [line.split()[0] for line in outputs[2]] == ["fine"] * 2 + ["centre"] * 2 + [
+        "greedy"]

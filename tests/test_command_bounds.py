@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
+import transient.api
 import transient.stability.stage
-import transient.cli.plotting
 import transient.shared
 import transient.solve.tied
 import transient.stages
@@ -106,12 +106,12 @@ def test_bad_input_is_one_line_before_the_setup(tmp_path, capsys, no_setup, comm
 def test_plot_cea_mu_is_bounded_before_any_variant(tmp_path, capsys, monkeypatch, no_setup,
                                                     mu, what):
     loads = []
-    load = transient.cli.plotting.load
+    load = transient.api._load        # what the API loads the case and mu_map's variants by
 
     def counted(*args):
         loads.append(args)
         return load(*args)
-    monkeypatch.setattr(transient.cli.plotting, "load", counted)
+    monkeypatch.setattr(transient.api, "_load", counted)
     err = one_error(capsys, ["plot", "cea", PAD, "--out", str(tmp_path), f"--mu={mu}"])
     assert ": --mu: expected " + what in err and len(err) < 300
     # the case alone was loaded: no variant was built, let alone checked one by one

@@ -108,3 +108,18 @@ def test_the_readmes_python_example_runs(tmp_path):
     lines = done.stdout.splitlines()
     assert lines[0].startswith("complete ")
     assert (tmp_path / "pad.h5").is_file()
+
+
+def test_the_api_page_lists_every_public_function():
+    """Each name of transient.__all__ has its `::: module.NAME` on docs/api.md, and each such
+    line names the object `transient.NAME` is (not a stale home)."""
+    import importlib
+    import transient
+    text = (ROOT / "docs" / "api.md").read_text()
+    documented = {}
+    for target in re.findall(r"^::: (transient[\w.]*)$", text, re.M):
+        module, _, name = target.rpartition(".")
+        documented[name] = getattr(importlib.import_module(module), name)
+    missing = [n for n in transient.__all__ if n not in documented]
+    assert missing == []
+    assert [n for n in transient.__all__ if documented[n] is not getattr(transient, n)] == []

@@ -9,9 +9,9 @@ import h5py
 import numpy as np
 import pytest
 
+from transient.cli.report import format_summary
 from transient.errors import RunAborted
 from transient.io.history import CASE_TEXT, History, energy_drift, load_checkpoint, summary
-from transient.io.report import format_summary
 
 ROOT = Path(__file__).resolve().parent.parent
 M = 7

@@ -20,6 +20,22 @@ def test_no_module_over_400_lines_and_integration_under_200():
     assert sizes[Path("transient/integration.py")] < 200
 
 
+def test_the_command_line_computes_through_the_api():
+    """cli/ takes its numbers from transient.api and its pictures from transient/plots: the
+    stages, the history's readers and the studies stay behind the API (a notebook gets what
+    the command prints). Besides, the errors, the settings, the check of an output file
+    before a long computation (io.lock) and the campaigns' bound on their values."""
+    allowed = {"api", "errors", "settings", "plots", "io.lock", "campaign.variants"}
+    found = set()
+    for path in (PACKAGE / "cli").glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level == 2:
+                names = [node.module] if node.module else [a.name for a in node.names]
+                found |= {(path.name, n) for n in names
+                          if n not in allowed and n.split(".")[0] != "plots"}
+    assert found == {("parser.py", "__version__")}
+
+
 def test_kernels_import_nothing_but_numba_numpy_and_jit():
     for path in (PACKAGE / "kernels").glob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):

@@ -155,7 +155,7 @@ def test_bench_refuses_an_unwritable_directory_first_and_writes_under_the_cwd(
     err = refused(capsys, ["bench", BAR, "--out", "/proc/transient_bench"])
     assert ": --out: cannot write" in err
     monkeypatch.chdir(tmp_path)
-    from transient.cli.commands import bench_directory
+    from transient.cli.benching import bench_directory
     assert bench_directory(None, BAR) == Path.cwd() / "bar_impact_bench"
     assert os.access(tmp_path, os.W_OK)
 

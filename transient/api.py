@@ -1,19 +1,28 @@
-"""The public Python API: `transient.load`, `prepare`, `run`, `modes`, `cea`, `compat` and
-`sweep`, what a script or a notebook calls and what every command of the command line calls
-before it prints. A thin layer over the stages: each function takes a case (`load`'s), runs the
-stages it needs and returns a plain object of arrays.
+"""The public Python API: what a script or a notebook calls and what every command of the
+command line calls before it prints. A thin layer over the stages: each function takes a case
+(`load`'s) or a run's history, runs the stages it needs and returns a plain object of arrays.
+
+Here: `transient.load`, `prepare`, `run`, `modes`, `cea`, `mu_map` and `sweep`; on an interface,
+`compat` and `compat_pairs` (api_interface); on a run's history, `history`, `summary` and
+`export` (api_results); studies of a case, `bench` and `compare_modes` (api_studies).
 
 The stages' modules (Numba, SciPy) are imported by the functions that need them, so that
 `import transient` stays light and a case's bad input is refused before they load.
 """
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from .case.checks import check_transient, check_two_surfaces
+from .api_interface import InterfaceCompatibility, compat, compat_pairs, pair_name
+from .api_results import export, history, summary
+from .api_studies import Bench, bench, compare_modes
+from .case.checks import check_transient
 from .case.loading import literal
 from .case.loading import load as _load
 from .errors import CaseError
+
+__all__ = ["load", "prepare", "run", "modes", "cea", "mu_map", "compat", "compat_pairs",
+           "sweep", "history", "summary", "export", "bench", "compare_modes", "NormalModes",
+           "InterfaceCompatibility", "Campaign", "Bench"]
 
 
 def load(path, overrides=()):
@@ -266,75 +275,6 @@ def mu_map(case, mus, pair=None):
             key = stage_key(case, "basis")
     return [analyse(v, built=basis if key is not None and stage_key(v, "basis") == key
                     else built) for v in variants]
-
-
-@dataclass(frozen=True)
-class InterfaceCompatibility:
-    """The compatibility of a contact pair's interface (`compat`)."""
-    pair: object             # contact.pair.ContactPair: its rules, eps and coarse rule
-    compatibility: object    # contact.compatibility.Compatibility: sigma, shapes, C(eps)
-    setup_s: float           # the pair's stages [s]
-    timings: dict            # stage -> seconds
-
-    def summary(self, eps_grid):
-        """What ``transient compat --json`` prints (C(eps) on eps_grid), but for the total
-        time."""
-        comp, fine, pair = self.compatibility, self.pair.interface.fine, self.pair
-        coarse = pair.coarse
-        return {"pair": pair.name, "n_points": fine.n_points, "area": fine.area,
-                "n_dof_1": comp.n1, "n_dof_2": comp.n2, "sigma_max": float(comp.sigma.max()),
-                "singular_values": comp.normalized.tolist(),
-                "compatibility": {"eps": list(map(float, eps_grid)),
-                                  "C": comp.curve(eps_grid).tolist()},
-                "eps": pair.eps, "eps_source": pair.eps_source, "kept": comp.kept(pair.eps),
-                "coarse": None if coarse is None else {
-                    "m": len(coarse.chosen), "energy_error": coarse.energy_error,
-                    "setup_s": pair.timings["coarse_rule"], "rank": coarse.rank,
-                    "weighting": coarse.weighting, "area_error": coarse.area_error},
-                "setup_s": self.setup_s, "timings": dict(self.timings)}
-
-
-def compat(case, pair=None):
-    """Compatibility of a contact pair's interface: the gap energy's spectrum and C(eps).
-
-    Parameters
-    ----------
-    case : Case
-        From `load`.
-    pair : str, optional
-        The pair's name (``[contact.NAME]``); by default the case's first.
-
-    Returns
-    -------
-    InterfaceCompatibility
-        ``compatibility`` (``sigma`` ascending [N/m], ``normalized``, the interface
-        ``shapes``, ``kept(eps)`` and ``curve(eps)`` = C(eps)), ``pair`` (its fine rule, its
-        ``eps`` and the greedy rule when the case asks for one), ``setup_s`` and ``timings``
-        [s].
-    """
-    from .contact.pair import build_pair
-    from .model.model import build_model
-    name = pair_name(case, pair)
-    check_two_surfaces(case, name)
-    model = build_model(case)
-    t0 = time.perf_counter()
-    built = build_pair(case, model, name, need_compatibility=True)
-    setup = time.perf_counter() - t0
-    comp = built.compat
-    return InterfaceCompatibility(built, comp, setup, {
-        **model.timings, **built.timings, **built.interface.timings, **comp.timings})
-
-
-def pair_name(case, pair=None):
-    """The contact pair a command names (the case's first by default), checked to exist."""
-    names = list(case.contact)
-    if not names:
-        raise CaseError(case.path, "contact", "the case has no [contact.NAME] pair")
-    if not pair:
-        return names[0]
-    if pair not in names:
-        raise CaseError(case.path, "contact", f"no pair '{pair}' (pairs: {', '.join(names)})")
-    return pair
 
 
 @dataclass(frozen=True)

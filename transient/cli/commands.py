@@ -3,11 +3,11 @@ import json
 import os
 import sys
 import time
-from pathlib import Path
 
 from .. import api
 from ..settings import configure
 from ..errors import CaseError, FactorizationError, stop_reason
+from .benching import cmd_bench
 from .parser import build_parser
 from .plotting import cmd_export, cmd_plot
 from .sweeping import cmd_sweep
@@ -217,64 +217,9 @@ def _peak_line(meta):
 
 
 def cmd_info(args):
-    from ..io.report import format_summary
-    from ..io.stored import read_summary
-    d = read_summary(args.file)
+    from .report import format_summary
+    d = api.summary(args.file)
     print(json.dumps(d) if args.json else format_summary(d))
-    return 0
-
-
-def _numbers(text, key, kind):
-    try:
-        return [kind(x) for x in text.split(",") if x.strip()]
-    except ValueError:
-        raise CaseError("command line", key, f"expected comma separated numbers, got "
-                        f"'{text}'") from None
-
-
-def bench_directory(out, case):
-    """The bench's output directory, made and checked writable before the sweep: --out, or
-    <case name>_bench in the working directory (not next to a shipped case)."""
-    import tempfile
-    path = Path(out) if out else Path.cwd() / f"{Path(case).stem}_bench"
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-        tempfile.TemporaryFile(dir=path).close()
-    except OSError as exc:
-        raise CaseError(path, "--out", f"cannot write: {exc.strerror or exc}") from None
-    return path
-
-
-def cmd_bench(args):
-    from ..studies.bench import HEADER, OSCILLATION_HEADER, bench, format_row, target, write
-    eps = _numbers(args.eps, "--eps", float)
-    points = _numbers(args.points, "--points", int) if args.points else None
-    tolerances = _numbers(args.tolerances, "--tolerances", float)
-    shown = []
-
-    def show(row):
-        if args.json:
-            return
-        if not shown:       # the first row says whether the squeal's columns follow
-            print(HEADER + (OSCILLATION_HEADER if row.get("growth_rate") is not None else ""))
-        shown.append(row)
-        print(format_row(row), flush=True)
-    out = bench_directory(args.out, args.case)
-    rows = bench(args.case, args.overrides, args.pair, eps, points, args.t_end, show,
-                 tolerances, args.reference, args.cycle_from)
-    files = write(rows, out)
-    best = target(rows)
-    if args.json:
-        print(json.dumps({"rows": rows, "target": best}))
-        return 0
-    ref = rows[0]["label"]
-    if best:
-        print(f"target met: {best['label']} within {best['error_rms']:.2%} of {ref} at "
-              f"{best['kernel_s'] / rows[0]['kernel_s']:.2f} of its kernel time")
-    else:
-        print(f"target not met: no regularized coarse rule within 1% of {ref} at a "
-              "third or less of its kernel time")
-    print("wrote " + ", ".join(str(f) for f in files))
     return 0
 
 

@@ -1,12 +1,11 @@
 """`transient plot KIND` and `transient export`: pictures and ParaView files of a case or a
-history; the drawing lives in transient/plots, the files in transient/io."""
+history; the numbers come from the API (transient.api), the drawing from transient/plots."""
 import sys
 from pathlib import Path
 
 import numpy as np
 
-from ..case.checks import check_two_surfaces
-from ..case.loading import load
+from .. import api
 from ..errors import CaseError
 
 
@@ -31,8 +30,7 @@ def _plot_sweep(args):
 
 def _plot_friction(args):
     from ..plots.friction import friction_figure, friction_series
-    from ..io.stored import open_history
-    stored = open_history(args.file)
+    stored = api.history(args.file)
     series = friction_series(stored, args.pair)
     path = _png_path(args, stored.path)
     rows = []
@@ -49,8 +47,7 @@ def _plot_friction(args):
 
 def _plot_spectrogram(args):
     from ..plots.history import MIN_SEGMENT, one_series, select_series, spectrogram_figure
-    from ..io.stored import open_history
-    stored = open_history(args.file)
+    stored = api.history(args.file)
     _check_fmax(stored, args.fmax)
     name = (one_series(stored, args.series, "--series") if args.series
             else select_series(stored, None)[0])
@@ -77,8 +74,7 @@ def _pair_of(stored, text, key, what):
 
 def _plot_envelope(args):
     from ..plots.history import envelope_figure, select_series
-    from ..io.stored import open_history
-    stored = open_history(args.file)
+    stored = api.history(args.file)
     names = select_series(stored, args.series)
     window = _pair_of(stored, args.window, "--window", "times [s]")
     band = _pair_of(stored, args.band, "--band", "frequencies [Hz]")
@@ -134,10 +130,9 @@ def _finite(text):
 
 
 def _plot_cea(args):
-    from .. import api
     from ..plots.cea import mode_figure, mu_map_figure, stability_figure
     from ..plots.render import RenderingUnavailable
-    case = load(args.case, args.overrides)
+    case = api.load(args.case, args.overrides)
     names = list(case.contact)
     pair = args.pair or (names[0] if names else None)
     if pair is None or pair not in names:
@@ -184,25 +179,15 @@ def _plot_cea(args):
 def _plot_modal_frf(args):
     from ..io.lock import check_writable
     from ..plots.modal import modal_frf_figure
-    from ..studies.modal import compare
-    case = load(args.case, args.overrides)
-    against = load(args.case, args.overrides + args.against)
-    sensors = list(case.sensors)
-    for key, name in (("--input", args.input), ("--output", args.output)):
-        if name not in sensors:
-            raise CaseError(case.path, key, f"expected a sensor of the case ("
-                            f"{', '.join(sensors) or 'none'}), got '{name}'")
-    if not 0 <= args.damping < 1:
-        raise CaseError(case.path, "--damping", f"expected a ratio in [0, 1), got "
-                        f"{args.damping}")
-    if args.fmax is not None and not args.fmax > 0:
-        raise CaseError(case.path, "--fmax", f"expected a frequency > 0 [Hz], got {args.fmax}")
+    case = api.load(args.case, args.overrides)
+    against = api.load(args.case, args.overrides + args.against)
     labels = args.labels or ["case", " ".join(args.against) or "case"]
     if len(labels) != 2:
         raise CaseError(case.path, "--labels", f"expected two labels, got {len(labels)}")
     path = Path(args.png or f"{Path(case.path).stem}_modal_frf.png")
     check_writable(path, "-o")
-    result = compare(case, against, args.input, args.output, args.damping, args.fmax)
+    result = api.compare_modes(case, against, args.input, args.output, args.damping,
+                               args.fmax)
     fa, fb = result.frequencies
     paired = result.partner >= 0
     by = "order" if np.isnan(result.mac).all() else "MAC"
@@ -231,8 +216,7 @@ def _plot_modal_frf(args):
 
 def _plot_history(args):
     from ..plots.history import history_figure, select_series
-    from ..io.stored import open_history
-    stored = open_history(args.file)
+    stored = api.history(args.file)
     names = select_series(stored, args.series)
     path = _png_path(args, stored.path)
     _save(lambda: history_figure(stored, names, path), path)
@@ -241,8 +225,7 @@ def _plot_history(args):
 
 def _plot_spectrum(args):
     from ..plots.history import select_series, spectrum_figure
-    from ..io.stored import open_history
-    stored = open_history(args.file)
+    stored = api.history(args.file)
     _check_fmax(stored, args.fmax)
     names = select_series(stored, args.series)
     path = _png_path(args, stored.path)
@@ -252,8 +235,7 @@ def _plot_spectrum(args):
 
 def _plot_frf(args):
     from ..plots.history import MIN_SEGMENT, frf_figure, one_series
-    from ..io.stored import open_history
-    stored = open_history(args.file)
+    stored = api.history(args.file)
     _check_fmax(stored, args.fmax)
     source = one_series(stored, args.input, "--input")
     response = one_series(stored, args.output, "--output")
@@ -272,8 +254,7 @@ def _check_fmax(stored, fmax):
 
 def _plot_pressure(args):
     from ..plots.history import pressure_figure, pressure_panels
-    from ..io.stored import open_history
-    histories = [open_history(f) for f in args.file]
+    histories = [api.history(f) for f in args.file]
     if args.labels is not None and len(args.labels) != len(histories):
         raise CaseError(histories[0].path, "--labels", f"expected one label per file "
                         f"({len(histories)}), got {len(args.labels)}")
@@ -297,42 +278,25 @@ def _save(draw, path):
 
 
 def cmd_export(args):
-    from ..io.export import export
-    try:
-        paths = export(args.file, args.out, args.format, args.every)
-    except OSError as exc:
-        raise CaseError(args.out or args.file, "--out", f"cannot write: {exc}") from None
+    paths = api.export(args.file, args.out, args.format, args.every)
     print("\n".join(str(p) for p in paths))
     return 0
 
 
 def _plot_compat(args):
-    from ..contact.pair import build_pair
-    from ..model.model import build_model
     from ..plots.compat import RenderingUnavailable, check_shapes, parse_shapes, plot_compat
     try:
         shapes = parse_shapes(args.shapes) if args.shapes is not None else None
     except ValueError as exc:
         raise CaseError(args.case, "--shapes", str(exc)) from None
-    case = load(args.case, args.overrides)
-    names = list(case.contact)
-    if not names:
-        raise CaseError(case.path, "contact", "the case has no [contact.NAME] pair")
-    if args.pair is not None and args.pair not in names:
-        raise CaseError(case.path, "contact", f"no pair '{args.pair}' "
-                        f"(pairs: {', '.join(names)})")
-    for name in names:
-        if args.pair in (None, name):
-            check_two_surfaces(case, name)
-    model = build_model(case)
-    pairs = [build_pair(case, model, name, need_compatibility=True)
-             for name in names if args.pair in (None, name)]
-    for pair in pairs:
+    case = api.load(args.case, args.overrides)
+    found = api.compat_pairs(case, None if args.pair is None else [args.pair])
+    for pair in (f.pair for f in found):
         try:
             check_shapes(shapes or [], pair.compat)
         except ValueError as exc:
             raise CaseError(case.path, "--shapes", f"pair '{pair.name}': {exc}") from None
-    for pair in pairs:
+    for pair in (f.pair for f in found):
         try:
             paths = plot_compat(pair, args.out, shapes)
         except RenderingUnavailable as exc:

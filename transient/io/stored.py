@@ -16,7 +16,12 @@ from .history import GEOMETRY, summary
 
 @dataclass(frozen=True)
 class Stored:
-    """What a history holds (the arrays stay in the file until read)."""
+    """What a history holds (`transient.history`): the arrays stay in the file until read.
+
+    ``path``; ``rows``, the complete rows (a history still written, or stopped early, reads as
+    those); ``series``, name -> shape of one row (``"sensors/tip": ()``,
+    ``"contact/NAME/gap": (m,)``); ``meta``, the run's attributes, its ``status`` included.
+    """
     path: Path
     rows: int            # complete rows
     series: dict         # name -> shape of one row

@@ -247,15 +247,8 @@ def bench(path, overrides=(), pair=None, eps_list=(1e-6, 1e-4, 1e-3, 1e-2),
     and 10 r (those below the fine rule's); tolerances: the sampled rule's. With friction, the
     oscillation's numbers too, the limit cycle from cycle_from [s] (default: the last
     quarter)."""
-    if reference not in REFERENCES:
-        raise CaseError("command line", "--reference", f"expected one of "
-                        f"{', '.join(REFERENCES)}, got '{reference}'")
     case = load(path, list(overrides))
-    pair = _pair_name(case, pair)
-    end = t_end or case.solver.t_end
-    if cycle_from is not None and not 0 <= cycle_from < end:
-        raise CaseError("command line", "--cycle-from", f"expected a time in [0, {end:g}) s "
-                        f"(the run's), got {cycle_from:g}")
+    pair = checked_pair(case, pair, reference, cycle_from, t_end)
     squeal = any(c.friction.active for c in case.contact.values())
     rows = []
     ref = ref_freq = ref_osc = None
@@ -296,6 +289,20 @@ def bench(path, overrides=(), pair=None, eps_list=(1e-6, 1e-4, 1e-3, 1e-2),
             todo += [Variant("greedy", f"greedy m={m}", dict(variant.settings, points=m))
                      for m in (r // 2, r // 4, 4 * r, 10 * r) if 0 < m < fine]
     return rows
+
+
+def checked_pair(case, pair=None, reference="fine", cycle_from=None, t_end=None):
+    """The pair a bench of case sweeps, the bench's options checked (CaseError) before any
+    stage."""
+    if reference not in REFERENCES:
+        raise CaseError("command line", "--reference", f"expected one of "
+                        f"{', '.join(REFERENCES)}, got '{reference}'")
+    pair = _pair_name(case, pair)
+    end = t_end or case.solver.t_end
+    if cycle_from is not None and not 0 <= cycle_from < end:
+        raise CaseError("command line", "--cycle-from", f"expected a time in [0, {end:g}) s "
+                        f"(the run's), got {cycle_from:g}")
+    return pair
 
 
 def refused(variant, exc):
@@ -371,29 +378,3 @@ def _plot(rows, path):
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
-
-def format_row(row):
-    if row["setup_s"] is None:
-        return f"{row['label']:<22} {row['status']}"
-    kept = row["kept"] if row["kept"] is not None else "-"
-    return (f"{row['label']:<22} {row['points']:>6} {kept:>5} "
-            f"{row['setup_s']:8.2f} {row['kernel_s']:8.2f} {row['total_s']:8.2f} "
-            f"{row['steps_per_s']:9.0f} {row['error_rms']:9.2e} {row['preload_error']:9.2e} "
-            f"{row['pressure_max_error']:9.2e} "
-            f"{row['frequency_error']:9.2e} {_oscillation_cells(row)}{row['status']}")
-
-
-def _oscillation_cells(row):
-    """The squeal's columns of a row, when it has them."""
-    if row.get("growth_rate") is None:
-        return ""
-    return (f"{row['growth_rate']:9.1f} {row['growth_error']:9.2e} {row['cycle_rms']:9.2e} "
-            f"{row['cycle_rms_error']:9.2e} {row['cycle_frequency']:9.1f} "
-            f"{row['cycle_frequency_error']:9.2e} ")
-
-
-HEADER = (f"{'rule':<22} {'points':>6} {'kept':>5} {'setup s':>8} {'kernel s':>8} "
-          f"{'total s':>8} {'steps/s':>9} {'error_rms':>9} {'preload':>9} {'p_max err':>9} "
-          f"{'freq err':>9}")
-OSCILLATION_HEADER = (f" {'growth':>9} {'grow err':>9} {'cycle rms':>9} {'rms err':>9} "
-                      f"{'cycle Hz':>9} {'Hz err':>9}")

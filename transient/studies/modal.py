@@ -21,6 +21,8 @@ POINTS = 4000     # frequencies of the transfer function
 
 @dataclass(frozen=True)
 class ModalComparison:
+    """Two modal models of one structure compared (`compare`), each mode of the first with
+    its partner in the second."""
     frequencies: tuple     # (fa, fb) each model's frequencies [Hz]
     partner: np.ndarray    # (len(fa),) index of each mode's partner in fb (-1: none)
     mac: np.ndarray        # (len(fa),) MAC of the pair (nan when paired by order)
