@@ -226,3 +226,16 @@ def test_bad_transforms_are_one_line_naming_the_file_and_key(tmp_path, capsys, m
     err = capsys.readouterr().err.strip()
     assert not caught and len(err.splitlines()) == 1 and "Traceback" not in err
     assert err.startswith(f"error: {path}: {key}: "), err
+
+
+def test_a_placement_beyond_double_precision_is_one_line(tmp_path, capsys):
+    # found once the mesh is built (its extent is not known before), with no overflow warning
+    path = tmp_path / "bar.toml"
+    path.write_text(BAR + "[parts.bar.transform.mirror]\npoint = [1e308, 0.0, 0.0]\n"
+                    "normal = [1.0, 0.0, 0.0]\n")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main(["modes", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert not caught and len(err.splitlines()) == 1
+    assert err.startswith(f"error: {path}: parts.bar.transform: "), err

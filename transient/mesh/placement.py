@@ -61,21 +61,30 @@ def place(mesh, translate=(0.0, 0.0, 0.0), rotate=None, mirror=None):
     set's node lists are reordered (reversed_order): volumes stay positive, faces outward.
     A transform that moves nothing returns the mesh itself, bit for bit.
     """
-    points = mesh.points
+    # a point or a translation far out of range overflows to inf silently here: the caller
+    # refuses the placed coordinates with the key that took them there (model.part_mesh)
+    with np.errstate(over="ignore", invalid="ignore"):
+        points = _moved(mesh.points, translate, rotate, mirror)
+    if mirror is None:
+        if points is mesh.points:
+            return mesh
+        return Mesh(points, mesh.cells, mesh.node_sets, mesh.face_sets, mesh.cell_sets)
+    cells = {t: conn[:, reversed_order(t)] for t, conn in mesh.cells.items()}
+    face_sets = {name: {t: faces[:, reversed_order(t)] for t, faces in by_type.items()}
+                 for name, by_type in mesh.face_sets.items()}
+    return Mesh(points, cells, mesh.node_sets, face_sets, mesh.cell_sets)
+
+
+def _moved(points, translate, rotate, mirror):
+    """The coordinates translated, rotated and mirrored (place); unmoved, the same array."""
     if any(x != 0.0 for x in translate):
         points = points + np.asarray(translate, dtype=float)
     if rotate is not None and rotate[1] != 0.0:
         axis, angle, point = rotate
         p = np.asarray(point, dtype=float)
         points = (points - p) @ rotation_matrix(axis, angle).T + p
-    if mirror is None:
-        if points is mesh.points:
-            return mesh
-        return Mesh(points, mesh.cells, mesh.node_sets, mesh.face_sets, mesh.cell_sets)
-    point, normal = mirror
-    n = unit(normal)
-    points = points - 2.0 * np.outer((points - np.asarray(point, dtype=float)) @ n, n)
-    cells = {t: conn[:, reversed_order(t)] for t, conn in mesh.cells.items()}
-    face_sets = {name: {t: faces[:, reversed_order(t)] for t, faces in by_type.items()}
-                 for name, by_type in mesh.face_sets.items()}
-    return Mesh(points, cells, mesh.node_sets, face_sets, mesh.cell_sets)
+    if mirror is not None:
+        point, normal = mirror
+        n = unit(normal)
+        points = points - 2.0 * np.outer((points - np.asarray(point, dtype=float)) @ n, n)
+    return points

@@ -89,15 +89,15 @@ def part_mesh(case, name):
         raise CaseError(case.path, f"{key}.path", f"{exc.path}: {exc.message}") from None
     except ValueError as exc:
         raise CaseError(case.path, key, str(exc)) from None
-    return _placed(with_geometric_sets(mesh, case.parts[name].sets), case.parts[name].transform)
-
-
-def _placed(mesh, transform):
-    """mesh.placement.place of a case's TransformSpec."""
-    rotate, mirror = transform.rotate, transform.mirror
-    return place(mesh, transform.translate,
-                 (rotate.axis, rotate.angle, rotate.point) if rotate.angle else None,
-                 (mirror.point, mirror.normal) if mirror.normal else None)
+    mesh = with_geometric_sets(mesh, case.parts[name].sets)
+    rotate, mirror = case.parts[name].transform.rotate, case.parts[name].transform.mirror
+    placed = place(mesh, case.parts[name].transform.translate,
+                   (rotate.axis, rotate.angle, rotate.point) if rotate.angle else None,
+                   (mirror.point, mirror.normal) if mirror.normal else None)
+    if placed is not mesh and not np.isfinite(placed.points).all():
+        raise CaseError(case.path, f"parts.{name}.transform", "places the part's nodes "
+                        "beyond double precision: a translation or a point far out of range")
+    return placed
 
 
 def resolve_set(case, parts, ref, key, surface=False):
