@@ -95,7 +95,8 @@ def _signals(case):
 
 
 def _directions(case):
-    """Normals, axes and directions that must have a length."""
+    """Normals, axes and directions that must have a length; a part rotated by an angle needs
+    the axis of its rotation."""
     vectors = [(f"contact.{n}.wall_normal", c.wall_normal) for n, c in case.contact.items()
                if c.wall]
     vectors += [(f"sensors.{n}.direction", s.direction) for n, s in case.sensors.items()]
@@ -106,6 +107,13 @@ def _directions(case):
             for field in ("normal", "axis"):
                 if field in sel.params:
                     vectors.append((f"parts.{part}.sets.{name}.{field}", sel.params[field]))
+        rotate, mirror = spec.transform.rotate, spec.transform.mirror
+        key = f"parts.{part}.transform"
+        if rotate.angle != 0.0 and not rotate.axis:
+            _fail(case, f"{key}.rotate.axis", f"missing: a rotation of {rotate.angle:g} deg "
+                  "needs its axis")
+        vectors += [(f"{key}.rotate.axis", rotate.axis)] if rotate.axis else []
+        vectors += [(f"{key}.mirror.normal", mirror.normal)] if mirror.normal else []
     for key, v in vectors:
         if not any(x != 0.0 for x in v):
             _fail(case, key, "expected a nonzero vector")

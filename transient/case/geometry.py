@@ -1,6 +1,7 @@
 """The case keys of a part's geometry: its mesh (a generator's parameters, or a file read by
-meshio) and the named selections made from its coordinates (case.schema's PART)."""
-from .nodes import REQUIRED, Value, Variant
+meshio), the named selections made from its coordinates and its placement (case.schema's
+PART)."""
+from .nodes import REQUIRED, Table, Value, Variant
 
 
 def positive(doc, unit="", default=REQUIRED):
@@ -84,3 +85,24 @@ SELECTION = Variant("named selection from geometry: nodes within tol, and the bo
                     }, common={
                         "tol": Value("float", "distance tolerance", 1e-9, "m", minimum=0.0),
                     })
+
+TRANSFORM = Table("placement of the part, applied after its mesh's own scale and translate "
+                  "and after its sets are selected: translate, then rotate, then mirror; the "
+                  "node, face and cell sets follow the mesh", {
+    "translate": vector3("translation of the part, the first step of its placement (after "
+                         "the mesh's own scale and translate; its sets follow it)",
+                         default=[0.0, 0.0, 0.0]),
+    "rotate": Table("rotation about an axis through a point, after the translation", {
+        "axis": Value("floats", "direction of the axis, right-handed with the angle (needed "
+                      "when the angle is not 0)", [], length=3),
+        "angle": Value("float", "angle of the rotation, after the translation", 0.0, "deg",
+                       minimum=-360.0, maximum=360.0),
+        "point": vector3("a point of the axis", default=[0.0, 0.0, 0.0]),
+    }, optional=True),
+    "mirror": Table("reflection through a plane, after the rotation", {
+        "point": vector3("a point of the plane", default=[0.0, 0.0, 0.0]),
+        "normal": Value("floats", "normal of the mirror plane, the last step ([]: no mirror; "
+                        "each cell's nodes are reordered so its volume stays positive)", [],
+                        length=3),
+    }, optional=True),
+}, optional=True)

@@ -4,7 +4,7 @@ Tables keyed by name (`[parts.NAME]`) give every value a dotted path. The schema
 validation (`loading.py`), `--set` overrides, and the key reference in `cases/README.md`
 (`python -m transient.case` prints it).
 """
-from .geometry import MESH, SELECTION, positive as _pos, vector3 as _vec3
+from .geometry import MESH, SELECTION, TRANSFORM, positive as _pos, vector3 as _vec3
 from .nodes import REQUIRED, Named, Table, Value, Variant, reference_markdown as _markdown
 from .solver_schema import SOLVER
 
@@ -16,6 +16,7 @@ PART = Table("a solid part", {
                               "on those cells", {}),
     "sets": Named("named selections from geometry (mesh and generator sets are named too)",
                   SELECTION),
+    "transform": TRANSFORM,
 })
 
 MATERIAL = Table("linear isotropic elastic material", {

@@ -32,11 +32,33 @@ class SelectionSpec:
 
 
 @dataclass(frozen=True)
+class RotationSpec:
+    axis: tuple              # () when no angle needs one
+    angle: float             # [deg]
+    point: tuple             # [m]
+
+
+@dataclass(frozen=True)
+class MirrorSpec:
+    point: tuple             # [m]
+    normal: tuple            # (): no mirror
+
+
+@dataclass(frozen=True)
+class TransformSpec:
+    """A part's placement: translate, then rotate, then mirror (mesh.placement)."""
+    translate: tuple         # [m]
+    rotate: RotationSpec
+    mirror: MirrorSpec
+
+
+@dataclass(frozen=True)
 class PartSpec:
     mesh: MeshSpec
     material: str
     region_materials: dict   # cell set -> material name
     sets: dict               # name -> SelectionSpec
+    transform: TransformSpec
 
 
 @dataclass(frozen=True)
@@ -242,6 +264,11 @@ def _variant(cls, table):
     return cls(table["kind"], {k: _plain(v) for k, v in table.items() if k != "kind"})
 
 
+def _transform(table):
+    return TransformSpec(_plain(table["translate"]), _make(RotationSpec, table["rotate"]),
+                         _make(MirrorSpec, table["mirror"]))
+
+
 def build(data):
     """The specs of a validated case dict: name -> spec (or dict of specs)."""
     solver = data["solver"]
@@ -250,7 +277,8 @@ def build(data):
         "materials": {n: _make(MaterialSpec, t) for n, t in data["materials"].items()},
         "parts": {n: PartSpec(_variant(MeshSpec, t["mesh"]), t["material"],
                               dict(t["region_materials"]),
-                              {s: _variant(SelectionSpec, v) for s, v in t["sets"].items()})
+                              {s: _variant(SelectionSpec, v) for s, v in t["sets"].items()},
+                              _transform(t["transform"]))
                   for n, t in data["parts"].items()},
         "constraints": {n: _make(ConstraintSpec, t) for n, t in data["constraints"].items()},
         "loads": {n: _make(LoadSpec, t, signal=dict(t["signal"]))

@@ -17,6 +17,7 @@ from ..errors import CaseError
 from .loads import nearest_node, pressure_forces
 from ..mesh.meshfile import MeshFileError, read_mesh
 from ..mesh.mesh import Mesh, unit
+from ..mesh.placement import place
 from ..mesh.selections import set_faces, set_nodes, with_geometric_sets
 
 AXES = {"x": 0, "y": 1, "z": 2}
@@ -66,7 +67,9 @@ class Model:
 
 
 def part_mesh(case, name):
-    """Mesh of a part from its generator or file, with its geometric selections."""
+    """Mesh of a part from its generator or file, with its geometric selections, placed by
+    its transform. The selections are made in the mesh's own frame, as a file's sets are, so
+    a part's table copied and mirrored keeps its sets."""
     spec = case.parts[name].mesh
     key = f"parts.{name}.mesh"
     kind = spec.kind
@@ -86,7 +89,15 @@ def part_mesh(case, name):
         raise CaseError(case.path, f"{key}.path", f"{exc.path}: {exc.message}") from None
     except ValueError as exc:
         raise CaseError(case.path, key, str(exc)) from None
-    return with_geometric_sets(mesh, case.parts[name].sets)
+    mesh = with_geometric_sets(mesh, case.parts[name].sets)
+    rotate, mirror = case.parts[name].transform.rotate, case.parts[name].transform.mirror
+    placed = place(mesh, case.parts[name].transform.translate,
+                   (rotate.axis, rotate.angle, rotate.point) if rotate.angle else None,
+                   (mirror.point, mirror.normal) if mirror.normal else None)
+    if placed is not mesh and not np.isfinite(placed.points).all():
+        raise CaseError(case.path, f"parts.{name}.transform", "places the part's nodes "
+                        "beyond double precision: a translation or a point far out of range")
+    return placed
 
 
 def resolve_set(case, parts, ref, key, surface=False):
