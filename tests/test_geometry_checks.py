@@ -201,9 +201,8 @@ def test_a_load_through_a_tied_piston_is_the_pad_s_preload():
     ("sensors.top.point", "sensors.top.point=[0.39,0.01,0.02]", "0.37 m from part 'upper'"),
     ("loads.tap.point", "loads.tap.point=[0.01,0.01,0.5]", "0.48 m from part 'upper'"),
 ])
-def test_a_point_off_its_part_is_refused_before_the_assembly(blocks, capsys, monkeypatch,
-                                                              key, override, measured):
-    monkeypatch.setattr(transient.model.model, "assemble", _reached)
+def test_a_point_off_its_part_is_refused_with_the_distance(blocks, capsys, key, override,
+                                                           measured):
     more = ['loads.tap.kind="force"', 'loads.tap.part="upper"',
             "loads.tap.point=[0.01,0.01,0.02]", "loads.tap.vector=[0.0,0.0,-1.0]",
             'loads.tap.signal.kind="impulse"', "loads.tap.signal.duration=1e-6"]

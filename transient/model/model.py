@@ -265,9 +265,8 @@ def build_model(case, structure=None):
         offset += mesh.n_nodes
     points = np.vstack([p.mesh.points for p in parts.values()])
     timings["mesh"] = time.perf_counter() - t0
-    # a mesh in millimetres, a point off its part: said before the assembly's seconds
+    # a mesh in millimetres: said before the assembly's seconds
     check_scale(case, parts)
-    check_points(case, parts)
     files = [n for n in case.parts if case.parts[n].mesh.kind == "file"]
     if files:
         # the cells read: the memory bound before any matrix is assembled
@@ -282,6 +281,8 @@ def build_model(case, structure=None):
     _check_cells(case, blocks, ops.min_det, parts)
     _check_finite(case, parts, ops)
     timings["assembly"] = time.perf_counter() - t0
+    # after the cells' own checks: a point is off a part only if the part is sound
+    check_points(case, parts)
 
     fixed = _fixed(case, parts, 3 * len(points))
     return _loaded(case, points, parts, ops.K, ops.M, ops.lumped_mass, fixed, timings)

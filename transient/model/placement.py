@@ -1,7 +1,7 @@
-"""Where the case puts things, checked on the meshes before any matrix is assembled: a mesh
-file read in millimetres as metres, and a sensor, a force or a rotation's axis placed off its
-part, are one-line errors with the distance measured, not modes at 1 Hz or a nearest node
-taken without a word."""
+"""Where the case puts things, checked on the meshes before any factorization: a mesh file
+read in millimetres as metres (before the assembly), and a sensor, a force or a rotation's
+axis placed off its part (once the cells are found sound), are one-line errors with the
+distance measured, not modes at 1 Hz or a nearest node taken without a word."""
 import numpy as np
 
 from ..errors import CaseError
