@@ -199,7 +199,7 @@ def _pair_summary(pair):
     out = {"pair": pair.name, "rule": pair.spec.rule, "regularized": pair.spec.regularized,
            "k": pair.k, "points": pair.rule.n_points, "area": pair.rule.area, "eps": pair.eps,
            "kept": pair.compat.kept(pair.eps) if pair.compat else None,
-           "law": pair.spec.law.kind}
+           "law": pair.spec.law.kind, "gap0": pair.gaps.meta() if pair.gaps else None}
     if pair.coarse is not None:
         out["coarse"] = {"m": len(pair.coarse.chosen), "energy_error": pair.coarse.energy_error,
                          "weighting": pair.coarse.weighting,

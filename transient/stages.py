@@ -229,7 +229,8 @@ def _contact_meta(pairs, contacts, preload):
                            "regularized": p.spec.regularized, "eps": p.eps,
                            "kept": p.compat.kept(p.eps) if p.compat else None,
                            "candidates": p.candidates or None,
-                           "law": p.spec.law.kind} for p in pairs}}
+                           "law": p.spec.law.kind,
+                           "gap0": p.gaps.meta() if p.gaps else None} for p in pairs}}
 
 
 def _geometry(case, system, pairs):

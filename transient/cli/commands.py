@@ -162,7 +162,8 @@ def _model_line(meta):
                      "this preload")
     for name, p in (meta.get("pairs") or {}).items():
         of = f" of {p['candidates']}" if p.get("candidates") else ""
-        parts.append(f"{name}: {p.get('rule', '?')} rule, {p.get('points', '?')}{of} points")
+        parts.append(f"{name}: {p.get('rule', '?')} rule, {p.get('points', '?')}{of} points"
+                     + _gap_text(p.get("gap0")))
     if "sampling" in meta:
         parts.append(f"sampling residual {meta['sampling']['residual']:.1e} on "
                      f"{meta['sampling']['band_modes']} modes")
@@ -174,6 +175,15 @@ def _model_line(meta):
         line += ("\n" if line else "") + "factorizations: " + ", ".join(
             f"{k} {v}" for k, v in factorized.items())
     return line
+
+
+def _gap_text(gap0):
+    """', initial gap MIN to MAX m (S% of the area overclosed)' of a pair's meta (none in a
+    history written before the gaps were measured)."""
+    if not isinstance(gap0, dict):
+        return ""
+    return (f", initial gap {gap0['min']:.3g} to {gap0['max']:.3g} m "
+            f"({100 * gap0['overclosed']:.3g}% of the area overclosed)")
 
 
 def cmd_run(args):

@@ -17,8 +17,10 @@ from .coarse import select, side_bases
 from .compatibility import auto_eps, compatibility
 from ..errors import CaseError
 from .friction import pair_sliding
+from .gaps import check_gaps, initial_gaps
 from .interface import InterfaceError, build_interface, build_wall_interface
 from ..model.model import resolve_set
+from ..model.placement import check_motions
 from .regularize import (dual_factors, factor_projectors, factored_rows, primal_basis,
                          regularized_rule, row_factors)
 from .rules import centre_rule, gauss_rule
@@ -45,6 +47,7 @@ class ContactPair:
     #                           the rule's C1, C2 are then None
     projections: tuple = None  # with factors: (Q1, Y1), (Q2, Y2) of the sides' projectors
     sliding: object = None    # friction.PairFriction with friction, else None
+    gaps: object = None       # gaps.InitialGaps of the fine rule
 
     @property
     def k(self):
@@ -101,8 +104,14 @@ GEOMETRY = ("surface1", "surface2", "wall", "wall_point", "wall_normal", "order"
 
 
 def build_pair(case, model, name, need_compatibility=False):
-    """The contact pair `name` of a case: its geometry, with the case's sliding."""
-    return attach(case, build_geometry(case, model, name, need_compatibility))
+    """The contact pair `name` of a case: its geometry, with the case's sliding; its initial
+    gaps checked against its law and preload before the compatibility's eigensolver."""
+    t0 = time.perf_counter()
+    interface = pair_interface(case, model, name)
+    seconds = time.perf_counter() - t0
+    check_gaps(case, model, name, interface, initial_gaps(interface))
+    return attach(case, build_geometry(case, model, name, need_compatibility,
+                                       (interface, seconds)))
 
 
 def attach(case, pair):
@@ -113,13 +122,10 @@ def attach(case, pair):
     return replace(pair, sliding=pair_sliding(case, pair)) if spec.friction.active else pair
 
 
-def build_geometry(case, model, name, need_compatibility=False):
-    """A pair's interface, compatibility, regularization and rule (no sliding): what its
-    spec's GEOMETRY fields and the model give."""
+def pair_interface(case, model, name):
+    """A pair's Interface: its fine rule and initial gaps."""
     spec = case.contact[name]
     key = f"contact.{name}"
-    timings = {}
-    t0 = time.perf_counter()
     p1, faces1 = _surface(case, model, spec.surface1, f"{key}.surface1")
     try:
         if spec.wall:
@@ -132,7 +138,20 @@ def build_geometry(case, model, name, need_compatibility=False):
                                         p2.mesh.points, faces2, p2.offset, spec.order)
     except InterfaceError as exc:
         raise CaseError(case.path, key, str(exc)) from None
-    timings["interface"] = time.perf_counter() - t0
+    return interface
+
+
+def build_geometry(case, model, name, need_compatibility=False, interface=None):
+    """A pair's interface, compatibility, regularization and rule (no sliding): what its
+    spec's GEOMETRY fields and the model give. interface: (Interface, seconds) built
+    already."""
+    spec = case.contact[name]
+    key = f"contact.{name}"
+    if interface is None:
+        t0 = time.perf_counter()
+        interface = (pair_interface(case, model, name), time.perf_counter() - t0)
+    interface, seconds = interface
+    timings = {"interface": seconds}
 
     comp, eps, eps_source, primal, coarse, factors = None, None, "", None, None, None
     projections = None
@@ -186,13 +205,17 @@ def build_geometry(case, model, name, need_compatibility=False):
         rule = coarse.rule
         timings["coarse_rule"] = time.perf_counter() - t0
     return ContactPair(name, spec, interface, comp, eps, eps_source, rule, primal, coarse,
-                       timings, factors=factors, projections=projections)
+                       timings, factors=factors, projections=projections,
+                       gaps=initial_gaps(interface))
 
 
 def build_contact(case, model, need_compatibility=False, geometry=None):
     """Every contact pair of the case, in file order; geometry: the pairs' geometry built
     already (build_geometry, for a case equal on GEOMETRY: a campaign's variants)."""
+    check_motions(case, model.parts)
     if geometry is not None:
+        for pair in geometry:
+            check_gaps(case, model, pair.name, pair.interface, pair.gaps)
         return [attach(case, pair) for pair in geometry]
     return [build_pair(case, model, name, need_compatibility) for name in case.contact]
 

@@ -15,6 +15,7 @@ from ..mesh.elements import ALIASES, ELEMENTS
 from ..case.sizes import cells_by_part, check_memory
 from ..errors import CaseError
 from .loads import nearest_node, pressure_forces
+from .placement import check_points, check_scale
 from ..mesh.meshfile import MeshFileError, read_mesh
 from ..mesh.mesh import Mesh, unit
 from ..mesh.placement import place
@@ -227,7 +228,7 @@ def _loads(case, parts, points, M):
             f[3 * part.offset:3 * part.offset + local.size] += local.ravel()
         elif spec.kind == "force":
             part = parts[spec.part]
-            node = _nearest(case, part, spec.point, f"{key}.point")
+            node = _nearest(part, spec.point)
             f[3 * node:3 * node + 3] += spec.vector
         else:
             acc = np.zeros((len(points), 3))
@@ -239,25 +240,17 @@ def _loads(case, parts, points, M):
     return out
 
 
-def _nearest(case, part, point, key):
-    """Global id of the part's node nearest point; a point farther from every node than the
-    part's own size is an error, not its nearest node."""
-    points = part.mesh.points
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    # hypot, not norm: the square of the diagonal of a part 1e160 m long overflows
-    size = float(np.hypot.reduce(hi - lo))
-    # compared by coordinate, which no magnitude overflows
-    if not np.all(np.abs(np.asarray(point, float) - 0.5 * (lo + hi)) <= 2.0 * size + 1e-12):
-        raise CaseError(case.path, key, f"{list(point)} is far from part '{part.name}' (its "
-                        f"nodes lie in the box {lo.tolist()} to {hi.tolist()})")
-    return nearest_node(points, point) + part.offset
+def _nearest(part, point):
+    """Global id of the part's node nearest point (placement.check_points has refused a point
+    off its part)."""
+    return nearest_node(part.mesh.points, point) + part.offset
 
 
 def _sensors(case, parts, ndof):
     names, rows, cols, vals = [], [], [], []
     for i, (sname, spec) in enumerate(case.sensors.items()):
         part = parts[spec.part]
-        node = _nearest(case, part, spec.point, f"sensors.{sname}.point")
+        node = _nearest(part, spec.point)
         names.append(sname)
         rows += [i] * 3
         cols += list(range(3 * node, 3 * node + 3))
@@ -272,6 +265,7 @@ def build_model(case, structure=None):
     loads and sensors are this case's (a campaign's pressure sweep shares the rest)."""
     if structure is not None:
         s = structure
+        check_points(case, s.parts)
         return _loaded(case, s.points, s.parts, s.K, s.M, s.lumped_mass, s.fixed, {})
     timings = {}
     t0 = time.perf_counter()
@@ -282,6 +276,8 @@ def build_model(case, structure=None):
         offset += mesh.n_nodes
     points = np.vstack([p.mesh.points for p in parts.values()])
     timings["mesh"] = time.perf_counter() - t0
+    # a mesh in millimetres: said before the assembly's seconds
+    check_scale(case, parts)
     files = [n for n in case.parts if case.parts[n].mesh.kind == "file"]
     if files:
         # the cells read: the memory bound before any matrix is assembled
@@ -296,6 +292,8 @@ def build_model(case, structure=None):
     _check_cells(case, blocks, ops.min_det, parts)
     _check_finite(case, parts, ops)
     timings["assembly"] = time.perf_counter() - t0
+    # after the cells' own checks: a point is off a part only if the part is sound
+    check_points(case, parts)
 
     fixed = _fixed(case, parts, 3 * len(points))
     return _loaded(case, points, parts, ops.K, ops.M, ops.lumped_mass, fixed, timings)
