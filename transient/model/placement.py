@@ -38,8 +38,10 @@ def cell_span(mesh):
 
 
 def _distance(a, b):
-    """|a - b| for points of any magnitude (hypot: the square of 1e160 m overflows)."""
-    return float(np.hypot.reduce(np.asarray(a, float) - np.asarray(b, float)))
+    """|a - b| for points of any magnitude (hypot: the square of 1e160 m overflows; past
+    1.8e308 m, inf)."""
+    with np.errstate(over="ignore"):
+        return float(np.hypot.reduce(np.asarray(a, float) - np.asarray(b, float)))
 
 
 def check_points(case, parts):
@@ -58,7 +60,8 @@ def check_points(case, parts):
         tol = spans[name]
         p = np.asarray(point, float)
         # the box first, by coordinate (no magnitude overflows), then the nearest node
-        outside = np.maximum(np.maximum(lo - p, p - hi), 0.0)
+        with np.errstate(over="ignore"):
+            outside = np.maximum(np.maximum(lo - p, p - hi), 0.0)
         away = (_distance(outside, 0.0) if np.any(outside > tol)
                 else float(np.hypot.reduce(x - p, axis=1).min()))
         if not away <= tol:
