@@ -79,8 +79,8 @@ class ContactSet:
 
     def observe(self, T, W=None):
         """C T (P, k) for T (ndof, k) dense or sparse, C T W for W (k, n): from the factors
-        when held, L (B^T T), which reads r x ndof sparse entries instead of the P dense rows
-        (pad_disc: 1.9 s -> 0.2), and W taken on the r factor rows before the P points'."""
+        when held, L (B^T T), which reads r x ndof sparse entries instead of the P dense
+        rows, and W taken on the r factor rows before the P points'."""
         if self.factors is None:
             return _times(_dense(self.C @ T), W)
         L, B = self.factors

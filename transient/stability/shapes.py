@@ -50,8 +50,8 @@ def part_shares(model, M, U):
 
 def real_times(R, Z):
     """R Z for a real R (dense or sparse) and a complex Z (n, k), as one real product with
-    [Re Z, Im Z]: NumPy and SciPy make a complex copy of R otherwise (X of pad_disc's basis:
-    0.43 GB), and two products read R twice (0.11 -> 0.06 s for the unstable modes' shapes)."""
+    [Re Z, Im Z]: NumPy and SciPy make a complex copy of R otherwise (the size of the whole
+    basis X), and two products read R twice."""
     k = Z.shape[1]
     Y = R @ np.hstack([Z.real, Z.imag])
     return Y[:, :k] + 1j * Y[:, k:]
