@@ -359,6 +359,13 @@ def _contact_shapes_by_columns(C, stiffness, solve, Phi, omega2, tol, cols, out=
     return flexible_shapes(H, Cc, stiffness, tol, response, solves)
 
 
+def contact_gram(Cc, stiffness):
+    """X^T X with X = D^1/2 Cc: the rows Cc (m, k) dense weighted by the law's stiffness
+    (m,), its negative entries as zero (flexible_shapes')."""
+    X = np.sqrt(np.maximum(stiffness, 0.0))[:, None] * Cc
+    return X.T @ X
+
+
 def flexible_shapes(H, Cc, stiffness, tol, response, solves=False, gram=None):
     """The contact shapes of a flexibility H = E^T K^-1 E (k x k, beyond the modes) of the
     load basis E of the rows Cc (m x k: C = Cc E^T), the law's stiffness (m,) at the points:
@@ -370,12 +377,8 @@ def flexible_shapes(H, Cc, stiffness, tol, response, solves=False, gram=None):
     root = (W * np.sqrt(np.maximum(lam, 0.0))) @ W.T
     # Y Y^T and Y^T Y = H^1/2 X^T X H^1/2 share their eigenvalues mu: the k x k one is the
     # cheap one (m >= k), and X^T u_i = X^T Y v_i / sqrt(mu_i) = X^T X H^1/2 v_i / sqrt(mu_i)
-    if gram is None:
-        X = np.sqrt(np.maximum(stiffness, 0.0))[:, None] * Cc
-        XtX = X.T @ X
-        X = None   # points x rho (0.40 GB at 1M dofs): not held while the shapes are solved
-    else:
-        XtX = gram
+    # the points x rho rows (0.40 GB at 1M dofs) are not held while the shapes are solved
+    XtX = contact_gram(Cc, stiffness) if gram is None else gram
     mu, Q = np.linalg.eigh(root @ XtX @ root)
     mu, Q = np.maximum(mu[::-1], 0.0), Q[:, ::-1]
     kept = mu >= tol

@@ -24,7 +24,7 @@ from ..errors import CaseError
 from ..model.dofs import free_block
 from ..solve import blas
 from ..solve.preload import Preload
-from .basis import Basis, flexible_shapes
+from .basis import Basis, contact_gram, flexible_shapes
 from .parts import Engine, PartError, PartTask
 from .sampling import PairBlocks, ReducedPreloadError, pair_gram, reduced_preload
 
@@ -72,11 +72,9 @@ def part_tasks(model, M, pairs, contacts, patterns, constant):
 
 
 def _gram(Cc, stiffness):
-    """Cc^T diag(stiffness) Cc (k, k) of the rows Cc (m, k) sparse that touch the part, its
-    negative stiffness as zero (basis.flexible_shapes' X^T X)."""
+    """basis.contact_gram (k, k) of the rows Cc (m, k) sparse, on those that touch the part."""
     touch = np.flatnonzero(np.diff(Cc.indptr))
-    X = np.sqrt(np.maximum(stiffness[touch], 0.0))[:, None] * Cc[touch].toarray()
-    return X.T @ X
+    return contact_gram(Cc[touch].toarray(), stiffness[touch])
 
 
 def law_tangent(pairs, contacts):
@@ -106,16 +104,15 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
     t_parts = time.perf_counter() - t0
     X = synthesis(model.ndof, [dofs for dofs, _ in tasks], [p.T for p in parts])
     Kr = sla.block_diag(*[p.Kr for p in parts])
-    with blas.every_core():
+    w = contacts.weights
+    with blas.every_core():         # dense algebra in reduced coordinates, no solve beside it
         Cr = contacts.observe(X)
         tangential = (list(contacts.observe_tangential(X)) if contacts.friction is not None
                       else [])
         Ct = tangential[0] if tangential else None
-    w = contacts.weights
-    with blas.every_core():         # dense algebra in reduced coordinates, no solve beside it
-        preload = _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant,
-                           PairBlocks(contacts, Cr, Ct))
-        K_lin = PairBlocks(contacts, Cr).stiffness(Kr, w * preload.tangent)
+        blocks = PairBlocks(contacts, Cr, Ct)
+        preload = _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant, blocks)
+        K_lin = blocks.stiffness(Kr, w * preload.tangent, sliding=False)
         omega2, A = sla.eigh(0.5 * (K_lin + K_lin.T))
         rows, stiffness = [Cr] + tangential, w * critical_tangent(contacts, preload.tangent)
         loads = X.T @ np.stack([constant] + list(patterns), axis=1)

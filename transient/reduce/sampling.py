@@ -25,6 +25,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..solve.preload import STALE
+from .basis import contact_gram
 
 
 @dataclass(frozen=True)
@@ -272,6 +273,14 @@ def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter, Ct=None, start=None,
             r += Ct.T @ (w * p * m)
         return r, g, p, kt
 
+    def tangent_at(d):
+        if blocks is not None:
+            return blocks.stiffness(Kr, w * d)
+        tangent = Kr + (Cr.T * (w * d)) @ Cr
+        if Ct is not None:
+            tangent += (Ct.T * (w * m * d)) @ Cr
+        return tangent
+
     r, g, p, kt = residual(q)
     held, factors = None, None
     for it in range(max_iter + 1):
@@ -282,23 +291,15 @@ def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter, Ct=None, start=None,
             d = kt if start is None or it else np.maximum(kt, start)
             try:
                 if start is None:
-                    tangent = Kr + (Cr.T * (w * d)) @ Cr
-                    if Ct is not None:
-                        tangent += (Ct.T * (w * m * d)) @ Cr
-                    dq = np.linalg.solve(tangent, r)
+                    dq = np.linalg.solve(tangent_at(d), r)
                 else:
                     # from the undeformed state: the tangent (its P x n^2 product the cost
                     # of an iteration) kept while the laws' tangents move less than STALE
                     if held is None or np.max(np.abs(d - held)) > STALE * np.max(held):
-                        if blocks is None:
-                            tangent = Kr + (Cr.T * (w * d)) @ Cr
-                            if Ct is not None:
-                                tangent += (Ct.T * (w * m * d)) @ Cr
-                        else:
-                            tangent = blocks.stiffness(Kr, w * d)
                         with warnings.catch_warnings():
                             warnings.simplefilter("error", sla.LinAlgWarning)
-                            factors, held = sla.lu_factor(tangent, check_finite=False), d
+                            factors = sla.lu_factor(tangent_at(d), check_finite=False)
+                        held = d
                     dq = sla.lu_solve(factors, r, check_finite=False)
             except (np.linalg.LinAlgError, sla.LinAlgWarning):
                 raise ReducedPreloadError(
@@ -320,41 +321,43 @@ def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter, Ct=None, start=None,
                               f"{max_iter} Newton iterations (residual {res:.1e})")
 
 
+def _pair_columns(contacts, rows):
+    """(rows' slice, columns) of each pair: the columns where any of the rows (P, n) is not
+    zero on the pair's points (its two parts' shapes, in the parts' coordinates)."""
+    for s in contacts.slices.values():
+        seen = np.logical_or.reduce([np.any(R[s] != 0.0, axis=0) for R in rows])
+        yield s, np.flatnonzero(seen)
+
 
 class PairBlocks:
     """The contact stiffness of reduced coordinates a pair at a time: in the parts'
     coordinates a pair's rows see only its two parts' shapes, so Cr^T diag(wd) Cr (and the
     steady sliding's Ct^T diag(wd m) Cr) is a sum of blocks that small. The rows' blocks are
-    cut once, for every Newton iteration."""
+    cut once, for every Newton iteration and the linearized stiffness after it."""
 
     def __init__(self, contacts, Cr, Ct=None):
         self.blocks = []
-        for s in contacts.slices.values():
-            seen = np.any(Cr[s] != 0.0, axis=0)
-            if Ct is not None:
-                seen |= np.any(Ct[s] != 0.0, axis=0)
-            c = np.flatnonzero(seen)
+        for s, c in _pair_columns(contacts, [Cr] + ([] if Ct is None else [Ct])):
             normal = Cr[s][:, c]
             rows = (normal if Ct is None
                     else normal + contacts.friction.m[s, None] * Ct[s][:, c])
             self.blocks.append((s, np.ix_(c, c), normal, rows))
 
-    def stiffness(self, Kr, wd):
-        """Kr + the contact's tangent at the points' law stiffness wd (P,)."""
+    def stiffness(self, Kr, wd, sliding=True):
+        """Kr + the contact's tangent at the points' law stiffness wd (P,); sliding=False:
+        its normal part alone, without the steady sliding's friction (symmetric)."""
         K = Kr.copy()
         for s, block, normal, rows in self.blocks:
-            K[block] += (rows.T * wd[s]) @ normal
+            K[block] += ((rows if sliding else normal).T * wd[s]) @ normal
         return K
 
 
 def pair_gram(contacts, rows, d):
-    """sum over rows R of R^T diag(d) R (d >= 0 (P,), its negative entries as zero), a
-    pair's block at a time (as PairBlocks): the rows in the parts' coordinates."""
+    """basis.contact_gram of the rows stacked (sum over R of R^T diag(d) R, d (P,)), a pair's
+    block at a time (as PairBlocks): the rows in the parts' coordinates."""
     n = rows[0].shape[1]
     gram = np.zeros((n, n))
-    root = np.sqrt(np.maximum(d, 0.0))
-    for s in contacts.slices.values():
-        c = np.flatnonzero(np.logical_or.reduce([np.any(R[s] != 0.0, axis=0) for R in rows]))
-        block = np.vstack([R[s][:, c] for R in rows]) * np.tile(root[s], len(rows))[:, None]
-        gram[np.ix_(c, c)] += block.T @ block      # one symmetric rank-k product (syrk)
+    for s, c in _pair_columns(contacts, rows):
+        gram[np.ix_(c, c)] += contact_gram(np.vstack([R[s][:, c] for R in rows]),
+                                           np.tile(d[s], len(rows)))
     return gram
