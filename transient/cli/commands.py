@@ -127,7 +127,8 @@ def cmd_compat(args):
 
 def _basis_notes(meta):
     """What the model line says of a reduced basis: its modes' reach, the parts reduced on
-    their own and their interface statics' error (the largest flexibility dropped), its band
+    their own, their interfaces' loads and fields (reduce.fields) and the fields' statics
+    error (the largest flexibility dropped), its band
     modes' residual in the whole model (from meta or a history's attributes, any of which may
     be missing)."""
     notes = []
@@ -138,8 +139,10 @@ def _basis_notes(meta):
         interfaces = (meta.get("basis_timings") or {}).get("part_interfaces") or {}
         if interfaces:
             worst = max(i["statics_error"] for i in interfaces.values())
-            notes.append(f"its interfaces' statics within {worst:.1e} of the contact's "
-                         "flexibility")
+            loads = sum(i["loads"] for i in interfaces.values())
+            fields = sum(i.get("fields", i["loads"]) for i in interfaces.values())
+            notes.append(f"its interfaces' {loads} contact loads as {fields} fields, their "
+                         f"statics within {worst:.1e} of the contact's flexibility")
     if meta.get("band_residual") is not None:
         notes.append(f"its band modes' residual in the whole model {meta['band_residual']:.1e}")
     return notes

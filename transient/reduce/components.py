@@ -25,26 +25,34 @@ from ..model.dofs import free_block
 from ..solve import blas
 from ..solve.preload import Preload
 from .basis import Basis, contact_gram, flexible_shapes
-from .parts import Engine, PartError, PartTask
+from .fields import rigid_motions, support_stiffness
+from .parts import Engine, PartError, PartInterface, PartTask
 from .sampling import PairBlocks, ReducedPreloadError, pair_gram, reduced_preload
 
 
 def part_tasks(model, M, pairs, contacts, patterns, constant):
     """(dofs, (name, K, M, interface, loads)) of each part: the arguments of part_basis on
-    the part's free dofs, which sit at dofs. The interface loads E are the contact's: with
-    factored rows (a regularized rule, C = L B^T) the columns of B on the part, the traces of
-    the (1-eps)-compatible shapes, fewer than the dofs the rows touch (their count grows
-    with the interface's mesh all the same); else a unit load on
-    each dof the rows touch. With friction, the tangential rows' loads too. The rows reach
+    the part's free dofs, which sit at dofs. The interface (a PartInterface) holds the
+    contact's loads E on the part: with factored rows (a regularized rule, C = L B^T) the
+    columns of B on the part, the traces of the (1-eps)-compatible shapes (with friction the
+    tangential rows' too), which the part reduces to the fields of its loaded interface
+    (reduce.fields); else a unit load on each dof the rows touch, kept whole. The rows reach
     the task as their gram in E's coordinates (k x k), not point by point."""
     free = ~model.fixed
     f = contacts.friction
     scale = contacts.weights * law_tangent(pairs, contacts)
+    shape_of = None
     if contacts.factors is not None:
         L, B = contacts.factors
         bases = [B] + ([f.along, f.across] if f is not None else [])
         E_all = sp.hstack([sp.csr_matrix(b) for b in bases]).tocsr()
         rows = sp.block_diag([sp.csr_matrix(L)] * len(bases)).tocsc()
+        # each column's compatible shape, -1 on a tied pair's (kept whole)
+        r = B.shape[1]
+        tied = np.concatenate([np.full(pair.factors[1].shape[1],
+                                       pair.spec.law.kind == "bilateral") for pair in pairs])
+        shape_of = np.tile(np.where(tied, -1, np.arange(r)), len(bases))
+        support = support_stiffness(pairs, model.ndof)
     else:
         bases = [contacts.C] + (list(contacts.tangential()) if f is not None else [])
         E_all, rows = None, sp.vstack(bases).tocsc()
@@ -54,20 +62,25 @@ def part_tasks(model, M, pairs, contacts, patterns, constant):
     for name in model.parts:
         dofs = model.part_dofs(name)
         dofs = dofs[free[dofs]]
+        Kp, Mp = free_block(model.K, dofs), free_block(M, dofs)
         if E_all is None:
             # the dofs the rows touch, each loaded alone
             Rp = rows[:, dofs].tocsc()
             cols = np.flatnonzero(np.diff(Rp.indptr))
             E = sp.csr_matrix((np.ones(len(cols)), (cols, np.arange(len(cols)))),
                               shape=(len(dofs), len(cols)))
-            Cc = Rp[:, cols]
+            Cc, shape, block = Rp[:, cols], np.full(len(cols), -1), np.zeros(len(cols), int)
         else:
             Ep = E_all[dofs].tocsc()
             cols = np.flatnonzero(np.diff(Ep.indptr))
-            E, Cc = Ep[:, cols], rows[:, cols]
-        interface = (sp.csc_matrix(E), _gram(Cc.tocsr(), scale)) if len(cols) else None
-        out.append((dofs, (name, free_block(model.K, dofs), free_block(M, dofs), interface,
-                           loads[dofs])))
+            E, Cc, shape, block = Ep[:, cols], rows[:, cols], shape_of[cols], cols // B.shape[1]
+        interface = None
+        if len(cols):
+            fields = (shape >= 0).any()
+            interface = PartInterface(sp.csc_matrix(E), _gram(Cc.tocsr(), scale), shape, block,
+                                      free_block(support, dofs) if fields else None,
+                                      rigid_motions(model.points, dofs) if fields else None)
+        out.append((dofs, (name, Kp, Mp, interface, loads[dofs])))
     return out
 
 
@@ -123,7 +136,8 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
                "part_seconds": {p.name: sum(p.seconds.values()) for p in parts},
                "part_stages": {p.name: p.seconds for p in parts},
                "synthesis_dofs": int(X.shape[1]),
-               "part_interfaces": {p.name: {"loads": len(p.interface_mu), "kept": p.n_shapes,
+               "part_interfaces": {p.name: {"loads": p.interface_loads,
+                                            "fields": len(p.interface_mu), "kept": p.n_shapes,
                                             "statics_error": p.statics_error(
                                                 reduction.statics_tolerance)}
                                    for p in parts}}

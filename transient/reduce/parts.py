@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..cluster import WHERE
 from ..errors import CaseError
@@ -23,11 +24,36 @@ from ..solve import blas
 from ..solve.linsolve import FactorizationError, factorize
 from ..solve.modes import normal_modes, shift_sigma
 from .basis import MODES_TOL, flexible_shapes
+from .fields import field_map
 
 # the modules whose arithmetic makes a part's reduction: their source is in its key
-_SOURCES = ("reduce/parts.py", "reduce/basis.py", "solve/modes.py", "solve/lanczos.py",
-            "solve/linsolve.py", "model/dofs.py")
-_FIELDS = ("T", "Kr", "mode_hz", "n_shapes", "n_static", "interface_mu")
+_SOURCES = ("reduce/parts.py", "reduce/basis.py", "reduce/fields.py", "solve/modes.py",
+            "solve/lanczos.py", "solve/linsolve.py", "model/dofs.py")
+_FIELDS = ("T", "Kr", "mode_hz", "n_shapes", "n_static", "interface_mu", "interface_loads")
+
+
+@dataclass(frozen=True)
+class PartInterface:
+    """The contact's loads on one part: E (n, k) sparse, the rows' gram G (k, k) in them
+    (G = Cc^T diag(w k_t) Cc with C = Cc E^T the part's rows, w k_t the law's stiffness at
+    each point); shape, block (k,): the compatible shape each column is the trace of (-1: kept
+    whole) and the rows' direction it loads (reduce.fields.field_map); support (n, n) sparse
+    and rigid (n, 6), the part's loaded interface and rigid motions (None: no field kept)."""
+    E: object
+    G: np.ndarray
+    shape: np.ndarray
+    block: np.ndarray
+    support: object = None
+    rigid: np.ndarray = None
+
+    def arrays(self):
+        """What the part's reduction reads of it, for its key."""
+        out = [self.E.data, self.E.indices, self.E.indptr, np.array(self.E.shape), self.G,
+               self.shape, self.block]
+        if self.support is not None:
+            S = self.support.tocsr()
+            out += [S.data, S.indices, S.indptr, self.rigid]
+        return out
 
 
 @dataclass(frozen=True)
@@ -41,9 +67,10 @@ class PartBasis:
     n_shapes: int            # interface shapes kept (contact_shapes at the tolerance)
     n_static: int            # static directions asked beyond the interface shapes
     seconds: dict            # factorization, modes, interface, statics, orthonormalization
-    interface_mu: np.ndarray = None   # (k,) descending: the interface loads' flexibility
+    interface_mu: np.ndarray = None   # (f,) descending: the interface fields' flexibility
     #                                   against the law's (flexible_shapes' mu); the largest
-    #                                   dropped is the interface statics' error
+    #                                   dropped is the fields' statics error
+    interface_loads: int = 0          # the contact's loads on the part before the fields
 
     def statics_error(self, tol):
         """The largest flexibility of an interface direction dropped (below tol), relative to
@@ -56,20 +83,30 @@ class PartBasis:
 
 def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"):
     """The PartBasis of one part from its own matrices on its free dofs: K, M (n, n) sparse,
-    interface (E (n, k) sparse, G (k, k)) the loads that span the contact's on the part and
-    the rows' gram in them, G = Cc^T diag(w k_t) Cc with C = Cc E^T the part's rows and w k_t
-    the law's stiffness at each (None: no contact on the part): a task holds no array the
-    size of the contact points, nor a dense one of the interface; loads (n, s) the static
-    loads to respond to.
+    interface the contact's loads on the part (a PartInterface; None: no contact on it): a
+    task holds no array the size of the contact points, nor a dense one of the interface;
+    loads (n, s) the static loads to respond to.
 
-    Its own factorization of K - sigma M (the small shift keeps a floating part solvable) gives
-    the modes and the responses beyond them; the interface's are kept by their flexibility
-    against the contact law's (basis.flexible_shapes)."""
+    The interface's loads are first reduced to the fields of its loaded modes to fmax
+    (reduce.fields). Its own factorization of K - sigma M (the small shift keeps a floating
+    part solvable) gives the modes and the responses beyond them; the fields' are kept by
+    their flexibility against the contact law's (basis.flexible_shapes)."""
     seconds, t0 = {}, time.perf_counter()
 
     def lap(stage):
         nonlocal t0
         seconds[stage], t0 = time.perf_counter() - t0, time.perf_counter()
+    n_loads = 0
+    if interface is not None:
+        E, G, n_loads = interface.E, interface.G, interface.E.shape[1]
+        if interface.support is not None:
+            try:
+                P = field_map(K, M, interface.support, E, G, interface.shape, interface.block,
+                              interface.rigid, fmax, shift_hz, backend)
+            except FactorizationError as exc:
+                raise PartError(name, str(exc)) from None
+            E, G = sp.csc_matrix(E @ P), P.T @ G @ P
+        lap("fields")
     sigma = shift_sigma(-shift_hz)
     try:
         solve = factorize(shifted(K, M, sigma), backend, definite=True)
@@ -92,7 +129,6 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
         return x - Phi @ (MPhi.T @ x)
     columns, n_shapes, mu = [], 0, np.zeros(0)
     if interface is not None:
-        E, G = interface
         KE = beyond(E.toarray())
         shapes, mu = flexible_shapes(np.asarray(E.T @ KE), None, None, tol, KE.__matmul__,
                                      gram=G)
@@ -106,7 +142,7 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
     Kr = T.T @ (K @ T)
     lap("orthonormalization")
     return PartBasis(name, T, 0.5 * (Kr + Kr.T), modes.frequencies, n_shapes,
-                     int(loads.shape[1]), seconds, mu)
+                     int(loads.shape[1]), seconds, mu, n_loads)
 
 
 class PartError(RuntimeError):
@@ -143,7 +179,7 @@ class PartTask:
     name: str
     K: object                # (n, n) sparse, the part's free dofs
     M: object
-    interface: tuple         # (E sparse, G) or None
+    interface: PartInterface  # or None
     loads: np.ndarray        # (n, s)
     fmax: float              # the cutoff its modes reach [Hz]
     shift_hz: float
@@ -165,8 +201,7 @@ class PartTask:
         arrays = [self.K.data, self.K.indices, self.K.indptr, self.M.data, self.M.indices,
                   self.M.indptr, self.loads]
         if self.interface is not None:
-            E, G = self.interface
-            arrays += [E.data, E.indices, E.indptr, np.array(E.shape), G]
+            arrays += self.interface.arrays()
         for a in arrays:
             a = np.ascontiguousarray(a)
             h.update(repr((a.dtype.str, a.shape)).encode())
@@ -177,7 +212,7 @@ class PartTask:
         """An estimate of the peak memory of its reduction [B]: the factor of K (about 40 times
         K's entries for tet10 in 3D), the modes and responses (n x their columns), twice."""
         n = self.K.shape[0]
-        k = 0 if self.interface is None else self.interface[0].shape[1]
+        k = 0 if self.interface is None else self.interface.E.shape[1]
         return int(40 * 12 * self.K.nnz + 8 * n * (3 * (k + self.loads.shape[1]) + 400))
 
 
@@ -264,7 +299,8 @@ def cached(runner, folder):
                 with np.load(path) as data:
                     out[i] = PartBasis(task.name, data["T"], data["Kr"], data["mode_hz"],
                                        int(data["n_shapes"]), int(data["n_static"]),
-                                       {"cache": 0.0}, data["interface_mu"])
+                                       {"cache": 0.0}, data["interface_mu"],
+                                       int(data["interface_loads"]))
                 if done is not None:
                     done(task, out[i])
             else:
