@@ -93,7 +93,11 @@ def cmd_cea(args):
         print(f"  mode {row['mode']} at {row['frequency_hz']:.1f} Hz: kinetic energy "
               f"{parts}{nd}{own}{residual}")
     if result.files:
-        print("files: " + ", ".join(str(p) for p in result.files))
+        # the CSV, then a VTU file and its collection per mode described
+        table, numbers = result.files[0], ", ".join(str(r["mode"]) for r in result.shapes)
+        stem = table.parent / table.name[:-len("_modes.csv")]
+        print(f"files: {table}" + (f"; {stem}_mode_NNN.vtu and .pvd for mode(s) {numbers}"
+                                   if result.shapes else ""))
     print("stages: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.stages.items())
           + f"; total {total:.2f} s")
     return 0
