@@ -182,8 +182,9 @@ def test_a_free_discs_in_plane_modes_are_named_so_and_its_bending_modes_counted(
     diameters (a pair: a free plate's fundamental, Leissa), 0, 1 and 3 (pairs), and the first
     in-plane pair (the annulus' elliptic mode). Which is which is found without the descriptor: a
     bending mode's axial motion is even about the mid-plane, an in-plane mode's odd. Each
-    in-plane mode is named so, without a count of its axial motion; each bending mode is
-    out-of-plane with the nodal diameters its axial motion's nodal lines make on the rim."""
+    in-plane mode is named so, with no count of its axial motion but that of its radial
+    motion's nodal lines on the rim; each bending mode is out-of-plane with the nodal
+    diameters its axial motion's nodal lines make on the rim."""
     from transient.model import build_model
     from transient.solve.modes import normal_modes
     from transient.stability.diameters import disc_motion
@@ -211,7 +212,10 @@ def test_a_free_discs_in_plane_modes_are_named_so_and_its_bending_modes_counted(
             assert d["motion"] == "out-of-plane" and d["axial_share"] > 0.9
             assert 2 * d["order"] == _sign_changes(uz_up) and d["share"] > 0.99
         else:
+            # named in-plane, its count that of its radial motion's nodal lines
+            radial = (u[3 * up] * x[up, 0] + u[3 * up + 1] * x[up, 1]) / 0.14
             assert d["motion"] == "in-plane" and d["axial_share"] < 1e-3
+            assert 2 * d["order"] == _sign_changes(radial) == 4 and d["share"] > 0.99
         kinds.append("bending" if bending else "in-plane")
     assert kinds == ["bending"] * 7 + ["in-plane"] * 2
     assert [d["order"] for d in found[:2]] == [2, 2]
