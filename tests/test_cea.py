@@ -235,7 +235,8 @@ def test_frictionless_complex_modes_are_the_tied_modes(capsys):
 def test_nodal_diameter_of_a_disc_wave():
     """A standing wave cos(3 theta) of the disc's axial motion is 3 nodal diameters, all of
     it; a travelling one exp(5 i theta) is 5; energy shares add to one."""
-    from transient.stability.shapes import nodal_diameter, part_shares
+    from transient.stability.diameters import disc_motion
+    from transient.stability.shapes import part_shares
     from transient.model import build_model
     case = small()
     model = build_model(case)
@@ -246,8 +247,9 @@ def test_nodal_diameter_of_a_disc_wave():
     for wave, order in ((np.cos(3 * theta), 3), (np.exp(5j * theta), 5)):
         u = np.zeros(model.ndof, complex)
         u[dofs[:, 2]] = wave * np.hypot(x[:, 0], x[:, 1])
-        n, share = nodal_diameter(model, motion, u)
-        assert n == order and share > 0.999
+        found, = disc_motion(model, motion, u[:, None])
+        assert found["motion"] == "out-of-plane" and found["axial_share"] == 1.0
+        assert found["order"] == order and found["share"] > 0.999
         shares = part_shares(model, model.M, u[:, None])[0]
         assert shares["disc"] == pytest.approx(1.0) and shares["pad"] == 0.0
 

@@ -227,16 +227,34 @@ def cea(case, matrices=False, workers=0, scheduler=None, cache=None, on_part=Non
     -------
     Analysis
         ``modes`` (``eigenvalues`` [1/s], ``frequency_hz``, ``real`` growth rates [1/s],
-        ``damping_ratio``, ``unstable``, ``vectors`` in the system's coordinates),
-        ``displacement(j)`` (mode j on the model's dofs), ``shapes`` (the unstable modes
-        described), ``fmax`` [Hz], ``ndof``, ``reduced``, ``stages`` [s], and with
-        ``matrices=True``, ``matrices`` = (M, D, K); ``summary()`` is what
-        ``transient cea --json`` prints, but for the total time.
+        ``damping_ratio``, ``unstable`` (growing faster than ``cea.threshold.growth_rate``),
+        ``vectors`` in the system's coordinates), ``displacement(j)`` (mode j on the model's
+        dofs), ``shapes`` (the modes described: the unstable ones, or all with
+        ``cea.shapes = "all"``), ``fmax`` [Hz], ``ndof``, ``reduced``, ``stages`` [s],
+        ``files`` (with ``output.vtu``: the CSV of the modes, then a VTU file and a ParaView
+        collection per mode described), and with ``matrices=True``, ``matrices`` = (M, D,
+        K); ``summary()`` is what ``transient cea --json`` prints, but for the total time.
+
+    Raises
+    ------
+    CaseError
+        Any bad input, or output files that cannot be written or are not this package's
+        (refused before the analysis).
     """
+    from dataclasses import replace
+    from .io import complex_modes
     from .stability.stage import analyse
     from .reduce.parts import engine_for
+    complex_modes.check(case)
     with engine_for(case, workers, scheduler, cache, on_part) as parts:
-        return analyse(case, matrices=matrices, parts=parts)
+        result = analyse(case, matrices=matrices, parts=parts)
+    if complex_modes.names(case) is None:
+        return result
+    try:
+        return replace(result, files=tuple(complex_modes.write(case, result)))
+    except OSError as exc:
+        raise CaseError(case.directory / case.output.vtu, "output.vtu",
+                        f"cannot write: {exc}") from None
 
 
 def mu_map(case, mus, pair=None):

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from . import schema as S
 from .checks import check
-from .specs import LimitsSpec, OutputSpec, SolverSpec, build
+from .specs import CeaSpec, LimitsSpec, OutputSpec, SolverSpec, build
 from ..errors import CaseError
 
 
@@ -30,6 +30,7 @@ class Case:
     motion: dict         # name -> MotionSpec
     solver: SolverSpec
     output: OutputSpec
+    cea: CeaSpec
     limits: LimitsSpec
 
     @property

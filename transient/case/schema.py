@@ -182,7 +182,8 @@ SENSOR = Table("displacement observed at a point", {
 
 OUTPUT = Table("outputs", {
     "vtu": Value("str", "write the model (and modes) to this VTU file, relative to the case "
-                 "file ('' = none)", ""),
+                 "file ('' = none); `transient cea` writes its complex modes beside it, a "
+                 "NAME_mode_NNN.vtu and .pvd per mode and NAME_modes.csv", ""),
     "file": Value("str", "HDF5 history of `transient run`, relative to the case file ('': the "
                   "case's name with .h5)", ""),
     "every": Value("int", "store one step in this many", 1, minimum=1),
@@ -194,6 +195,21 @@ OUTPUT = Table("outputs", {
     "field": Value("bool", "store the state q every `every` steps (reduced coordinates, or "
                    "the free dofs of the full model) so `transient export` can write the "
                    "displacement field", False),
+}, optional=True)
+
+CEA = Table("complex eigenvalue analysis (`transient cea`): what is called unstable, and which "
+            "modes are described and written", {
+    "threshold": Table("the growth a mode must exceed to be called unstable", {
+        "growth_rate": Value("float", "real part of the eigenvalue, the mode's growth rate "
+                             "(its amplitude grows as exp(growth_rate t)), above which a mode is "
+                             "unstable in the table, the CSV, the JSON and the pictures; a "
+                             "damping ratio below -1e-6 is needed too (round-off: 0 keeps that "
+                             "alone)", 0.0, "1/s", minimum=0.0, maximum=1e12),
+    }, optional=True),
+    "shapes": Value("choice", "the modes described (kinetic energy shares, nodal diameters, "
+                    "part modes, residual) and written for ParaView with output.vtu: the "
+                    "unstable ones, or all below the band's top", "unstable",
+                    choices=("unstable", "all")),
 }, optional=True)
 
 LIMITS = Table("bounds on the work of a case, checked before it starts (raise them to go "
@@ -221,6 +237,7 @@ CASE = Table("a case", {
     "motion": Named("rigid motions imposed on parts by name (the sliding of friction)", MOTION),
     "solver": SOLVER,
     "output": OUTPUT,
+    "cea": CEA,
     "limits": LIMITS,
 })
 

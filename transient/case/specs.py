@@ -248,6 +248,12 @@ class OutputSpec:
     field: bool
 
 
+@dataclass(frozen=True)
+class CeaSpec:
+    growth_rate: float       # [1/s] above which a mode is unstable (cea.threshold)
+    shapes: str              # unstable, all: the modes described and written
+
+
 def _plain(value):
     """Lists as tuples: a spec's values do not change."""
     return tuple(_plain(v) for v in value) if isinstance(value, list) else value
@@ -295,5 +301,6 @@ def build(data):
                         newton=_make(NewtonSpec, solver["newton"]),
                         quadrature=_make(QuadratureSpec, solver["quadrature"])),
         "output": _make(OutputSpec, data["output"]),
+        "cea": CeaSpec(data["cea"]["threshold"]["growth_rate"], data["cea"]["shapes"]),
         "limits": _make(LimitsSpec, data["limits"]),
     }

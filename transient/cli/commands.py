@@ -78,21 +78,41 @@ def cmd_cea(args):
         mark = "  unstable" if row["unstable"] else ""
         print(f"{i:>5} {row['frequency_hz']:16.6g} {row['real']:14.5g} "
               f"{row['damping_ratio']:14.4e}{mark}")
-    print(f"{int(modes.unstable.sum())} unstable mode(s) below {result.fmax:g} Hz")
+    above = (f" (growing faster than {modes.threshold:g} 1/s, cea.threshold.growth_rate)"
+             if modes.threshold > 0 else "")
+    print(f"{int(modes.unstable.sum())} unstable mode(s) below {result.fmax:g} Hz{above}")
     for row in result.shapes:
         parts = ", ".join(f"{p} {100 * v:.0f}%" for p, v in row["shares"].items())
-        nd = "".join(f"; {p}: {d['order']} nodal diameters ({100 * d['share']:.0f}% of its "
-                     "axial motion)" for p, d in row.get("nodal_diameters", {}).items())
+        nd = "".join(f"; {p}: {_motion_text(d)}"
+                     for p, d in row.get("nodal_diameters", {}).items())
         own = "".join(f"; {p}: like its mode {d['mode']} alone "
-                      f"({max(d['frequency_hz'], 0.0):.0f} Hz, MAC {d['mac']:.2f})"
+                      f"({d['frequency_hz']:.0f} Hz, MAC {d['mac']:.2f})"
                       for p, d in row.get("part_modes", {}).items())
         residual = (f"; residual {row['residual']:.1e} of the full model's equations"
                     if "residual" in row else "")
         print(f"  mode {row['mode']} at {row['frequency_hz']:.1f} Hz: kinetic energy "
               f"{parts}{nd}{own}{residual}")
+    if result.files:
+        # the CSV, then a VTU file and its collection per mode described
+        table, numbers = result.files[0], ", ".join(str(r["mode"]) for r in result.shapes)
+        stem = table.parent / table.name[:-len("_modes.csv")]
+        print(f"files: {table}" + (f"; {stem}_mode_NNN.vtu and .pvd for mode(s) {numbers}"
+                                   if result.shapes else ""))
     print("stages: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.stages.items())
           + f"; total {total:.2f} s")
     return 0
+
+
+def _motion_text(d):
+    """What a rotating part does in a mode (stability.diameters.disc_motion's dict)."""
+    what = f"{d['motion']} (axial {100 * d['axial_share']:.0f}% of its kinetic energy)"
+    if d["motion"] == "out-of-plane":
+        return (f"{what}, {d['order']} nodal diameters ({100 * d['share']:.0f}% of its axial "
+                "motion)")
+    if d["motion"] == "in-plane":
+        return (f"{what}, {d['order']} nodal diameters of its radial and tangential motion "
+                f"({100 * d['share']:.0f}% of it)")
+    return what
 
 
 def cmd_compat(args):

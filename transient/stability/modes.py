@@ -11,9 +11,10 @@ import numpy as np
 import scipy.linalg as sla
 
 # a mode is unstable when it grows faster than this fraction of |lambda| (a damping ratio below
-# -1e-6: e-folding in 1e6 / (2 pi) periods, 30 s at 5 kHz). Slower growth is neither resolved by
-# the arithmetic (eigenvalues of the non-normal friction system carry round-off of eps ||A||:
-# pad_disc at mu = 0.4 left a neutral disc mode at 2.8e-9 |lambda|) nor meaningful for squeal
+# -1e-6: e-folding in 1e6 / (2 pi) periods, 30 s at 5 kHz), and faster than the case's
+# cea.threshold.growth_rate. Slower growth is neither resolved by the arithmetic (eigenvalues
+# of the non-normal friction system carry round-off of eps ||A||: pad_disc at mu = 0.4 left a
+# neutral disc mode at 2.8e-9 |lambda|) nor meaningful for squeal
 UNSTABLE_RTOL = 1e-6
 
 
@@ -21,6 +22,7 @@ UNSTABLE_RTOL = 1e-6
 class ComplexModes:
     eigenvalues: np.ndarray   # (n,) lambda [1/s], imaginary part >= 0, by frequency
     vectors: np.ndarray       # (ndof, n) the displacement part of each mode, unit max entry
+    threshold: float = 0.0    # [1/s] the growth rate an unstable mode exceeds
 
     @property
     def frequency_hz(self):
@@ -38,12 +40,13 @@ class ComplexModes:
 
     @property
     def unstable(self):
-        return self.eigenvalues.real > UNSTABLE_RTOL * np.abs(self.eigenvalues)
+        real = self.eigenvalues.real
+        return (real > UNSTABLE_RTOL * np.abs(self.eigenvalues)) & (real > self.threshold)
 
     def below(self, fmax):
         """The modes up to fmax [Hz]."""
         keep = self.frequency_hz <= fmax
-        return ComplexModes(self.eigenvalues[keep], self.vectors[:, keep])
+        return ComplexModes(self.eigenvalues[keep], self.vectors[:, keep], self.threshold)
 
     def table(self):
         """One dict per mode (the JSON of `transient cea`)."""

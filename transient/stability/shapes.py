@@ -1,43 +1,11 @@
-"""What a complex mode looks like on a brake: the nodal diameter of the rotating part, the share
-of the motion each part carries, and which mode of each other part alone (the pad on its
-abutments) its motion there resembles: which disc mode and which pad mode couple."""
+"""What a complex mode looks like on a brake: the rotating part's motion and nodal diameters
+(stability.diameters), the share of the motion each part carries, and which elastic mode of
+each other part alone (the pad on its abutments) its motion there resembles: which disc mode
+and which pad mode couple."""
 import numpy as np
 
-from ..mesh.mesh import unit
-
-
-def nodal_diameters(model, motion, U):
-    """(n (k,), share (k,)): for each displacement U[:, j] (ndof, k complex), the
-    circumferential order n of the axial motion of the part that a rotation turns, and the
-    share of that order in it (|c_n|^2 / sum |c_k|^2)."""
-    part = model.parts[motion.part]
-    dofs = model.part_dofs(motion.part).reshape(-1, 3)
-    axis = unit(motion.axis)
-    x = part.mesh.points - np.asarray(motion.point, float)
-    e1 = np.cross(axis, [1.0, 0, 0] if abs(axis[0]) < 0.9 else [0, 1.0, 0])
-    e1 /= np.linalg.norm(e1)
-    theta = np.arctan2(x @ np.cross(axis, e1), x @ e1)
-    W = np.einsum("ndk,d->nk", U.reshape(len(U) // 3, 3, U.shape[1])[dofs[:, 0] // 3], axis)
-    # up to half the distinct angles of the nodes: beyond, orders alias (N - n is n again)
-    angles = len(np.unique(np.round(theta, 6)))
-    # E[n] = exp(-i n theta) as powers of E[1] (a product a row: one exp a node instead of
-    # one per order and node, 0.1 s on pad_disc's disc)
-    E = np.empty((max(angles // 2, 1) + 1, len(theta)), complex)
-    E[0] = 1.0
-    E[1:] = np.exp(-1j * theta)
-    np.cumprod(E, axis=0, out=E)
-    # an order n and its mirror -n are one nodal diameter: a standing or travelling wave
-    c = np.abs(E @ W) ** 2
-    # conj(E) W as conj(E conj(W)), the same numbers: no conjugate copy of E (nodes x orders)
-    c[1:] += np.abs(E[1:] @ W.conj()) ** 2
-    n = np.argmax(c, axis=0)
-    return n, c[n, np.arange(len(n))] / np.maximum(c.sum(axis=0), 1e-300)
-
-
-def nodal_diameter(model, motion, u):
-    """(n, share) of one displacement u (ndof,): nodal_diameters."""
-    n, share = nodal_diameters(model, motion, np.asarray(u)[:, None])
-    return int(n[0]), float(share[0])
+from .diameters import disc_motion
+from .rigid import RIGID_RTOL
 
 
 def part_shares(model, M, U):
@@ -64,13 +32,14 @@ def still_parts(case, model):
 
 
 def describe(case, model, basis, modes, which, fmax, own=None):
-    """One dict per mode index in which: frequency, real part, the rotating parts' nodal
-    diameter and the parts' energy shares. basis: (X, A), the modes' coordinates z are
-    X (A z) on the model's dofs. The still parts' own modes up to fmax [Hz], or own:
-    {part: part_modes(model, part, fmax)} made already."""
+    """One dict per mode index in which: frequency, real part, damping ratio, whether it is
+    unstable, the parts' energy shares, the rotating parts' motion and nodal diameters
+    (diameters.disc_motion) and the still parts' elastic modes it resembles. basis: (X, A),
+    the modes' coordinates z are X (A z) on the model's dofs. The still parts' own modes up
+    to fmax [Hz], or own: {part: part_modes(model, part, fmax)} made already."""
     X, A = basis
     U = real_times(X, A @ modes.vectors[:, which])
-    rotations = {m.part: nodal_diameters(model, m, U)
+    rotations = {m.part: disc_motion(model, m, U)
                  for m in case.motion.values() if m.kind == "rotation"}
     # the parts that do not turn (the pad): which of their own modes the motion resembles
     still = still_parts(case, model)
@@ -79,10 +48,10 @@ def describe(case, model, basis, modes, which, fmax, own=None):
     shares = part_shares(model, model.M, U)
     for k, j in enumerate(which):
         row = {"mode": int(j + 1), "frequency_hz": float(modes.frequency_hz[j]),
-               "real": float(modes.real[j]), "shares": shares[k]}
+               "real": float(modes.real[j]), "damping_ratio": float(modes.damping_ratio[j]),
+               "unstable": bool(modes.unstable[j]), "shares": shares[k]}
         if rotations:
-            row["nodal_diameters"] = {part: {"order": int(n[k]), "share": float(share[k])}
-                                      for part, (n, share) in rotations.items()}
+            row["nodal_diameters"] = {part: found[k] for part, found in rotations.items()}
         if matched:
             row["part_modes"] = {part: {"mode": int(i[k] + 1), "frequency_hz": float(f[k]),
                                         "mac": float(mac[k])}
@@ -97,7 +66,8 @@ PART_MODES_TOL = 1e-6   # a match by MAC needs shapes, not eigenvalues to round-
 
 def part_modes(model, part, fmax, shift_hz=1.0):
     """The normal modes of one part alone, on its own supports (contact left out), up to fmax
-    [Hz]: (frequencies, shapes on the part's free dofs, those dofs, the part's mass there)."""
+    [Hz]: (frequencies, shapes on the part's free dofs, those dofs, the part's mass there), its
+    rigid modes (a pad free along the axis between its abutments) among them."""
     from ..model.dofs import restricted
     from ..solve.modes import normal_modes
     dofs = model.part_dofs(part)
@@ -109,13 +79,28 @@ def part_modes(model, part, fmax, shift_hz=1.0):
     return modes.frequencies, modes.shapes, dofs, M
 
 
+def elastic(frequencies, stiffness, mass):
+    """The modes of these frequencies [Hz] that strain a part of diagonal stiffness and mass
+    (its K_ii and M_ii): omega^2 above RIGID_RTOL of max K_ii / M_ii (at most the largest
+    eigenvalue), where a rigid mode's sits at the eigensolver's round-off (1e-3 Hz on the small
+    pad_disc's pad, whose first elastic mode is at 2.5 kHz; the bound 0.3 Hz)."""
+    ratio = np.max(stiffness / np.maximum(mass, 1e-300))
+    return (2 * np.pi * np.asarray(frequencies)) ** 2 > RIGID_RTOL * ratio
+
+
 def matched_part_modes(model, U, parts, fmax, own=None):
-    """{part: (index (k,), frequency (k,), MAC (k,))}: for each displacement U[:, j], the mode
-    of each part alone that its motion on the part resembles most (the modal assurance
-    criterion in the part's mass); own: {part: part_modes(model, part, fmax)} made already."""
+    """{part: (index (k,), frequency (k,), MAC (k,))}: for each displacement U[:, j], the
+    elastic mode of each part alone that its motion on the part resembles most (the modal
+    assurance criterion in the part's mass), indexed among all the part's modes, rigid ones
+    first; own: {part: part_modes(model, part, fmax)} made already. A rigid mode is never the
+    match: the part's motion in a mode of the assembly carries rigid motion (the pad riding on
+    the disc's contact stiffness) that says nothing of which of its modes couples."""
     out = {}
+    stiffness = model.K.diagonal()
     for part in parts:
         f, Phi, dofs, M = own[part] if own else part_modes(model, part, fmax)
+        keep = np.flatnonzero(elastic(f, stiffness[dofs], M.diagonal()))
+        f, Phi = f[keep], Phi[:, keep]
         if Phi.shape[1] == 0:
             continue
         Up = U[dofs]
@@ -125,5 +110,5 @@ def matched_part_modes(model, U, parts, fmax, own=None):
             np.einsum("ij,ij->j", Up.conj(), MUp))[None, :]
         mac = cross / np.maximum(norms, 1e-300)
         best = np.argmax(mac, axis=0)
-        out[part] = (best, f[best], mac[best, np.arange(U.shape[1])])
+        out[part] = (keep[best], f[best], mac[best, np.arange(U.shape[1])])
     return out

@@ -33,10 +33,12 @@ class Analysis:
     reduced: int             # dofs of the reduced model (0: the full model)
     stages: dict             # stage -> seconds
     meta: dict               # the setup's (dynamics prepare's meta)
-    shapes: list             # the unstable modes described (stability.shapes.describe)
+    shapes: list             # the modes described (stability.shapes.describe): the unstable
+    #                          ones, or all (cea.shapes)
     model: object = None     # the Model, and
     basis: tuple = None      # (X, A): the modes' coordinates z are X (A z) on the model's dofs
     matrices: tuple = None   # asked for: the linearized (M, D, K) the modes solve
+    files: tuple = ()        # the files written (io.complex_modes), output.vtu asking
 
     def displacement(self, j):
         """(ndof,) complex displacement of mode j (0-based)."""
@@ -46,7 +48,9 @@ class Analysis:
     def summary(self):
         """What `transient cea --json` prints, but for the total time."""
         return {"modes": self.modes.table(), "ndof": self.ndof, "reduced": self.reduced,
-                "fmax_hz": self.fmax, "unstable_shapes": self.shapes, "stages": self.stages}
+                "fmax_hz": self.fmax, "growth_rate_threshold": self.modes.threshold,
+                "shapes": self.shapes, "files": [str(p) for p in self.files],
+                "stages": self.stages}
 
 
 def analysed_case(case):
@@ -109,12 +113,14 @@ def analysis_of(case, setup, stages=None, matrices=False):
             modes = complex_modes(M, D, K).below(fmax)
         else:
             modes = _full_modes(case, model, system, (M, D, K), fmax)
+        modes = replace(modes, threshold=case.cea.growth_rate)
         stages["complex_modes"] = time.perf_counter() - t0
         ndof = setup.meta.get("free_dofs", system.n)
         basis = (setup.basis if system.reduced else
                  (_full_basis(model.ndof, system.free), sp.identity(system.n, format="csr")))
         t0 = time.perf_counter()
-        which = np.flatnonzero(modes.unstable)
+        which = (np.flatnonzero(modes.unstable) if case.cea.shapes == "unstable" else
+                 np.arange(len(modes.eigenvalues)))
         own = ({p: done.result() for p, done in beside.items()} if beside is not None else
                {p: _alone(model, p, fmax) for p in still} if len(which) else None)
         shapes = describe(case, model, basis, modes, which, fmax, own)
