@@ -230,7 +230,8 @@ def cea(case, matrices=False, workers=0, scheduler=None, cache=None, on_part=Non
         ``damping_ratio``, ``unstable``, ``vectors`` in the system's coordinates),
         ``displacement(j)`` (mode j on the model's dofs), ``shapes`` (the unstable modes
         described), ``fmax`` [Hz], ``ndof``, ``reduced``, ``stages`` [s], and with
-        ``matrices=True``, ``matrices`` = (M, D, K); ``summary()`` is what
+        ``matrices=True``, ``matrices`` = (M, D, K), K complex where a material has a
+        loss factor (its i eta K_m); ``summary()`` is what
         ``transient cea --json`` prints, but for the total time.
     """
     from .stability.stage import analyse
