@@ -15,8 +15,9 @@ from ..model.dofs import free_block, restrict
 from ..solve import blas
 
 
-# vectors whose stiffness is below this fraction of the largest are rigid motions, whose
-# eigenvalue is round-off (reduce.basis clips theirs at 0; 1e-4 on a free pad whose largest is 1e14)
+# vectors whose stiffness is below this fraction of the largest are rigid motions, their
+# eigenvalue round-off (reduce.basis clips theirs at 0): the loss they would carry, at most
+# max(eta) (omega2_i omega2_j)^1/2, is 1e-6 max(eta) of the largest there
 STILL_RTOL = 1e-12
 
 

@@ -4,9 +4,9 @@ factorizations and eigensolvers need not give the same last bits under another l
 thread count).
 
 Every field of the frozen system is kept but the reduced basis T (ndof x n, the largest by
-far; the history keeps it under /geometry when the field is stored) and the cea's loss: arrays as datasets,
-sparse matrices and the contact set and critical step as groups, numbers and names as
-attributes.
+far; the history keeps it under /geometry when the field is stored) and the cea's loss:
+arrays as datasets, sparse matrices and the contact set and critical step as groups, numbers
+and names as attributes.
 """
 import json
 from dataclasses import fields

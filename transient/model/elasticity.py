@@ -85,9 +85,9 @@ class Anisotropy:
                 Q, dist = cylindrical(o.point, o.axis, x[cells])
                 extent = np.ptp(x.reshape(-1, 3), axis=0).max()
                 if dist.min() <= 1e-9 * extent:
-                    raise CaseError(self.path, f"materials.{self.names[k]}.orientation.point", "the "
-                                    "cylindrical axis passes through an integration point of "
-                                    "a cell of the material, where no radial direction is "
+                    raise CaseError(self.path, f"materials.{self.names[k]}.orientation.point",
+                                    "the cylindrical axis passes through an integration point "
+                                    "of a cell of the material, where no radial direction is "
                                     "defined: an axis off the material's cells")
             K = bond(Q)
             out[cells] = K @ D @ np.swapaxes(K, -1, -2)

@@ -6,11 +6,11 @@ stiffness and the contact's tangent at the preload, K_f and D_f the friction's s
 damping there (stability.linearize), the reduced damping's forces M T diag(d) z and the
 materials' loss i H x (H = sum_m eta_m K_m), the residual
 r = (K_lin + i H + K_f) x + lambda (M T diag(d) z + D_f x) + lambda^2 M x vanishes for a mode
-of the full model; the Galerkin projection leaves it orthogonal to the basis. Its size relative to the
-inertia forces, rho = |r|_{M^-1} / (|lambda|^2 |x|_M) (lumped mass norms on the free dofs), is
-what the modes beyond the basis' cutoff and the directions it lacks leave out: it falls as the
-cutoff grows (tools/study_cea_band.py measures it with the real parts' errors against the full
-model).
+of the full model; the Galerkin projection leaves it orthogonal to the basis. Its size relative
+to the inertia forces, rho = |r|_{M^-1} / (|lambda|^2 |x|_M) (lumped mass norms on the free
+dofs), is what the modes beyond the basis' cutoff and the directions it lacks leave out: it
+falls as the cutoff grows (tools/study_cea_band.py measures it with the real parts' errors
+against the full model).
 """
 import numpy as np
 
