@@ -90,7 +90,7 @@ outer_radius = 0.1
 angle = 50.0
 lining_thickness = 0.008
 backplate_thickness = 0.005
-divisions = [2, 5, 2, 1]
+divisions = [2, 4, 2, 1]
 element = "tet10"
 
 [solver]

@@ -11,6 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import critical
+from ..kernels.sparse import csr_dot
 from ..model.dofs import free_block, restrict
 from ..solve import blas
 
@@ -111,7 +112,8 @@ def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, si
     base, Hr = damp, None
     with blas.every_core():      # products of a few hundred columns, no solve
         if loss is not None:
-            G = X.T @ (loss @ X)
+            # H X on both cores (SciPy's product is single-threaded), the same sums on any
+            G = X.T @ csr_dot(loss, X)
             Hr = AW.T @ (0.5 * (G + G.T)) @ AW
             Hr = 0.5 * (Hr + Hr.T)
             # H <= max(eta) K_lin in energy, so a vector without stiffness (a free part's
