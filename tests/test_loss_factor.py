@@ -4,9 +4,11 @@ model is of that material; in a run the viscous damping eta / omega_ref K_m, whi
 mode of frequency omega at eta omega^2 / (2 omega_ref)."""
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from transient.api import cea, load, prepare
 from transient.cli import main
+from transient.dynamics.system import reduced_loss
 from transient.stages import choose_dt, simulate
 
 ETA = 0.04
@@ -177,3 +179,21 @@ def test_no_loss_factor_adds_nothing(tmp_path):
     setup = prepare(_case(tmp_path, overrides=["materials.m.loss_factor=0.0"]))
     assert setup.model.loss is None and setup.system.loss is None
     assert setup.system.base_damp is None and not setup.system.damp.any()
+
+
+def test_the_loss_on_a_sparse_basis_is_the_dense_ones():
+    """The components path holds its basis sparse (the parts' bases side by side): T^T H T
+    on it is the dense basis', and a vector without stiffness takes no loss."""
+    rng = np.random.default_rng(0)
+    B = sp.random(30, 30, density=0.2, random_state=1)
+    H = (B @ B.T).tocsr()
+    X = rng.standard_normal((30, 6)) * (rng.random((30, 6)) < 0.5)
+    AW = rng.standard_normal((6, 4))
+    omega2 = np.array([0.0, 1e3, 2e3, 3e3])
+    dense = reduced_loss(H, X, AW, omega2)
+    assert np.allclose(reduced_loss(H, sp.csc_matrix(X), AW, omega2), dense, rtol=1e-13,
+                       atol=1e-13 * np.abs(dense).max())
+    T = X @ AW
+    exact = T.T @ (H @ T)
+    assert not dense[0].any() and not dense[:, 0].any()
+    assert np.allclose(dense[1:, 1:], exact[1:, 1:], rtol=1e-12)

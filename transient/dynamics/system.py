@@ -112,15 +112,7 @@ def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, si
     base, Hr = damp, None
     with blas.every_core():      # products of a few hundred columns, no solve
         if loss is not None:
-            # H X on both cores (SciPy's product is single-threaded), the same sums on any
-            G = X.T @ csr_dot(loss, X)
-            Hr = AW.T @ (0.5 * (G + G.T)) @ AW
-            Hr = 0.5 * (Hr + Hr.T)
-            # H <= max(eta) K_lin in energy, so a vector without stiffness (a free part's
-            # rigid motion) has no loss: its round-off, square-rooted by the cea, would grow
-            still = omega2 <= STILL_RTOL * omega2.max()
-            Hr[still] = 0.0
-            Hr[:, still] = 0.0
+            Hr = reduced_loss(loss, X, AW, omega2)
             damp = base + np.diag(Hr) / (2 * np.pi * loss_hz)
         Cr = np.ascontiguousarray(contacts.observe(X, AW))
         n = len(omega2)
@@ -136,6 +128,24 @@ def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, si
                          omega2=omega2,
                          damp=damp, C=Cr, T=X @ AW if field else None, Ct=Ct, Cc=Cc,
                          loss=Hr, base_damp=base if Hr is not None else None)
+
+
+def reduced_loss(H, X, AW, omega2):
+    """(n, n) T^T H T, T = X AW, of the loss H on a basis X dense, or sparse (the components
+    path's parts side by side), with eigenvalues omega2 of K_lin. A vector without stiffness
+    (a free part's rigid motion) has no loss, H <= max(eta) K_lin in energy: its round-off,
+    square-rooted by the cea, would grow."""
+    if sp.issparse(X):
+        G = (X.T @ (H @ X)).toarray()
+    else:
+        # on both cores (SciPy's product is single-threaded), the same sums on any
+        G = X.T @ csr_dot(H, X)
+    Hr = AW.T @ (0.5 * (G + G.T)) @ AW
+    Hr = 0.5 * (Hr + Hr.T)
+    still = omega2 <= STILL_RTOL * omega2.max()
+    Hr[still] = 0.0
+    Hr[:, still] = 0.0
+    return Hr
 
 
 def full_system(K_lin, lumped, M, damping, contacts, tangent, free, patterns, signals, sensors,
