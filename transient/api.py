@@ -233,7 +233,8 @@ def cea(case, matrices=False, workers=0, scheduler=None, cache=None, on_part=Non
         ``cea.shapes = "all"``), ``fmax`` [Hz], ``ndof``, ``reduced``, ``stages`` [s],
         ``files`` (with ``output.vtu``: the CSV of the modes, then a VTU file and a ParaView
         collection per mode described), and with ``matrices=True``, ``matrices`` = (M, D,
-        K); ``summary()`` is what ``transient cea --json`` prints, but for the total time.
+        K), K complex where a material has a loss factor (its i eta K_m); ``summary()`` is
+        what ``transient cea --json`` prints, but for the total time.
 
     Raises
     ------

@@ -151,17 +151,18 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False, parts=No
                                 if c.friction.basis_mu}
         # the rows and operators on the reduced coordinates
         system, state = stages.timed("reduced_system", _reduced, case, red, patterns, signals,
-                                     sensors, names, not analysis)
+                                     sensors, names, not analysis, model.loss)
         if want_unsampled and red.unsampled is not None:
             u, t0 = red.unsampled, time.perf_counter()
-            unsampled = Setup(*_reduced(case, u, patterns, signals, sensors, names, False),
+            unsampled = Setup(*_reduced(case, u, patterns, signals, sensors, names, False,
+                                        model.loss),
                               None, {}, dict(u.meta), {}, model, (u.X, u.AW))
             stages["reduced_system"] += time.perf_counter() - t0
     else:
         system = stages.timed("time_step", full_system, K_lin, model.lumped_mass,
                         None if solver.lumped else model.M, solver.damping, contacts,
                         preload.tangent, free, patterns, signals, sensors, names,
-                        case.output.field, not analysis)
+                        case.output.field, not analysis, model.loss)
         meta = {"free_dofs": len(free)}
         state = State.zeros(system.n, contacts.n_points)
         state.q[:], state.v[:] = preload.u[free], v0[free]
@@ -206,13 +207,16 @@ def _assembled(case, stages, built, model, pairs, contacts, preload, patterns, v
                   basis, sample), elsewhere
 
 
-def _reduced(case, red, patterns, signals, sensors, names, critical=True):
-    """(system, initial state) of a ReducedModel; critical: with its critical step."""
+def _reduced(case, red, patterns, signals, sensors, names, critical=True, loss=None):
+    """(system, initial state) of a ReducedModel; critical: with its critical step; loss:
+    the model's H (its viscous share at solver.damping.loss_frequency, else at the band's
+    top, reduction.fmax)."""
     solver = case.solver
-    system = reduced_system(red.X, red.AW, red.omega2, solver.reduction.modes_fmax,
-                            solver.damping,
+    damping = solver.damping
+    system = reduced_system(red.X, red.AW, red.omega2, solver.reduction.modes_fmax, damping,
                             red.contacts, red.preload.tangent, patterns, signals, sensors,
-                            names, case.output.field, red.preload.pressure, critical)
+                            names, case.output.field, red.preload.pressure, critical, loss,
+                            damping.loss_frequency or solver.reduction.fmax)
     state = State.zeros(system.n, red.contacts.n_points)
     state.q[:], state.v[:] = red.q0, red.v0
     state.gmin[:] = red.preload.gap

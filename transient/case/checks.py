@@ -1,6 +1,7 @@
 """Checks that need several keys of a case, run at load: before any mesh is built, a wrong
 combination is a one-line error naming the key to change."""
 from ..errors import CaseError
+from .materials import check_materials
 from .signals import check_signal
 from .sizes import check_generated, check_steps
 
@@ -8,6 +9,7 @@ from .sizes import check_generated, check_steps
 def check(case):
     """Raise CaseError on the first combination of keys that no stage admits (every case)."""
     _references(case)
+    check_materials(case)
     _contact(case)
     _friction(case)
     _signals(case)
@@ -204,6 +206,11 @@ def _solver(case):
         if solver.damping.modal > 0:
             _fail(case, "solver.damping.modal", "modal damping needs the reduced model "
                   "(solver.reduction.enabled = true); use alpha and beta")
+        lossy = [name for name, m in case.materials.items() if m.loss_factor > 0]
+        if lossy:
+            _fail(case, f"materials.{lossy[0]}.loss_factor", "a run takes the materials' loss "
+                  "on the reduced model (solver.reduction.enabled = true), each vector's "
+                  "share of it; the full model's cea takes it, its run does not: use beta")
         if solver.mass == "consistent" and solver.scheme == "explicit":
             _fail(case, "solver.mass", "central differences on the full model need the "
                   "lumped mass: use lumped (or auto), or a reduced model")

@@ -156,7 +156,7 @@ class _Validator:
             elif isinstance(spec, S.Table) and spec.optional:
                 out[k] = self.table(spec, {}, sub)
             elif isinstance(spec, S.Variant) and spec.default:
-                out[k] = self.variant(spec, {"kind": spec.default}, sub)
+                out[k] = self.variant(spec, {spec.key: spec.default}, sub)
             elif isinstance(spec, S.Value) and spec.default is not S.REQUIRED:
                 out[k] = copy.deepcopy(spec.default)
             else:
@@ -178,21 +178,22 @@ class _Validator:
 
     def variant(self, spec, value, key):
         self.expect_table(value, key)
-        kind = value.get("kind")
+        name = spec.key
+        kind = value.get(name, spec.default if spec.implicit else None)
         if kind is None:
-            self.fail(_join(key, "kind"), f"missing key (one of: {', '.join(spec.options)})")
+            self.fail(_join(key, name), f"missing key (one of: {', '.join(spec.options)})")
         if not isinstance(kind, str):
-            self.fail(_join(key, "kind"), f"expected a string (one of: "
+            self.fail(_join(key, name), f"expected a string (one of: "
                       f"{', '.join(spec.options)}), got {_show(kind)}")
         if kind not in spec.options:
             close = difflib.get_close_matches(str(kind), list(spec.options), n=1)
             hint = f"did you mean '{close[0]}'? " if close else ""
-            self.fail(_join(key, "kind"),
-                      f"unknown kind {_show(kind)} ({hint}expected one of: "
-                      f"{', '.join(spec.options)})")
-        rest = {k: v for k, v in value.items() if k != "kind"}
+            self.fail(_join(key, name),
+                      f"unknown {'kind' if name == 'kind' else 'value'} {_show(kind)} "
+                      f"({hint}expected one of: {', '.join(spec.options)})")
+        rest = {k: v for k, v in value.items() if k != name}
         out = self.fields({**spec.common, **spec.options[kind]}, rest, key)
-        out["kind"] = kind
+        out[name] = kind
         return out
 
     def value(self, spec, value, key):

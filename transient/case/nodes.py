@@ -38,11 +38,15 @@ class Named:
 
 @dataclass(frozen=True)
 class Variant:
-    """A table whose fields depend on its `kind` key."""
+    """A table whose fields depend on its `kind` key (or another: `key`)."""
     doc: str
     options: dict
     common: dict = field(default_factory=dict)
     default: str = None        # kind taken when the table is absent (None: required)
+    key: str = "kind"
+    # the default kind also when the table is given without its key: a material's elasticity,
+    # isotropic unless said (a load's signal, given, must say its kind)
+    implicit: bool = False
 
 
 def reference(node, prefix=""):
@@ -54,8 +58,8 @@ def reference(node, prefix=""):
     elif isinstance(node, Named):
         rows += reference(node.item, f"{prefix}.NAME")
     elif isinstance(node, Variant):
-        rows.append((f"{prefix}.kind", "choice", repr(node.default) if node.default else
-                     "required", "",
+        rows.append((f"{prefix}.{node.key}", "choice", repr(node.default) if node.default
+                     else "required", "",
                      f"{node.doc}: one of {', '.join(node.options)}"))
         for key, sub in node.common.items():
             rows += reference(sub, f"{prefix}.{key}")

@@ -4,7 +4,8 @@ Tables keyed by name (`[parts.NAME]`) give every value a dotted path. The schema
 validation (`loading.py`), `--set` overrides, and the key reference in `cases/README.md`
 (`python -m transient.case` prints it).
 """
-from .geometry import MESH, SELECTION, TRANSFORM, positive as _pos, vector3 as _vec3
+from .geometry import MESH, SELECTION, TRANSFORM, vector3 as _vec3
+from .materials import MATERIAL
 from .nodes import REQUIRED, Named, Table, Value, Variant, reference_markdown as _markdown
 from .solver_schema import SOLVER
 
@@ -17,12 +18,6 @@ PART = Table("a solid part", {
     "sets": Named("named selections from geometry (mesh and generator sets are named too)",
                   SELECTION),
     "transform": TRANSFORM,
-})
-
-MATERIAL = Table("linear isotropic elastic material", {
-    "E": _pos("Young's modulus", "Pa"),
-    "nu": Value("float", "Poisson's ratio", open_min=-1.0, open_max=0.5),
-    "rho": _pos("mass density", "kg/m^3"),
 })
 
 CONSTRAINT = Table("zero displacement of the nodes of a selection", {

@@ -68,6 +68,11 @@ SOLVER = Table("solution settings", {
                        minimum=0.0),
         "beta": Value("float", "Rayleigh stiffness-proportional coefficient", 0.0, "s",
                       minimum=0.0),
+        "loss_frequency": Value("float", "where a run's viscous damping eta / omega K_m "
+                                "equals the materials' loss factors (0: reduction.fmax, the "
+                                "band's top: the modes below it are damped less than by the "
+                                "cea's i eta K_m, never more, so a run errs towards squeal)",
+                                0.0, "Hz", minimum=0.0, maximum=1e150),
     }, optional=True),
     "reduction": Table("reduced model: normal modes of the preloaded structure to a cutoff above "
                        "the band, plus static responses", {

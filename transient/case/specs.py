@@ -13,10 +13,30 @@ CUTOFF_FACTOR = 2.0
 
 
 @dataclass(frozen=True)
+class OrientationSpec:
+    kind: str                # global, rectangular, cylindrical (case.materials)
+    a: tuple = ()            # rectangular: the 1-axis, and
+    b: tuple = ()            # a direction of the 1-2 plane
+    point: tuple = ()        # cylindrical: a point of the axis [m], and
+    axis: tuple = ()         # its direction, the 3-axis
+
+
+@dataclass(frozen=True)
 class MaterialSpec:
-    E: float
-    nu: float
-    rho: float
+    rho: float               # [kg/m^3]
+    E: float = 0.0           # isotropic [Pa]
+    nu: float = 0.0
+    elasticity: str = "isotropic"   # or transversely_isotropic, orthotropic
+    constants: tuple = ()    # the anisotropic ones: (key, value) pairs, SI (case.materials)
+    orientation: OrientationSpec = OrientationSpec("global")
+    loss_factor: float = 0.0
+
+
+def _material(table):
+    """The MaterialSpec of a validated material table."""
+    common = ("rho", "E", "nu", "elasticity", "orientation", "loss_factor")
+    return _make(MaterialSpec, table, orientation=_make(OrientationSpec, table["orientation"]),
+                 constants=tuple((k, v) for k, v in table.items() if k not in common))
 
 
 @dataclass(frozen=True)
@@ -167,6 +187,7 @@ class DampingSpec:
     residual: float
     alpha: float
     beta: float
+    loss_frequency: float = 0.0   # [Hz] the materials' loss as viscous damping; 0: fmax
 
 
 @dataclass(frozen=True)
@@ -280,7 +301,7 @@ def build(data):
     solver = data["solver"]
     return {
         "title": data["title"],
-        "materials": {n: _make(MaterialSpec, t) for n, t in data["materials"].items()},
+        "materials": {n: _material(t) for n, t in data["materials"].items()},
         "parts": {n: PartSpec(_variant(MeshSpec, t["mesh"]), t["material"],
                               dict(t["region_materials"]),
                               {s: _variant(SelectionSpec, v) for s, v in t["sets"].items()},

@@ -11,8 +11,15 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import critical
+from ..kernels.sparse import csr_dot
 from ..model.dofs import free_block, restrict
 from ..solve import blas
+
+
+# vectors whose stiffness is below this fraction of the largest are rigid motions, their
+# eigenvalue round-off (reduce.basis clips theirs at 0): the loss they would carry, at most
+# max(eta) (omega2_i omega2_j)^1/2, is 1e-6 max(eta) of the largest there
+STILL_RTOL = 1e-12
 
 
 @dataclass(frozen=True)
@@ -45,6 +52,9 @@ class ReducedSystem(System):
     T: np.ndarray = None         # (ndof, n) the basis, zero on fixed dofs (field output only)
     Ct: np.ndarray = None        # (m, n) tangential rows along the sliding (friction only)
     Cc: np.ndarray = None        # (m, n) and across it
+    loss: np.ndarray = None      # (n, n) T^T H T, H = sum_m eta_m K_m the materials' loss:
+    #                              the cea's i T^T H T; damp holds its diagonal / omega_ref
+    base_damp: np.ndarray = None  # (n,) damp without the loss's share (the cea's D)
     reduced = True
 
 
@@ -60,6 +70,7 @@ class FullSystem(System):
     free: np.ndarray = None      # the free dofs q lives on
     Ct: sp.csr_matrix = None     # (m, n) tangential rows along the sliding (friction only)
     Cc: sp.csr_matrix = None     # (m, n) and across it
+    loss: sp.csr_matrix = None   # (n, n) H on the free dofs: the cea's i H (no run takes it)
     reduced = False
 
 
@@ -76,7 +87,8 @@ def patterns_matrix(vectors, n):
 
 
 def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, signals,
-                   sensors, sensor_names, field, pressure=None, critical_step=True):
+                   sensors, sensor_names, field, pressure=None, critical_step=True,
+                   loss=None, loss_hz=0.0):
     """The reduced system on the basis T = X AW (X (ndof, m), AW (m, n)) with eigenvalues
     omega2. T itself (ndof x n, the setup's largest product at scale: 4x pad_disc's 198 GFLOP)
     is formed only for field output; the contact rows, sensors and loads come from X.
@@ -86,12 +98,22 @@ def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, si
     patterns: load vectors on the model's dofs; sensors (s, ndof) their observation.
     pressure: the preload's at the points, for the friction's explicit step bounds.
     critical_step: False for a system that is only linearized (no CriticalStep).
+    loss: the model's H = sum_m eta_m K_m (None: no material has a loss factor). The run
+    takes the viscous damping H / omega_ref, omega_ref = 2 pi loss_hz, as each vector's own
+    share, the diagonal of T^T H T / omega_ref: the kernels' damping is diagonal, and the
+    coupling the off-diagonal terms carry (between vectors that strain the lossy materials
+    unlike their stiffness, a multi-material model's) is left to the cea, which takes the
+    whole T^T H T.
     """
     omega = np.sqrt(omega2)
     above = omega > 2 * np.pi * fmax
     ratio = damping.modal + damping.residual * above
     damp = 2 * ratio * omega + damping.alpha + damping.beta * omega2
+    base, Hr = damp, None
     with blas.every_core():      # products of a few hundred columns, no solve
+        if loss is not None:
+            Hr = reduced_loss(loss, X, AW, omega2)
+            damp = base + np.diag(Hr) / (2 * np.pi * loss_hz)
         Cr = np.ascontiguousarray(contacts.observe(X, AW))
         n = len(omega2)
         S = _observation((sensors @ X) @ AW, n, field, dense=True)
@@ -104,13 +126,33 @@ def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, si
                          critical.reduced(omega2, Cr, contacts, tangent, Ct, Cc, pressure)
                          if critical_step else None,
                          omega2=omega2,
-                         damp=damp, C=Cr, T=X @ AW if field else None, Ct=Ct, Cc=Cc)
+                         damp=damp, C=Cr, T=X @ AW if field else None, Ct=Ct, Cc=Cc,
+                         loss=Hr, base_damp=base if Hr is not None else None)
+
+
+def reduced_loss(H, X, AW, omega2):
+    """(n, n) T^T H T, T = X AW, of the loss H on a basis X dense, or sparse (the components
+    path's parts side by side), with eigenvalues omega2 of K_lin. A vector without stiffness
+    (a free part's rigid motion) has no loss, H <= max(eta) K_lin in energy: its round-off,
+    square-rooted by the cea, would grow."""
+    if sp.issparse(X):
+        G = (X.T @ (H @ X)).toarray()
+    else:
+        # on both cores (SciPy's product is single-threaded), the same sums on any
+        G = X.T @ csr_dot(H, X)
+    Hr = AW.T @ (0.5 * (G + G.T)) @ AW
+    Hr = 0.5 * (Hr + Hr.T)
+    still = omega2 <= STILL_RTOL * omega2.max()
+    Hr[still] = 0.0
+    Hr[:, still] = 0.0
+    return Hr
 
 
 def full_system(K_lin, lumped, M, damping, contacts, tangent, free, patterns, signals, sensors,
-                sensor_names, field, critical_step=True):
+                sensor_names, field, critical_step=True, loss=None):
     """The full system on the free dofs. M: the mass the implicit scheme uses, None for the
-    lumped one; critical_step as in reduced_system."""
+    lumped one; critical_step as in reduced_system; loss: the model's H, for the cea only
+    (case.checks refuses a full model's run with a loss factor)."""
     Kf = free_block(K_lin, free)
     mass = lumped[free]
     Cf = restrict(contacts.C, cols=free)
@@ -123,4 +165,5 @@ def full_system(K_lin, lumped, M, damping, contacts, tangent, free, patterns, si
                       critical.full(Kf, mass, Cf, contacts, tangent) if critical_step
                       else None, K=Kf, mass=mass,
                       M=sp.diags(mass).tocsr() if M is None else free_block(M, free),
-                      alpha=damping.alpha, beta=damping.beta, C=Cf, free=free, Ct=Ct, Cc=Cc)
+                      alpha=damping.alpha, beta=damping.beta, C=Cf, free=free, Ct=Ct, Cc=Cc,
+                      loss=None if loss is None else free_block(loss, free))

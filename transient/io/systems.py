@@ -4,9 +4,9 @@ factorizations and eigensolvers need not give the same last bits under another l
 thread count).
 
 Every field of the frozen system is kept but the reduced basis T (ndof x n, the largest by
-far; the history keeps it under /geometry when the field is stored): arrays as datasets,
-sparse matrices and the contact set and critical step as groups, numbers and names as
-attributes.
+far; the history keeps it under /geometry when the field is stored) and the cea's loss:
+arrays as datasets, sparse matrices and the contact set and critical step as groups, numbers
+and names as attributes.
 """
 import json
 from dataclasses import fields
@@ -20,7 +20,8 @@ from ..dynamics.system import FullSystem, ReducedSystem
 from ..errors import DamagedHistory
 from .checksums import create
 
-SKIPPED = ("T",)
+# the materials' loss is the cea's (a run integrates damp, which holds its share)
+SKIPPED = ("T", "loss", "base_damp")
 FRICTION_ARRAYS = ("speed", "m", "dm", "turn", "code", "v_eps", "table")
 
 GROUP = "system"           # the history's group of the system integrated

@@ -1,4 +1,4 @@
-"""Element matrices of linear isotropic elasticity and their summation into CSR.
+"""Element matrices of linear elasticity (isotropic, or any D) and their summation into CSR.
 
 Element matrices are COO triplets in compact form: the value of entry (3a+i, 3b+j) of cell e sits
 at blocks[e, 3a+i, 3b+j]; its row and column are the dofs 3 conn[e,a]+i and 3 conn[e,b]+j. The
@@ -78,6 +78,56 @@ def stiffness_blocks(X, conn, dN, w, lam, mu, blocks, min_det):
                     Ke[r + 2, q] += cl * ga2 * gb0 + cm * ga0 * gb2
                     Ke[r + 2, q + 1] += cl * ga2 * gb1 + cm * ga1 * gb2
                     Ke[r + 2, q + 2] += cl * ga2 * gb2 + cm * ga2 * gb2 + s
+        for a in range(nen):
+            for b in range(a + 1, nen):
+                for i in range(3):
+                    for j in range(3):
+                        Ke[3 * b + j, 3 * a + i] = Ke[3 * a + i, 3 * b + j]
+        min_det[e] = md
+
+
+@njit
+def anisotropic_stiffness_blocks(X, conn, dN, w, D, blocks, min_det):
+    """stiffness_blocks with an elasticity matrix D (ne, ng or 1, 6, 6) [Pa] per cell and
+    rule point (or per cell), Voigt order 11, 22, 33, 23, 13, 12 with engineering shears:
+    Ke = sum_g w_g det J_g B_g^T D_g B_g."""
+    ne, nen = conn.shape
+    ng = w.shape[0]
+    per_point = D.shape[1] > 1
+    J = np.empty((3, 3))
+    G = np.empty((nen, 3))
+    DB = np.empty((nen, 6, 3))
+    for e in range(ne):
+        nodes = conn[e]
+        Ke = blocks[e]
+        Ke[:, :] = 0.0
+        md = np.inf
+        for g in range(ng):
+            det = _jacobian(X, nodes, dN[g], J)
+            md = min(md, det)
+            for a in range(nen):
+                for i in range(3):
+                    G[a, i] = dN[g, a, 0] * J[i, 0] + dN[g, a, 1] * J[i, 1] + dN[g, a, 2] * J[i, 2]
+            Dg = D[e, g if per_point else 0]
+            c = w[g] * det
+            for b in range(nen):
+                g0, g1, g2 = G[b, 0], G[b, 1], G[b, 2]
+                # D B_b: B_b's columns are (g0, 0, 0, 0, g2, g1), (0, g1, 0, g2, 0, g0) and
+                # (0, 0, g2, g1, g0, 0)
+                for r in range(6):
+                    DB[b, r, 0] = c * (Dg[r, 0] * g0 + Dg[r, 4] * g2 + Dg[r, 5] * g1)
+                    DB[b, r, 1] = c * (Dg[r, 1] * g1 + Dg[r, 3] * g2 + Dg[r, 5] * g0)
+                    DB[b, r, 2] = c * (Dg[r, 2] * g2 + Dg[r, 3] * g1 + Dg[r, 4] * g0)
+            for a in range(nen):
+                g0, g1, g2 = G[a, 0], G[a, 1], G[a, 2]
+                for b in range(a, nen):
+                    for j in range(3):
+                        Ke[3 * a, 3 * b + j] += (g0 * DB[b, 0, j] + g2 * DB[b, 4, j]
+                                                 + g1 * DB[b, 5, j])
+                        Ke[3 * a + 1, 3 * b + j] += (g1 * DB[b, 1, j] + g2 * DB[b, 3, j]
+                                                     + g0 * DB[b, 5, j])
+                        Ke[3 * a + 2, 3 * b + j] += (g2 * DB[b, 2, j] + g1 * DB[b, 3, j]
+                                                     + g0 * DB[b, 4, j])
         for a in range(nen):
             for b in range(a + 1, nen):
                 for i in range(3):

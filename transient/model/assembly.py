@@ -1,4 +1,5 @@
-"""Assembly of the stiffness K and mass M of linear isotropic elasticity as CSR matrices."""
+"""Assembly of the stiffness K and mass M of linear elasticity as CSR matrices, and of the
+materials' loss H = sum_m eta_m K_m on K's pattern."""
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,6 +17,9 @@ class CellBlock:
     young: np.ndarray      # (ne,) Young's modulus [Pa]
     poisson: np.ndarray    # (ne,) Poisson's ratio [-]
     density: np.ndarray    # (ne,) mass density [kg/m^3]
+    anisotropy: object = None   # model.elasticity.Anisotropy of the cells (None: isotropic,
+    #                             young and poisson's Lame constants)
+    loss: np.ndarray = None     # (ne,) loss factor of each cell's material (None: none)
 
 
 @dataclass(frozen=True)
@@ -24,6 +28,8 @@ class Operators:
     M: sp.csr_matrix          # consistent mass [kg]
     lumped_mass: np.ndarray   # (ndof,) HRZ-lumped diagonal mass [kg]
     min_det: list             # per block: (ne,) minimum det J over the stiffness rule
+    H: sp.csr_matrix = None   # sum over cells of their loss factor times their stiffness
+    #                           [N/m] (None: no cell has a loss factor)
 
 
 def lame(young, poisson):
@@ -61,18 +67,28 @@ def assemble(points, blocks, stiffness_degree=None, mass_degree=None):
     ptr, idx, indptr, indices = sparsity(n_nodes, conns)
     k_data = np.zeros(len(indices))
     m_data = np.zeros(len(indices))
+    lossy = any(b.loss is not None and np.any(b.loss) for b in blocks)
+    h_data = np.zeros(len(indices)) if lossy else None
     lumped = np.zeros(n_nodes)
     min_det = []
     for block, conn in zip(blocks, conns):
         el = ELEMENTS[block.cell_type]
         ne, nen = conn.shape
-        lam, mu = lame(np.asarray(block.young, float), np.asarray(block.poisson, float))
-        _, dN, w = tabulate(block.cell_type, stiffness_degree or el.stiffness_degree)
+        N, dN, w = tabulate(block.cell_type, stiffness_degree or el.stiffness_degree)
         Ke = np.empty((ne, 3 * nen, 3 * nen))
         det = np.empty(ne)
-        kern.stiffness_blocks(points, conn, dN, w, np.broadcast_to(lam, ne).copy(),
-                              np.broadcast_to(mu, ne).copy(), Ke, det)
+        if block.anisotropy is None:
+            lam, mu = lame(np.asarray(block.young, float), np.asarray(block.poisson, float))
+            kern.stiffness_blocks(points, conn, dN, w, np.broadcast_to(lam, ne).copy(),
+                                  np.broadcast_to(mu, ne).copy(), Ke, det)
+        else:
+            D = block.anisotropy.at(np.einsum("ga,eai->egi", N, points[conn]))
+            kern.anisotropic_stiffness_blocks(points, conn, dN, w, np.ascontiguousarray(D),
+                                              Ke, det)
         kern.add_vector_blocks(ptr, idx, conn, Ke, k_data)
+        if block.loss is not None and np.any(block.loss):
+            Ke *= np.asarray(block.loss, float)[:, None, None]
+            kern.add_vector_blocks(ptr, idx, conn, Ke, h_data)
         del Ke
         N, dN, w = tabulate(block.cell_type, mass_degree or el.mass_degree)
         Me = np.empty((ne, nen, nen))
@@ -88,4 +104,5 @@ def assemble(points, blocks, stiffness_degree=None, mass_degree=None):
     K = sp.csr_matrix((k_data, indices, indptr), shape=shape)
     # one pattern for both (0.31 GB at 1M dofs): nothing edits a model's pattern in place
     M = sp.csr_matrix((m_data, indices, indptr), shape=shape)
-    return Operators(K, M, np.repeat(lumped, 3), min_det)
+    H = sp.csr_matrix((h_data, indices, indptr), shape=shape) if lossy else None
+    return Operators(K, M, np.repeat(lumped, 3), min_det, H)

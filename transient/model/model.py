@@ -11,6 +11,7 @@ import scipy.sparse as sp
 
 from ..mesh import generators
 from .assembly import CellBlock, assemble
+from .elasticity import anisotropy
 from ..mesh.elements import ALIASES, ELEMENTS
 from ..case.sizes import cells_by_part, check_memory
 from ..errors import CaseError
@@ -44,6 +45,8 @@ class Model:
     sensor_names: tuple
     sensors: sp.csr_matrix       # (n_sensors, ndof) observation of the sensors [-]
     timings: dict                # stage -> seconds
+    loss: sp.csr_matrix = None   # H = sum_m eta_m K_m, the materials' loss factors times
+    #                              their cells' stiffness [N/m]; None: no material has one
 
     @property
     def ndof(self):
@@ -159,9 +162,11 @@ def _cell_blocks(case, parts):
                                     f"{', '.join(part.mesh.cell_sets) or 'none'})")
                 mat[part.mesh.cell_sets[cset].get(ctype, [])] = mname
             props = {k: np.array([getattr(materials[m], k) for m in mat])
-                     for k in ("E", "nu", "rho")}
+                     for k in ("E", "nu", "rho", "loss_factor")}
             blocks.append((name, ctype, CellBlock(ctype, conn + part.offset, props["E"],
-                                                  props["nu"], props["rho"])))
+                                                  props["nu"], props["rho"],
+                                                  anisotropy(materials, mat, case.path),
+                                                  props["loss_factor"])))
     return blocks
 
 
@@ -266,7 +271,7 @@ def build_model(case, structure=None):
     if structure is not None:
         s = structure
         check_points(case, s.parts)
-        return _loaded(case, s.points, s.parts, s.K, s.M, s.lumped_mass, s.fixed, {})
+        return _loaded(case, s.points, s.parts, s.K, s.M, s.lumped_mass, s.fixed, {}, s.loss)
     timings = {}
     t0 = time.perf_counter()
     parts, offset = {}, 0
@@ -296,16 +301,16 @@ def build_model(case, structure=None):
     check_points(case, parts)
 
     fixed = _fixed(case, parts, 3 * len(points))
-    return _loaded(case, points, parts, ops.K, ops.M, ops.lumped_mass, fixed, timings)
+    return _loaded(case, points, parts, ops.K, ops.M, ops.lumped_mass, fixed, timings, ops.H)
 
 
-def _loaded(case, points, parts, K, M, lumped_mass, fixed, timings):
+def _loaded(case, points, parts, K, M, lumped_mass, fixed, timings, loss):
     """The Model of a structure with the case's loads and sensors."""
     patterns = _loads(case, parts, points, M)
     load = sum(patterns.values(), np.zeros(3 * len(points)))
     names, sensors = _sensors(case, parts, 3 * len(points))
     return Model(points, parts, K, M, lumped_mass, fixed, load, patterns, names, sensors,
-                 timings)
+                 timings, loss)
 
 
 def constant_load(case, model):

@@ -1,4 +1,6 @@
 """The system linearized at steady sliding: M, D, K of M a + D v + K q = 0 about the preload.
+K is complex where materials have a loss factor: their structural damping i H, H = sum_m eta_m
+K_m, which a run takes as a viscous damping instead (dynamics.system).
 
 With g = C q + g0 the gap, p(g) the contact law (k_t = -dp/dg), Ct and Cc the tangential
 observations along and across the sliding, and the friction force Ct^T (w p m(V - Ct v))
@@ -45,12 +47,16 @@ def linearized(system, state):
     Kf, Df = _friction_terms(system, p, kt)
     if system.reduced:
         n = system.n
-        M, D, K = np.eye(n), np.diag(system.damp), np.diag(system.omega2)
+        lossy = system.loss is not None
+        M, K = np.eye(n), np.diag(system.omega2)
+        D = np.diag(system.base_damp if lossy else system.damp)
         if Kf is not None:
             K, D = K + Kf, D + Df
-        return M, D, K
+        return M, D, (K + 1j * system.loss if lossy else K)
     M, K = system.M, system.K
     D = system.alpha * M + system.beta * K
     if Kf is not None:
         K, D = (K + Kf).tocsr(), (D + Df).tocsr()
+    if system.loss is not None:
+        K = (K + 1j * system.loss).tocsr()
     return M, sp.csr_matrix(D), K

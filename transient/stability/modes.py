@@ -60,9 +60,13 @@ def complex_modes(M, D, K):
     """Complex modes of the dense (n, n) matrices M (symmetric positive definite), D and K.
 
     Returns one eigenvalue of each conjugate pair (imaginary part >= 0; real eigenvalues, of
-    overdamped or divergent motion, once each), sorted by frequency then real part.
+    overdamped or divergent motion, once each), sorted by frequency then real part. K may be
+    complex (a loss factor's i H): its eigenvalues then pair as lambda and -conj(lambda), the
+    one of positive frequency decaying and its mirror growing, which is not a motion (a
+    structural damping holds at positive frequencies only): the positive ones are kept.
     """
-    M, D, K = (np.asarray(X, dtype=float) for X in (M, D, K))
+    dtype = complex if any(np.iscomplexobj(X) for X in (M, D, K)) else float
+    M, D, K = (np.asarray(X, dtype=dtype) for X in (M, D, K))
     n = M.shape[0]
     eye, zero = np.eye(n), np.zeros((n, n))
     if np.array_equal(M, eye):

@@ -52,7 +52,8 @@ def full_complex_modes(M, D, K, fmax, rigid=(), shifts=SHIFTS, k=12):
     """
     n = K.shape[0]
     M, D, K = (sp.csr_matrix(X) for X in (M, D, K))
-    free = floating(M, D, K, rigid)
+    # a loss factor's i H holds the rigid motions K holds: each cell's stiffness does
+    free = floating(M, D, sp.csr_matrix(K.real) if np.iscomplexobj(K.data) else K, rigid)
     step = 2 * np.pi * fmax / shifts
     v0 = free.project(np.random.default_rng(0).standard_normal(2 * n) + 0j)
     found, vectors = [], []

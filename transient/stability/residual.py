@@ -3,13 +3,14 @@ carries it.
 
 A reduced mode (lambda, z) expands to x = T z on the model's dofs. With K_lin the structure's
 stiffness and the contact's tangent at the preload, K_f and D_f the friction's stiffness and
-damping there (stability.linearize) and the reduced damping's forces M T diag(d) z, the residual
-r = (K_lin + K_f) x + lambda (M T diag(d) z + D_f x) + lambda^2 M x vanishes for a mode of the
-full model; the Galerkin projection leaves it orthogonal to the basis. Its size relative to the
-inertia forces, rho = |r|_{M^-1} / (|lambda|^2 |x|_M) (lumped mass norms on the free dofs), is
-what the modes beyond the basis' cutoff and the directions it lacks leave out: it falls as the
-cutoff grows (tools/study_cea_band.py measures it with the real parts' errors against the full
-model).
+damping there (stability.linearize), the reduced damping's forces M T diag(d) z and the
+materials' loss i H x (H = sum_m eta_m K_m), the residual
+r = (K_lin + i H + K_f) x + lambda (M T diag(d) z + D_f x) + lambda^2 M x vanishes for a mode
+of the full model; the Galerkin projection leaves it orthogonal to the basis. Its size relative
+to the inertia forces, rho = |r|_{M^-1} / (|lambda|^2 |x|_M) (lumped mass norms on the free
+dofs), is what the modes beyond the basis' cutoff and the directions it lacks leave out: it
+falls as the cutoff grows (tools/study_cea_band.py measures it with the real parts' errors
+against the full model).
 """
 import numpy as np
 
@@ -33,7 +34,10 @@ def mode_residuals(model, M, system, state, basis, modes, which):
     U = real_times(X, AW @ Z)                        # x = T z, (ndof, k)
     Cx = contacts.observe(U)
     force = real_times(model.K, U) + contacts.normal_load((w * kt)[:, None] * Cx)
-    damping = real_times(M, real_times(X, AW @ (system.damp[:, None] * Z)))
+    if system.loss is not None:
+        force = force + 1j * real_times(model.loss, U)
+    damp = system.damp if system.loss is None else system.base_damp
+    damping = real_times(M, real_times(X, AW @ (damp[:, None] * Z)))
     if contacts.friction is not None:
         f = contacts.friction
         along, across = contacts.observe_tangential(U)
