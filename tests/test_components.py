@@ -76,6 +76,16 @@ def test_bars_tied_end_to_end_are_one_bar_of_their_length(tmp_path, count):
     assert sorted(parts) == [f"bar{i}" for i in range(count)]
 
 
+def test_one_part_without_contact_or_load_is_its_own_modes(tmp_path):
+    """No pair and no load: the part's basis is its modes alone, and the coupling has no
+    static direction to add (it once failed on the empty set)."""
+    case = bars(tmp_path, 1)
+    reference = rod_frequencies(case)
+    setup = prepare(case, analysis=True)
+    reduced = np.sqrt(setup.system.omega2) / (2 * np.pi)
+    np.testing.assert_allclose(reduced[:len(reference)], reference, rtol=1e-9)
+
+
 def test_pad_disc_preload_and_modes_match_the_assembled_path():
     """The small pad and disc (a sampled rule, the pad held by its abutments and the contact):
     the preload solved in the coupled reduced coordinates carries the assembled preload's

@@ -178,9 +178,11 @@ def condensed(K_lin, omega2, A, cutoff, gram, loads, q, tol):
     norms = np.linalg.norm(S, axis=0)
     S = S[:, norms > 1e-12 * max(norms.max(), 1e-300)]
     S /= np.linalg.norm(S, axis=0)
-    lam, V = np.linalg.eigh(S.T @ S)
-    big = lam > 1e-12 * max(lam.max(), 1.0)
-    W = np.hstack([Am, S @ (V[:, big] / np.sqrt(lam[big]))])
+    W = Am
+    if S.shape[1]:            # none: no contact, no load and no preload beyond the modes
+        lam, V = np.linalg.eigh(S.T @ S)
+        big = lam > 1e-12 * max(lam.max(), 1.0)
+        W = np.hstack([Am, S @ (V[:, big] / np.sqrt(lam[big]))])
     omega2, V = np.linalg.eigh(W.T @ (K_lin @ W))
     return W @ V, omega2, int(keep.sum()), shapes.shape[1]
 
