@@ -181,3 +181,24 @@ def test_parts_and_instances_placed_as_the_manual_says():
     tops = mesh.node_sets["BOTH_TOPS"]
     assert len(tops) == 12 and (mesh.points[tops][:, 2] == 1).all()
     assert find_set(names, "block-2.TOP") == "Block-2.Top"
+
+
+def test_input_files_cylindrical_nodes_node_surfaces_and_faces_on_the_boundary(tmp_path):
+    """A *NODE whose data is in a file of its own (INPUT=), in r, theta, z (SYSTEM=C); a
+    TYPE=NODE surface; a TYPE=ELEMENT line without a face: the elements' boundary faces."""
+    (tmp_path / "nodes.txt").write_text("1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 90, 0\n4, 1, 0, 1\n")
+    (tmp_path / "deck.inp").write_text(
+        "*NODE, SYSTEM=C, INPUT=nodes.txt\n*ELEMENT, TYPE=C3D4, ELSET=\"One Tet\"\n"
+        "7, 1, 2, 3, 4\n*NSET, NSET=BASE\n1, 2, 3\n*SURFACE, TYPE=NODE, NAME=Base Nodes\n"
+        "BASE\n*SURFACE, NAME=Skin\n\"One Tet\"\n")
+    mesh = read_mesh(tmp_path / "deck.inp")
+    np.testing.assert_allclose(mesh.points, [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 1]],
+                               atol=1e-15)
+    assert set(mesh.cell_sets) == {"One Tet"}
+    np.testing.assert_array_equal(mesh.node_sets["Base Nodes"], [0, 1, 2])
+    assert "Base Nodes" not in mesh.face_sets
+    _, skin = only_faces(mesh, "Skin")
+    area, normal, centroid = face_geometry(mesh.points, skin)
+    assert len(skin) == 4
+    # every face points away from the tet's centroid
+    assert (np.einsum("ij,ij->i", normal, centroid - mesh.points.mean(axis=0)) > 0).all()
