@@ -80,15 +80,28 @@ def _solids(model):
 
 
 class _Boundary:
-    """The solids' boundary faces, outward, with a lookup by their corner nodes."""
+    """The solids' boundary faces, outward, with a lookup by their corner nodes, found when
+    first asked for (a deck without 2-D elements or faceless surface lines never does)."""
 
     def __init__(self, mesh):
-        self.faces = boundary_faces(mesh)
+        self.mesh = mesh
+        self.index = None
+
+    @property
+    def faces(self):
+        if self.index is None:
+            self._find()
+        return self._faces
+
+    def _find(self):
+        self._faces = boundary_faces(self.mesh)
         self.index = {ft: dict(zip(map(tuple, face_key(f, ELEMENTS[ft].n_corners).tolist()),
-                                   range(len(f)))) for ft, f in self.faces.items()}
+                                   range(len(f)))) for ft, f in self._faces.items()}
 
     def match(self, faces, ftype):
         """(index of each face among the boundary faces of its type or -1)."""
+        if self.index is None:
+            self._find()
         table = self.index.get(ftype, {})
         keys = map(tuple, face_key(faces, ELEMENTS[ftype].n_corners).tolist())
         return np.array([table.get(k, -1) for k in keys], dtype=np.int64)

@@ -153,7 +153,10 @@ def _keyword(text):
 
 
 def _fields(text):
-    fields = [_unquote(f.strip()) for f in _split(text)]
+    if '"' in text:
+        fields = [_unquote(f.strip()) for f in _split(text)]
+    else:
+        fields = [f.strip() for f in text.split(",")]
     while fields and not fields[-1]:
         fields.pop()
     return tuple(fields)
