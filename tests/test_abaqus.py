@@ -10,7 +10,7 @@ import pytest
 from transient.mesh.abaqus import read_abaqus
 from transient.mesh.abaqus.types import ABAQUS_FACES, FACES
 from transient.mesh.elements import ELEMENTS
-from transient.mesh.meshfile import read_mesh
+from transient.mesh.meshfile import MeshFileError, read_mesh
 from transient.mesh.selections import find_set
 
 DATA = Path(__file__).parent / "data" / "abaqus"
@@ -202,3 +202,24 @@ def test_input_files_cylindrical_nodes_node_surfaces_and_faces_on_the_boundary(t
     assert len(skin) == 4
     # every face points away from the tet's centroid
     assert (np.einsum("ij,ij->i", normal, centroid - mesh.points.mean(axis=0)) > 0).all()
+
+
+@pytest.mark.parametrize("text, words", [
+    ("*Part, name=P\n*Node\n1, 0, 0, 0\n*End Part\n",
+     "no solid elements: expected C3D4, C3D10, C3D8 and C3D20, with any formulation letters "
+     "(C3D8R, C3D10M, C3D20R) (the deck defines parts but no *INSTANCE of them)"),
+    ("*Part, name=P\n*End Part\n*Assembly, name=A\n*Instance, name=I, part=Q\n*End Instance\n",
+     "line 4: *Instance, name=I, part=Q: no part 'Q' (parts: P)"),
+    ("*Part, name=P\n*End Instance\n", "line 2: *End Instance: out of place"),
+    ("*Part, name=P\n*End Part\n*Assembly, name=A\n*Instance, name=I, part=P\n0, 0, 0\n"
+     "0, 0, 0, 0, 0, 1\n", "line 4: *Instance, name=I, part=P: expected at most two data "
+     "lines: a translation x, y, z, then a rotation xa, ya, za, xb, yb, zb, angle [deg]"),
+    ("*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n4, 0, 0, 1\n*ELEMENT, TYPE=C3D10\n"
+     "1, 1, 2, 3, 4\n", "line 7: *ELEMENT, TYPE=C3D10: element 1: 4 node labels, expected 10"),
+])
+def test_a_deck_out_of_shape_is_refused_naming_what_was_expected(tmp_path, text, words):
+    path = tmp_path / "deck.inp"
+    path.write_text(text)
+    with pytest.raises(MeshFileError) as info:
+        read_mesh(path)
+    assert info.value.path == str(path) and words in info.value.message

@@ -13,7 +13,7 @@ from ..placement import rotation_matrix
 from .parse import labels_set, parse_elements, parse_nodes, parse_set, set_name
 
 
-@dataclass
+@dataclass(eq=False)
 class Body:
     """One instance of a part (name as written) or the assembly (name '')."""
     name: str
@@ -82,7 +82,7 @@ def build_model(deck):
         n_nodes += len(labels)
         n_elems += len(elem_labels)
     sizes = np.array([len(blk.labels) for blk in blocks], dtype=np.int64)
-    first = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    first = np.cumsum(sizes) - sizes
     block_of = np.repeat(np.arange(len(blocks)), sizes)
     row_of = np.arange(n_elems) - np.repeat(first, sizes)
     return Model(bodies, np.vstack(points), blocks, conn, first, block_of, row_of,

@@ -19,14 +19,14 @@ REFUSED = ("NGEN", "NFILL", "NCOPY", "NMAP", "ELGEN", "ELCOPY", "PARAMETER", "NO
            "SUBSTRUCTURE PROPERTY", "IMPORT")
 
 
-@dataclass
+@dataclass(eq=False)
 class Scope:
     """The mesh keywords of one part, of one instance's own lines, or of the assembly."""
     name: str                      # as written ('' for the assembly)
     keywords: dict = field(default_factory=lambda: {k: [] for k in MESH})
 
 
-@dataclass
+@dataclass(eq=False)
 class Instance:
     """A placed copy of a part: its nodes moved by the translation, then the rotation."""
     name: str                      # as written
@@ -37,7 +37,7 @@ class Instance:
     keyword: object                # the *INSTANCE keyword, for messages
 
 
-@dataclass
+@dataclass(eq=False)
 class Deck:
     path: object
     parts: dict                    # upper-case name -> Scope
@@ -138,7 +138,7 @@ def _floats(keyword, row):
 def _close(deck, keyword, current):
     """The scope after an *END PART, *END INSTANCE, *ASSEMBLY or *END ASSEMBLY."""
     name = keyword.name
-    inside_part = current is not deck.assembly and current in deck.parts.values()
+    inside_part = any(current is part for part in deck.parts.values())
     inside_instance = current is not deck.assembly and not inside_part
     if (name == "END PART" and not inside_part) or (
             name == "END INSTANCE" and not inside_instance) or (
