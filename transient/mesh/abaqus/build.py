@@ -8,6 +8,7 @@ import numpy as np
 from ..elements import ELEMENTS, VOLUME_TYPES
 from ..fileerror import MeshFileError
 from ..mesh import Mesh, boundary_faces, face_key, face_nodes
+from ..selections import find_set
 from .bodies import build_model
 from .scopes import read_deck_structure
 from .sets import Resolver
@@ -47,12 +48,12 @@ def read_abaqus(path):
             for name, keyword in defs:
                 surface = read_surface(resolver, body, keyword)
                 if surface is None:
-                    notes.append(f"surface {body.prefix}{name} "
-                                 f"(TYPE={keyword.get('TYPE')}) not read")
+                    notes.append(f"surface {body.prefix}{name} not read ({keyword.text}: "
+                                 "an analytical or combined surface)")
                 else:
                     sets.add_surface(_name(body, key), surface, keyword)
     for b, body in enumerate(model.bodies):
-        if body.name and body.name not in sets.cells:
+        if body.name and find_set(sets.cells, body.name) is None:
             sets.add_instance(body.name, b)
     notes += _left_out(model, two_d)
     return sets.mesh(model.points, cells), notes
@@ -127,11 +128,16 @@ def _left_out(model, two_d):
             counts[blk.abaqus_type] += len(blk.labels)
     if not counts:
         return []
-    off = sum(int((idx < 0).sum()) for _, idx in two_d.values())
     listed = ", ".join(f"{n} {t}" for t, n in sorted(counts.items()))
-    return [f"{sum(counts.values())} elements that are not solids are left out of the model "
-            f"({listed}); the 2-D ones on the solids' boundary give their sets' faces"
-            + (f" ({off} of them are off that boundary)" if off else "")]
+    total = sum(counts.values())
+    note = ("1 element that is not a solid is" if total == 1
+            else f"{total} elements that are not solids are")
+    note += f" left out of the model ({listed})"
+    if two_d:
+        off = sum(int((idx < 0).sum()) for _, idx in two_d.values())
+        note += ("; the 2-D ones on the solids' boundary give their sets' faces"
+                 + (f" ({off} of them are off that boundary)" if off else ""))
+    return [note]
 
 
 class _Sets:
@@ -140,7 +146,7 @@ class _Sets:
     def __init__(self, model, cell_of, boundary, two_d):
         self.model, self.cell_of, self.boundary, self.two_d = model, cell_of, boundary, two_d
         self.nodes, self.faces, self.cells = {}, {}, {}
-        self.kinds = np.array([blk.kind for blk in model.blocks] + [""], dtype=object)
+        self.kinds = np.array([blk.kind for blk in model.blocks], dtype=object)
 
     def add_nodes(self, name, ids):
         self.nodes[name] = np.union1d(self.nodes.get(name, np.zeros(0, np.int64)), ids)
@@ -174,6 +180,7 @@ class _Sets:
                 self.add_faces(name, ftype, self.boundary.faces[ftype][found[found >= 0]])
 
     def add_surface(self, name, surface, keyword):
+        """A surface's faces (and a TYPE=NODE surface's nodes) under its name."""
         for ftype, faces in surface.faces.items():
             for f in faces:
                 self.add_faces(name, ftype, f)
