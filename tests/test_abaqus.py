@@ -223,3 +223,13 @@ def test_a_deck_out_of_shape_is_refused_naming_what_was_expected(tmp_path, text,
     with pytest.raises(MeshFileError) as info:
         read_mesh(path)
     assert info.value.path == str(path) and words in info.value.message
+
+
+def test_an_error_in_an_included_file_names_that_file_and_its_line(tmp_path):
+    (tmp_path / "deck.inp").write_text("*NODE\n*INCLUDE, INPUT=nodes.inp\n")
+    (tmp_path / "nodes.inp").write_text("** the nodes\n1, 0, 0, 0\n2, 1, x, 0\n")
+    with pytest.raises(MeshFileError) as info:
+        read_mesh(tmp_path / "deck.inp")
+    assert info.value.path == str(tmp_path / "nodes.inp")
+    assert info.value.message == ("line 3: *NODE: expected a node label and its coordinates, "
+                                  "got 2, 1, x, 0")

@@ -30,6 +30,7 @@ class Keyword:
     path, line : where the keyword line is.
     source : the file holding the data lines (path, or the file of an INPUT parameter).
     text : the keyword line as written, for messages.
+    files : the file of each data line when some come from an *INCLUDE file, else ().
     """
     name: str
     params: dict
@@ -39,11 +40,15 @@ class Keyword:
     line: int
     source: Path
     text: str
+    files: tuple = ()
 
     def error(self, message, row=None):
         """A MeshFileError naming the file, the line (of data row `row`, else of the keyword
         line) and the keyword line."""
-        path, line = (self.source, self.lines[row]) if row is not None else (self.path, self.line)
+        if row is None:
+            path, line = self.path, self.line
+        else:
+            path, line = (self.files[row] if self.files else self.source), self.lines[row]
         return MeshFileError(path, f"line {line}: {self.text}: {message}")
 
     def get(self, param, default=None):
@@ -72,7 +77,7 @@ def read_keywords(path):
             close()
             head, data = (where, line, stripped), []
         elif head is not None:
-            data.append((line, stripped))
+            data.append((where, line, stripped))
     close()
     return blocks
 
@@ -83,11 +88,12 @@ def _block(path, line, text, data):
     source = path
     if "INPUT" in params and name in DATA_FILES:
         source = _resolve(keyword, params["INPUT"], path.parent)
-        data = [(n, t.strip()) for _, n, t in _read(source, keyword)
+        data = [(f, n, t.strip()) for f, n, t in _read(source, keyword)
                 if t.strip() and not t.strip().startswith("**")]
-    fields = tuple(_fields(t) for _, t in data)
-    return Keyword(name, params, fields, tuple(n for n, _ in data), path, line, source,
-                   keyword.text)
+    fields = tuple(_fields(t) for _, _, t in data)
+    files = tuple(f for f, _, _ in data) if any(f != source for f, _, _ in data) else ()
+    return Keyword(name, params, fields, tuple(n for _, n, _ in data), path, line, source,
+                   keyword.text, files)
 
 
 def _short(text):
