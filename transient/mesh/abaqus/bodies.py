@@ -24,6 +24,7 @@ class Body:
     nsets: dict = field(default_factory=dict)      # KEY -> [(name as written, SetDef)]
     elsets: dict = field(default_factory=dict)
     surfaces: dict = field(default_factory=dict)   # KEY -> [(name as written, Keyword)]
+    sections: list = field(default_factory=list)   # (element set name, Keyword) of each
 
     @property
     def prefix(self):
@@ -107,11 +108,15 @@ def _parse(scope):
     defs += [("N",) + parse_set(k, "NSET", "node") for k in kw["NSET"]]
     defs += [("E",) + parse_set(k, "ELSET", "cell") for k in kw["ELSET"]]
     defs += [("S", set_name(k, "NAME", "surface"), k) for k in kw["SURFACE"]]
+    defs += [("X", k.get("ELSET"), k) for k in kw["SECTION"]]
     return nodes, blocks, defs
 
 
 def _add_sets(body, defs):
     for kind, name, definition in defs:
+        if kind == "X":
+            body.sections.append((name, definition))
+            continue
         table = {"N": body.nsets, "E": body.elsets, "S": body.surfaces}[kind]
         table.setdefault(name.upper(), []).append((name, definition))
 

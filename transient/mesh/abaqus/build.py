@@ -55,8 +55,24 @@ def read_abaqus(path):
     for b, body in enumerate(model.bodies):
         if body.name and find_set(sets.cells, body.name) is None:
             sets.add_instance(body.name, b)
-    notes += _left_out(model, two_d)
+    notes += _left_out(model, _used(sets.used), _structural(resolver))
     return sets.mesh(model.points, cells), notes
+
+
+def _used(parts):
+    return np.unique(np.concatenate(parts)) if parts else np.zeros(0, np.int64)
+
+
+def _structural(resolver):
+    """Global ids of the elements under a shell, membrane or solid section: structure of the
+    deck's model (a section naming a set not defined here gives none)."""
+    ids = []
+    for body in resolver.model.bodies:
+        for name, keyword in body.sections:
+            target, rest = resolver.split(body, name)
+            if rest.upper() in target.elsets:
+                ids.append(resolver.elements(target, rest.upper()))
+    return _used(ids)
 
 
 def _name(body, key):
@@ -120,12 +136,22 @@ def _two_d_faces(model, boundary):
     return {ft: (np.concatenate(i), np.concatenate(x)) for ft, (i, x) in out.items()}
 
 
-def _left_out(model, two_d):
-    """One note on the elements left out of the model, if any."""
-    counts = Counter()
-    for blk in model.blocks:
-        if blk.kind in (FACE, SKIPPED):
-            counts[blk.abaqus_type] += len(blk.labels)
+def _left_out(model, used, structural):
+    """One note on the elements left out of the model, if any: every element that is not a
+    solid but a 2-D one that only makes faces of a set (on the solids' boundary, under no
+    structural section: the faces gmsh and meshio write)."""
+    counts, faces_too = Counter(), set()
+    for b, blk in enumerate(model.blocks):
+        ids = model.first[b] + np.arange(len(blk.labels))
+        if blk.kind == SKIPPED:
+            counts[blk.abaqus_type] += len(ids)
+        elif blk.kind == FACE:
+            structure = np.isin(ids, structural)
+            left = structure | ~np.isin(ids, used)
+            counts[blk.abaqus_type] += int(left.sum())
+            if (structure & np.isin(ids, used)).any():
+                faces_too.add(blk.abaqus_type)
+    counts = {t: n for t, n in counts.items() if n}
     if not counts:
         return []
     listed = ", ".join(f"{n} {t}" for t, n in sorted(counts.items()))
@@ -133,10 +159,9 @@ def _left_out(model, two_d):
     note = ("1 element that is not a solid is" if total == 1
             else f"{total} elements that are not solids are")
     note += f" left out of the model ({listed})"
-    if two_d:
-        off = sum(int((idx < 0).sum()) for _, idx in two_d.values())
-        note += ("; the 2-D ones on the solids' boundary give their sets' faces"
-                 + (f" ({off} of them are off that boundary)" if off else ""))
+    if faces_too:
+        note += (f"; the {', '.join(sorted(faces_too))} on the solids' boundary still give "
+                 "their sets' faces")
     return [note]
 
 
@@ -146,6 +171,7 @@ class _Sets:
     def __init__(self, model, cell_of, boundary, two_d):
         self.model, self.cell_of, self.boundary, self.two_d = model, cell_of, boundary, two_d
         self.nodes, self.faces, self.cells = {}, {}, {}
+        self.used = []          # global ids of the 2-D elements that gave faces
         self.kinds = np.array([blk.kind for blk in model.blocks], dtype=object)
 
     def add_nodes(self, name, ids):
@@ -178,6 +204,7 @@ class _Sets:
                     "elements: expected the faces of a surface")
             if (found >= 0).any():
                 self.add_faces(name, ftype, self.boundary.faces[ftype][found[found >= 0]])
+                self.used.append(ids[mask][found >= 0])
 
     def add_surface(self, name, surface, keyword):
         """A surface's faces (and a TYPE=NODE surface's nodes) under its name."""
@@ -194,11 +221,12 @@ class _Sets:
                 self.add_faces(name, el.face_type, faces[hit >= 0])
         for elems in surface.two_d:
             for ftype, (ids, idx) in self.two_d.items():
-                found = idx[np.isin(ids, elems)]
-                if (found < 0).any():
+                mask = np.isin(ids, elems)
+                if (idx[mask] < 0).any():
                     raise keyword.error(f"surface '{name}': a 2-D element of it is not on the "
                                         "boundary of the solid elements")
-                self.add_faces(name, ftype, self.boundary.faces[ftype][found])
+                self.add_faces(name, ftype, self.boundary.faces[ftype][idx[mask]])
+                self.used.append(ids[mask])
         for ids in surface.nodes:
             self.add_nodes(name, ids)
 

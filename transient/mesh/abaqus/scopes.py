@@ -14,6 +14,10 @@ import numpy as np
 from .deck import read_keywords
 
 MESH = ("NODE", "ELEMENT", "NSET", "ELSET", "SURFACE")
+# sections that make their elements structure: a 2-D element under one is a shell, a
+# membrane or a plane solid of the model, not only the face of a solid (gmsh's and meshio's
+# faces have no section)
+STRUCTURAL = ("SHELL SECTION", "SHELL GENERAL SECTION", "MEMBRANE SECTION", "SOLID SECTION")
 # keywords that make or move nodes and elements by rules this reader does not follow
 REFUSED = ("NGEN", "NFILL", "NCOPY", "NMAP", "ELGEN", "ELCOPY", "PARAMETER", "NODAL THICKNESS",
            "SUBSTRUCTURE PROPERTY", "IMPORT")
@@ -23,7 +27,7 @@ REFUSED = ("NGEN", "NFILL", "NCOPY", "NMAP", "ELGEN", "ELCOPY", "PARAMETER", "NO
 class Scope:
     """The mesh keywords of one part, of one instance's own lines, or of the assembly."""
     name: str                      # as written ('' for the assembly)
-    keywords: dict = field(default_factory=lambda: {k: [] for k in MESH})
+    keywords: dict = field(default_factory=lambda: {k: [] for k in MESH + ("SECTION",)})
 
 
 @dataclass(eq=False)
@@ -54,6 +58,8 @@ def read_deck_structure(path):
         name = keyword.name
         if name in MESH:
             current.keywords[name].append(keyword)
+        elif name in STRUCTURAL and keyword.get("ELSET"):
+            current.keywords["SECTION"].append(keyword)
         elif name == "PART":
             current = _part(deck, keyword, current)
         elif name == "INSTANCE":
