@@ -60,10 +60,13 @@ MESH = Variant("mesh of the part: a generator or a file", {
         "element": ELEMENT,
     },
     "file": {
-        "path": Value("str", "mesh file read by meshio (Gmsh .msh, Abaqus .inp, VTU...), "
-                      "relative to the case file"),
+        "path": Value("str", "mesh file, relative to the case file: an Abaqus or CalculiX "
+                      "deck (.inp), or any file meshio reads (Gmsh .msh, VTU...)"),
         "scale": positive("factor applied to the coordinates (1e-3 for a file in mm)", "-", 1.0),
         "translate": vector3("translation applied after scaling", default=[0.0, 0.0, 0.0]),
+        "body": Value("str", "the file's cell set whose cells alone make the part: an "
+                      "instance of a deck's assembly, an element set, a physical volume "
+                      "(empty: every cell of the file)", ""),
     },
 })
 

@@ -1,32 +1,28 @@
-"""Mesh files: read any meshio format into a Mesh, write VTU for ParaView, check Jacobians.
+"""Mesh files: read any meshio format or an Abaqus deck into a Mesh, write VTU for ParaView,
+check Jacobians.
 
 Reading keeps the volume cells as elements and turns surface cells into outward-oriented face
 sets. Named selections come from meshio point_sets and cell_sets, from Gmsh physical groups and
 from the 0/1 'set:<name>' arrays that write_vtu adds, so a VTU written here reads back with its
-node and cell sets.
+node and cell sets. Abaqus and CalculiX decks (.inp) are read by transient.mesh.abaqus, which
+reads their surfaces, parts and instances, as meshio's reader does not.
 """
 import contextlib
 import io
+import sys
 import warnings
 from pathlib import Path
 
 import meshio
 import numpy as np
 
+from .abaqus import read_abaqus
 from .elements import ELEMENTS, FACE_TYPES, VOLUME_TYPES
+from .fileerror import MeshFileError
 from .mesh import Mesh, face_nodes, orient_faces
 
 SET_PREFIX = "set:"
 _JACOBIAN_CHUNK = 8192   # cells per vectorized batch: bounds memory to a few tens of MB
-
-
-class MeshFileError(Exception):
-    """A mesh file that cannot be used: missing, unreadable or with unsupported content."""
-
-    def __init__(self, path, message):
-        super().__init__(f"{path}: {message}")
-        self.path = str(path)
-        self.message = message
 
 
 def read_mesh(path):
@@ -35,7 +31,8 @@ def read_mesh(path):
     Parameters
     ----------
     path : str or Path
-        Any file meshio can read; coordinates are taken as metres.
+        Any file meshio can read, or an Abaqus deck (.inp: transient.mesh.abaqus, whose notes
+        on what it leaves out are printed on standard error); coordinates are taken as metres.
 
     Returns
     -------
@@ -54,6 +51,11 @@ def read_mesh(path):
     path = Path(path)
     if not path.is_file():
         raise MeshFileError(path, "no such file")
+    if path.suffix.lower() == ".inp":
+        mesh, notes = read_abaqus(path)
+        for note in notes:
+            print(f"note: {path}: {note}", file=sys.stderr)
+        return mesh
     raw, said = _meshio_read(path)
     # what meshio said is held until the mesh is taken: a refused one gets one error line,
     # which carries it (a truncated file often explains the refusal)

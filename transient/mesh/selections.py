@@ -56,3 +56,18 @@ def set_faces(mesh, name):
     if name in mesh.node_sets:
         return faces_on_nodes(mesh, mesh.node_sets[name])
     raise KeyError(name)
+
+
+def find_set(names, name):
+    """The name a set has among names: name itself, else the one name equal to it but for
+    case (Abaqus compares names in upper case: PAD_FACE finds pad_face), else None."""
+    if name in names:
+        return name
+    same = {n for n in names if n.upper() == name.upper()}
+    return same.pop() if len(same) == 1 else None
+
+
+def offered(names):
+    """Set names to list in a message: sorted, without the internal ones (a name starting
+    with '_', as Abaqus/CAE names the element sets behind its surfaces)."""
+    return sorted((n for n in names if not n.startswith("_")), key=str.upper)

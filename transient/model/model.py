@@ -20,7 +20,8 @@ from .placement import check_points, check_scale
 from ..mesh.meshfile import MeshFileError, read_mesh
 from ..mesh.mesh import Mesh, unit
 from ..mesh.placement import place
-from ..mesh.selections import set_faces, set_nodes, with_geometric_sets
+from ..mesh.body import take_body
+from ..mesh.selections import find_set, offered, set_faces, set_nodes, with_geometric_sets
 
 AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -80,7 +81,7 @@ def part_mesh(case, name):
     try:
         if kind == "file":
             path = case.directory / spec.params["path"]
-            mesh = read_mesh(path)
+            mesh = _body(case, key, read_mesh(path), spec.params["body"], path)
             points = mesh.points * spec.params["scale"] + np.asarray(spec.params["translate"])
             mesh = Mesh(points, mesh.cells, mesh.node_sets, mesh.face_sets, mesh.cell_sets)
         else:
@@ -104,6 +105,18 @@ def part_mesh(case, name):
     return placed
 
 
+def _body(case, key, mesh, body, path):
+    """The part of a file's mesh that its key `body` names (a cell set), or all of it."""
+    if not body:
+        return mesh
+    name = find_set(mesh.cell_sets, body)
+    if name is None:
+        raise CaseError(case.path, f"{key}.body", f"{path} has no cell set '{body}' (cell "
+                        f"sets, with a deck's instances: "
+                        f"{', '.join(offered(mesh.cell_sets)) or 'none'})")
+    return take_body(mesh, name)
+
+
 def resolve_set(case, parts, ref, key, surface=False):
     """(part, set name) of a 'PART.SET' reference, with errors naming the key; a surface
     (contact, pressure) takes a face or node set, not a cell set."""
@@ -113,14 +126,15 @@ def resolve_set(case, parts, ref, key, surface=False):
     if part not in parts:
         raise CaseError(case.path, key, f"unknown part '{part}' (parts: {', '.join(parts)})")
     mesh = parts[part].mesh
-    if name not in mesh.set_names():
+    found = find_set(mesh.set_names(), name)
+    if found is None:
         raise CaseError(case.path, key, f"part '{part}' has no set '{name}' (sets: "
-                        f"{', '.join(mesh.set_names()) or 'none'})")
-    if surface and name not in mesh.face_sets and name not in mesh.node_sets:
+                        f"{', '.join(offered(mesh.set_names())) or 'none'})")
+    if surface and found not in mesh.face_sets and found not in mesh.node_sets:
         raise CaseError(case.path, key, f"'{ref}' is a cell set: a surface is a face or node "
                         f"set (face sets of part '{part}': "
-                        f"{', '.join(sorted(mesh.face_sets)) or 'none'})")
-    return parts[part], name
+                        f"{', '.join(offered(mesh.face_sets)) or 'none'})")
+    return parts[part], found
 
 
 def _check_quadrature(case, ctypes):
@@ -156,11 +170,12 @@ def _cell_blocks(case, parts):
         for ctype, conn in part.mesh.cells.items():
             mat = np.full(len(conn), spec.material, dtype=object)
             for cset, mname in spec.region_materials.items():
-                if cset not in part.mesh.cell_sets:
+                found = find_set(part.mesh.cell_sets, cset)
+                if found is None:
                     raise CaseError(case.path, f"{key}.region_materials.{cset}",
                                     f"part '{name}' has no cell set '{cset}' (cell sets: "
-                                    f"{', '.join(part.mesh.cell_sets) or 'none'})")
-                mat[part.mesh.cell_sets[cset].get(ctype, [])] = mname
+                                    f"{', '.join(offered(part.mesh.cell_sets)) or 'none'})")
+                mat[part.mesh.cell_sets[found].get(ctype, [])] = mname
             props = {k: np.array([getattr(materials[m], k) for m in mat])
                      for k in ("E", "nu", "rho", "loss_factor")}
             blocks.append((name, ctype, CellBlock(ctype, conn + part.offset, props["E"],
