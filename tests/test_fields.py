@@ -6,7 +6,7 @@ import scipy.sparse as sp
 
 from transient.case.loading import load
 from transient.model import build_model
-from transient.reduce.fields import field_map, rigid_motions
+from transient.reduce.fields import field_map, part_rigid_motions
 
 K_CONTACT = 5e11      # [Pa/m], a lining's contact at 1 MPa
 CUTOFF = 40000.0      # [Hz]
@@ -37,7 +37,7 @@ def fields(model, dofs, area):
     E = sp.csc_matrix((np.ones(k), (dofs, np.arange(k))), shape=(ndof, k))
     G = np.diag(K_CONTACT * area)
     support = sp.csr_matrix((K_CONTACT * area, (dofs, dofs)), shape=(ndof, ndof))
-    rigid = rigid_motions(model.points, np.arange(ndof))
+    rigid = part_rigid_motions(model.points, np.arange(ndof))
     return field_map(model.K, model.M, support, E, G, np.arange(k), np.zeros(k, int), rigid,
                      CUTOFF, 1.0, "auto")
 
@@ -60,6 +60,6 @@ def test_the_fields_count_is_set_by_the_cutoff_not_the_mesh(tmp_path):
 def test_rigid_motions_are_rigid(tmp_path):
     """K R = 0 on a free part: each column a rigid translation or rotation."""
     model, _, _ = plate(tmp_path, 4)
-    R = rigid_motions(model.points, np.arange(model.ndof))
+    R = part_rigid_motions(model.points, np.arange(model.ndof))
     assert np.linalg.norm(model.K @ R) <= 1e-9 * sp.linalg.norm(model.K) * np.linalg.norm(R)
     assert np.linalg.matrix_rank(R) == 6

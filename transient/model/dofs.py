@@ -56,3 +56,17 @@ def shifted(K, M, sigma):
     out = sp.csr_matrix((data, indices, indptr), shape=K.shape)
     out.has_sorted_indices = True
     return out
+
+
+def rigid_motions(points, dofs, centre):
+    """(len(dofs), 6) the rigid translations and rotations about centre (3,) of the model
+    dofs `dofs`, of nodes at points (nn, 3): omega_a e_a x (x - centre) on each dof."""
+    node, comp = dofs // 3, dofs % 3
+    x = points[node] - centre
+    R = np.zeros((len(dofs), 6))
+    R[np.arange(len(dofs)), comp] = 1.0
+    for axis in range(3):
+        a, b = (axis + 1) % 3, (axis + 2) % 3
+        R[comp == a, 3 + axis] = -x[comp == a, b]
+        R[comp == b, 3 + axis] = x[comp == b, a]
+    return R

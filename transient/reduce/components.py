@@ -25,7 +25,7 @@ from ..model.dofs import free_block
 from ..solve import blas
 from ..solve.preload import Preload
 from .basis import Basis, contact_gram, flexible_shapes
-from .fields import rigid_motions, support_stiffness
+from .fields import part_rigid_motions, support_stiffness
 from .parts import Engine, PartError, PartInterface, PartTask
 from .sampling import PairBlocks, ReducedPreloadError, pair_gram, reduced_preload
 
@@ -79,7 +79,8 @@ def part_tasks(model, M, pairs, contacts, patterns, constant):
             fields = (shape >= 0).any()
             interface = PartInterface(sp.csc_matrix(E), _gram(Cc.tocsr(), scale), shape, block,
                                       free_block(support, dofs) if fields else None,
-                                      rigid_motions(model.points, dofs) if fields else None)
+                                      part_rigid_motions(model.points, dofs) if fields
+                                      else None)
         out.append((dofs, (name, Kp, Mp, interface, loads[dofs])))
     return out
 

@@ -14,7 +14,7 @@ static flexibility no frequency bounds.
 import numpy as np
 import scipy.sparse as sp
 
-from ..model.dofs import shifted
+from ..model.dofs import rigid_motions, shifted
 from ..solve.linsolve import factorize
 from ..solve.modes import normal_modes, shift_sigma
 
@@ -40,18 +40,9 @@ def support_stiffness(pairs, ndof):
     return K
 
 
-def rigid_motions(points, dofs):
-    """(n, 6) the rigid translations and rotations (about the centroid) of the part's dofs,
-    which sit at model dofs `dofs` of nodes at points (nn, 3)."""
-    node, comp = dofs // 3, dofs % 3
-    x = points[node] - points[node].mean(axis=0)
-    R = np.zeros((len(dofs), 6))
-    R[np.arange(len(dofs)), comp] = 1.0
-    for axis in range(3):                  # omega_axis e_axis x r
-        a, b = (axis + 1) % 3, (axis + 2) % 3
-        R[comp == a, 3 + axis] = -x[comp == a, b]
-        R[comp == b, 3 + axis] = x[comp == b, a]
-    return R
+def part_rigid_motions(points, dofs):
+    """(n, 6) the rigid motions of a part's dofs `dofs` about their nodes' centroid."""
+    return rigid_motions(points, dofs, points[dofs // 3].mean(axis=0))
 
 
 def field_map(K, M, support, E, G, shape, block, rigid, cutoff, shift_hz, backend):
@@ -61,7 +52,9 @@ def field_map(K, M, support, E, G, shape, block, rigid, cutoff, shift_hz, backen
     the sliding). The loaded modes are those of (K + support, M) to the cutoff [Hz]; their
     factorization is freed on return."""
     whole = np.flatnonzero(shape < 0)
-    columns = [np.eye(len(shape))[:, whole]]
+    kept = np.zeros((len(shape), len(whole)))
+    kept[whole, np.arange(len(whole))] = 1.0
+    columns = [kept]
     shaped = np.flatnonzero(shape >= 0)
     if len(shaped):
         Ks = K + support

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model.dofs import rigid_motions as dof_rigid_motions
+
 # a rigid motion's strain energy is round-off (1e-16 of the largest eigenvalue of the pair
 # (K, M) on two_bars): below this fraction it is zero, which leaves elastic modes down to a
 # millionth of the mesh's highest frequency untouched
@@ -63,20 +65,11 @@ def rigid_motions(model, free):
     where[free] = np.arange(len(free))
     out = []
     for name in model.parts:
-        dofs = model.part_dofs(name).reshape(-1, 3)
-        x = model.points[dofs[:, 0] // 3]
-        x = x - x.mean(axis=0)
+        dofs = model.part_dofs(name)
+        centre = model.points[dofs[::3] // 3].mean(axis=0)
+        dofs = dofs[where[dofs] >= 0]
         R = np.zeros((len(free), 6))
-        for c in range(3):
-            rows = where[dofs[:, c]]
-            on = rows >= 0
-            R[rows[on], c] = 1.0
-            # rotation about axis a: (e_a x x)_c = eps_{a b c} x_b
-            for a in range(3):
-                b = 3 - a - c
-                if a != c:
-                    sign = 1.0 if (a, b, c) in ((0, 1, 2), (1, 2, 0), (2, 0, 1)) else -1.0
-                    R[rows[on], 3 + a] = sign * x[on, b]
+        R[where[dofs]] = dof_rigid_motions(model.points, dofs, centre)
         out.append(R)
     return out
 
