@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
+from test_materials import PAD as LINED_PAD
 from transient.api import cea, load, prepare
 from transient.cli import main
 from transient.dynamics.system import reduced_loss
@@ -66,45 +67,11 @@ def test_cea_of_one_lossy_material(tmp_path, reduced):
     assert not lossy.unstable.any()
 
 
-PAD = """
-[materials.steel]
-E = 2.1e11
-nu = 0.3
-rho = 7850.0
-
-[materials.lining]
-elasticity = "transversely_isotropic"
-E_p = 8.0e9
-nu_p = 0.25
-E_t = 3.0e9
-nu_pt = 0.3
-G_t = 1.5e9
-rho = 2500.0
-loss_factor = 0.1
-
-[parts.pad]
-material = "steel"
-region_materials = { lining = "lining" }
-[parts.pad.mesh]
-kind = "brake_pad"
-inner_radius = 0.06
-outer_radius = 0.1
-angle = 50.0
-lining_thickness = 0.008
-backplate_thickness = 0.005
-divisions = [2, 4, 2, 1]
-element = "tet10"
-
-[solver]
-mass = "consistent"
-
-[solver.modes]
-fmax = 15000.0
-
-[solver.reduction]
-enabled = true
-fmax = 15000.0
-"""
+# test_materials' transversely isotropic lining on steel, the lining lossy, its cea reduced
+PAD = (LINED_PAD[:LINED_PAD.index("[solver.modes]")].replace(
+    "rho = 2500.0\n", "rho = 2500.0\nloss_factor = 0.1\n")
+    + '[solver]\nmass = "consistent"\n\n[solver.modes]\nfmax = 15000.0\n\n'
+    '[solver.reduction]\nenabled = true\nfmax = 15000.0\n')
 
 
 def test_a_lossy_lining_on_steel_reduced_against_full(tmp_path):
