@@ -17,9 +17,9 @@ import scipy.sparse as sp
 from ..model.dofs import rigid_motions, shifted
 from ..solve.linsolve import factorize
 from ..solve.modes import normal_modes, shift_sigma
+from .basis import MODES_TOL
 
 FIELD_TOL = 1e-8     # relative singular value below which a field depends on the others
-MODES_TOL = 1e-9     # as basis.MODES_TOL: the loaded modes only span fields
 
 
 def support_stiffness(pairs, ndof):
