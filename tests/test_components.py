@@ -228,6 +228,7 @@ def test_parts_on_a_cluster_equal_parts_here_and_a_killed_worker_is_made_up(tmp_
     class Crashing:
         def __init__(self, client, crash):
             self.client, self.crash, self.done, self.cache = client, crash, None, None
+            self.stage = None
 
         def budget(self):
             return None
@@ -314,3 +315,58 @@ def test_a_part_with_no_static_direction_keeps_its_modes():
     Phi = np.linalg.qr(rng.standard_normal((12, 3)))[0]
     T = _with_statics(Phi, np.zeros((12, 2)), sp.identity(12, format="csr"))
     assert np.array_equal(T, Phi)
+
+
+@pytest.mark.parametrize("regularized", [True, False])
+def test_the_coupling_rows_a_pair_at_a_time_are_the_whole_rows(regularized):
+    """reduce.coupling.PairRows holds each pair's rows on its own parts' columns only, and the
+    part tasks the rows' gram a pair's shapes at a time: both against the whole rows, points x
+    every part's columns, formed densely (factored rows, and the fine rule's plain ones)."""
+    from transient.contact.contactset import stack
+    from transient.contact.pair import build_contact
+    from transient.reduce.basis import contact_gram
+    from transient.reduce.components import law_tangent, part_tasks, synthesis
+    from transient.reduce.coupling import PairRows
+    case = load(PAD, SMALL + ['solver.reduction.method="components"',
+                              "contact.pad_disc.friction.mu=0.4",
+                              f"contact.pad_disc.regularized={str(regularized).lower()}"])
+    model = build_model(case)
+    pairs = build_contact(case, model)
+    contacts = stack(pairs, model.ndof)
+    assert (contacts.factors is not None) == regularized
+    rng = np.random.default_rng(1)
+    dofs = [model.part_dofs(name) for name in model.parts]
+    X = synthesis(model.ndof, dofs, [rng.normal(size=(len(d), 7)) for d in dofs])
+    rows = PairRows(contacts, X)
+    whole = [contacts.observe(X)] + list(contacts.observe_tangential(X))
+    q, y, wd = rng.normal(size=X.shape[1]), rng.normal(size=contacts.n_points), \
+        rng.uniform(1.0, 2.0, contacts.n_points)
+    for kind, R in enumerate(whole):
+        np.testing.assert_allclose(rows.observe(q, kind), R @ q, rtol=1e-12,
+                                   atol=1e-12 * np.abs(R @ q).max())
+        np.testing.assert_allclose(rows.load(y, kind), R.T @ y, rtol=1e-12,
+                                   atol=1e-12 * np.abs(R.T @ y).max())
+    Kr = np.diag(rng.uniform(1.0, 2.0, X.shape[1]))
+    Cr, Ct, _ = whole
+    m = contacts.friction.m
+    for sliding, left in ((False, Cr), (True, Cr + m[:, None] * Ct)):
+        expected = Kr + (left.T * wd) @ Cr
+        np.testing.assert_allclose(rows.stiffness(Kr, wd, sliding), expected, rtol=1e-11,
+                                   atol=1e-12 * np.abs(expected).max())
+    expected = contact_gram(np.vstack(whole), np.tile(wd, 3))
+    np.testing.assert_allclose(rows.gram(wd), expected, rtol=1e-11,
+                               atol=1e-12 * np.abs(expected).max())
+    # the part tasks' gram of the rows on each part's loads E: C = Cc E^T
+    M = model.M
+    constant = np.zeros(model.ndof)
+    scale = np.tile(contacts.weights * law_tangent(pairs, contacts), 3)
+    stacked = sp.vstack([contacts.C] + list(contacts.tangential())).tocsr()
+    for (part_dofs, (name, _, _, interface, _)) in part_tasks(model, M, pairs, contacts, [],
+                                                              constant):
+        # with C = Cc E^T the part's rows, E G E^T = C^T diag(scale) C on the part
+        Cp = stacked[:, part_dofs]
+        touched = np.flatnonzero(np.diff(Cp.tocsc().indptr))
+        E = interface.E.toarray()[touched]
+        expected = (Cp.T @ sp.diags(scale) @ Cp).toarray()[np.ix_(touched, touched)]
+        np.testing.assert_allclose(E @ interface.G @ E.T, expected, rtol=1e-9,
+                                   atol=1e-10 * np.abs(expected).max(), err_msg=name)

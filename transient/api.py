@@ -49,7 +49,7 @@ def load(path, overrides=()):
     return _load(path, list(overrides))
 
 
-def prepare(case, workers=0, scheduler=None, cache=None, on_part=None):
+def prepare(case, workers=0, scheduler=None, cache=None, on_part=None, on_stage=None):
     """The stages of a case up to its time integration, in memory.
 
     The model, the contact pairs, the factorization, the preload, the linearization and,
@@ -72,6 +72,10 @@ def prepare(case, workers=0, scheduler=None, cache=None, on_part=None):
         alone).
     on_part : callable, optional
         ``on_part(name, seconds, cached)`` as each part is reduced or read back.
+    on_stage : callable, optional
+        ``on_stage(name, seconds, peak_gb)`` as each stage of the setup ends (the model, the
+        contact, the factorization, ..., and the components path's coupling), with the
+        process's peak memory so far [GB].
 
     Returns
     -------
@@ -83,12 +87,12 @@ def prepare(case, workers=0, scheduler=None, cache=None, on_part=None):
     """
     from .stages import prepare as prepare_stages
     from .reduce.parts import engine_for
-    with engine_for(case, workers, scheduler, cache, on_part) as parts:
+    with engine_for(case, workers, scheduler, cache, on_part, on_stage) as parts:
         return prepare_stages(case, parts=parts)
 
 
 def run(case, path=None, resume=False, progress=False, key=None, workers=0, scheduler=None,
-        cache=None, on_part=None):
+        cache=None, on_part=None, on_stage=None):
     """Integrate a case to ``solver.t_end``, streaming its history to an HDF5 file.
 
     Parameters
@@ -106,8 +110,9 @@ def run(case, path=None, resume=False, progress=False, key=None, workers=0, sche
     key : str, optional
         What errors call the path (the command line's ``-o``); by default ``path``, or
         ``output.file`` when the path is the case's.
-    workers, scheduler, cache, on_part
-        Where the components path reduces its parts, as `prepare` says.
+    workers, scheduler, cache, on_part, on_stage
+        Where the components path reduces its parts, and what is said meanwhile, as
+        `prepare` says.
 
     Returns
     -------
@@ -123,7 +128,7 @@ def run(case, path=None, resume=False, progress=False, key=None, workers=0, sche
         path = case.directory / (case.output.file or Path(case.path).with_suffix(".h5").name)
         key = key or "output.file"
     from .reduce.parts import engine_for
-    with engine_for(case, workers, scheduler, cache, on_part) as parts:
+    with engine_for(case, workers, scheduler, cache, on_part, on_stage) as parts:
         return run_case(case, Path(path), resume=resume, progress=progress, key=key or "path",
                         parts=parts)
 
@@ -207,7 +212,8 @@ def _pair_summary(pair):
     return out
 
 
-def cea(case, matrices=False, workers=0, scheduler=None, cache=None, on_part=None):
+def cea(case, matrices=False, workers=0, scheduler=None, cache=None, on_part=None,
+        on_stage=None):
     """Complex modes of a case at steady sliding with friction: which modes can squeal.
 
     The case's setup is linearized at its preload with the disc sliding; the complex modes
@@ -220,8 +226,9 @@ def cea(case, matrices=False, workers=0, scheduler=None, cache=None, on_part=Non
         From `load`.
     matrices : bool
         Also return the linearized mass, damping and stiffness the modes solve.
-    workers, scheduler, cache, on_part
-        Where the components path reduces its parts, as `prepare` says.
+    workers, scheduler, cache, on_part, on_stage
+        Where the components path reduces its parts, and what is said meanwhile, as
+        `prepare` says.
 
     Returns
     -------
@@ -247,7 +254,7 @@ def cea(case, matrices=False, workers=0, scheduler=None, cache=None, on_part=Non
     from .stability.stage import analyse
     from .reduce.parts import engine_for
     complex_modes.check(case)
-    with engine_for(case, workers, scheduler, cache, on_part) as parts:
+    with engine_for(case, workers, scheduler, cache, on_part, on_stage) as parts:
         result = analyse(case, matrices=matrices, parts=parts)
     if complex_modes.names(case) is None:
         return result

@@ -64,7 +64,7 @@ def prepare(case, check=None, built=None, unsampled=False, analysis=False, parts
     (the critical step's eigenvalues are dense work an analysis does not use).
     parts: where the components path reduces its parts (reduce.parts.Engine; None: here)."""
     with blas.one_thread(), heap.setup():
-        return _prepare(case, Stages(check), built or Built(None), unsampled, analysis, parts)
+        return _prepare(case, Stages(check, getattr(parts, "stage", None)), built or Built(None), unsampled, analysis, parts)
 
 
 def _band_keys(case, analysis):

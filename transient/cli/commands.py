@@ -46,12 +46,21 @@ def _tie_text(tie, pair):
 
 def _parts(args, quiet=False):
     """The API's keywords of where the components path reduces its parts, and a line on
-    standard error as each part is reduced (unless quiet)."""
+    standard error as each part is reduced (unless quiet) and, on a terminal, as each stage
+    of the setup ends: a long setup says where it is and what it holds."""
     def on_part(name, seconds, cached):
         print(f"part {name}: " + ("read back from the cache" if cached
                                   else f"reduced in {seconds:.1f} s"), file=sys.stderr)
+
+    def on_stage(name, seconds, peak_gb):
+        print(f"stage {name}: {seconds:.1f} s, peak {peak_gb:.2f} GB", file=sys.stderr)
     return {"workers": args.workers, "scheduler": args.scheduler, "cache": args.cache,
-            "on_part": None if quiet else on_part}
+            "on_part": None if quiet else on_part,
+            "on_stage": None if quiet or not _interactive() else on_stage}
+
+
+def _interactive():
+    return sys.stderr.isatty() and not os.environ.get("CI")
 
 
 def cmd_cea(args):
@@ -211,7 +220,7 @@ def _gap_text(gap0):
 
 def cmd_run(args):
     case = api.load(args.case, args.overrides)
-    quiet = args.quiet or args.json or os.environ.get("CI") or not sys.stderr.isatty()
+    quiet = args.quiet or args.json or not _interactive()
     result = api.run(case, args.output, resume=args.resume, progress=not quiet,
                      key="-o" if args.output else None, **_parts(args, quiet))
     if args.json:

@@ -17,17 +17,18 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from ..case.sizes import cells_by_part, setup_bytes
+from ..case.sizes import cells_by_part, peak_rss_gb, setup_bytes
 from ..contact.contactset import first_tangent
 from ..dynamics.critical import critical_tangent
 from ..errors import CaseError
 from ..model.dofs import free_block
 from ..solve import blas
 from ..solve.preload import Preload
-from .basis import Basis, contact_gram, flexible_shapes
+from .basis import Basis, flexible_shapes
 from .fields import part_rigid_motions, support_stiffness
 from .parts import Engine, PartError, PartInterface, PartTask
-from .sampling import PairBlocks, ReducedPreloadError, pair_gram, reduced_preload
+from .coupling import ALONG, PairRows
+from .sampling import ReducedPreloadError, reduced_preload
 
 
 def part_tasks(model, M, pairs, contacts, patterns, constant):
@@ -41,22 +42,22 @@ def part_tasks(model, M, pairs, contacts, patterns, constant):
     free = ~model.fixed
     f = contacts.friction
     scale = contacts.weights * law_tangent(pairs, contacts)
-    shape_of = None
+    kinds = 1 if f is None else 3
     if contacts.factors is not None:
-        L, B = contacts.factors
-        bases = [B] + ([f.along, f.across] if f is not None else [])
-        E_all = sp.hstack([sp.csr_matrix(b) for b in bases]).tocsr()
-        rows = sp.block_diag([sp.csr_matrix(L)] * len(bases)).tocsc()
-        # each column's compatible shape, -1 on a tied pair's (kept whole)
+        B = contacts.factors[1]
+        E_all = sp.hstack([sp.csr_matrix(b) for b in [B] + ([f.along, f.across] if f else [])])
+        E_all = E_all.tocsr()
         r = B.shape[1]
+        grams = _pair_grams(pairs, contacts, scale)
+        # each column's compatible shape, -1 on a tied pair's (kept whole)
         tied = np.concatenate([np.full(pair.factors[1].shape[1],
                                        pair.spec.law.kind == "bilateral") for pair in pairs])
-        shape_of = np.tile(np.where(tied, -1, np.arange(r)), len(bases))
+        shape_of = np.tile(np.where(tied, -1, np.arange(r)), kinds)
         support = support_stiffness(pairs, model.ndof)
     else:
-        bases = [contacts.C] + (list(contacts.tangential()) if f is not None else [])
-        E_all, rows = None, sp.vstack(bases).tocsc()
-    scale = np.tile(scale, len(bases))
+        E_all, rows = None, sp.vstack([contacts.C] + (list(contacts.tangential()) if f
+                                                      else [])).tocsc()
+        scale = np.tile(scale, kinds)
     loads = np.stack([constant] + list(patterns), axis=1)
     out = []
     for name in model.parts:
@@ -70,14 +71,16 @@ def part_tasks(model, M, pairs, contacts, patterns, constant):
             E = sp.csr_matrix((np.ones(len(cols)), (cols, np.arange(len(cols)))),
                               shape=(len(dofs), len(cols)))
             Cc, shape, block = Rp[:, cols], np.full(len(cols), -1), np.zeros(len(cols), int)
+            gram = (Cc.T @ sp.diags(np.maximum(scale, 0.0)) @ Cc).toarray()
         else:
             Ep = E_all[dofs].tocsc()
             cols = np.flatnonzero(np.diff(Ep.indptr))
-            E, Cc, shape, block = Ep[:, cols], rows[:, cols], shape_of[cols], cols // B.shape[1]
+            E, shape, block = Ep[:, cols], shape_of[cols], cols // r
+            gram = _gram_on(grams, cols % r, block)
         interface = None
         if len(cols):
             fields = (shape >= 0).any()
-            interface = PartInterface(sp.csc_matrix(E), _gram(Cc.tocsr(), scale), shape, block,
+            interface = PartInterface(sp.csc_matrix(E), gram, shape, block,
                                       free_block(support, dofs) if fields else None,
                                       part_rigid_motions(model.points, dofs) if fields
                                       else None)
@@ -85,10 +88,30 @@ def part_tasks(model, M, pairs, contacts, patterns, constant):
     return out
 
 
-def _gram(Cc, stiffness):
-    """basis.contact_gram (k, k) of the rows Cc (m, k) sparse, on those that touch the part."""
-    touch = np.flatnonzero(np.diff(Cc.indptr))
-    return contact_gram(Cc[touch].toarray(), stiffness[touch])
+def _pair_grams(pairs, contacts, scale):
+    """(offsets (pairs + 1,), [L_s^T diag(scale_s) L_s]) of each pair's factor L_s: the rows'
+    gram on the compatible shapes, block diagonal by pair, and the same along and across the
+    sliding (C = L B^T, Ct = L Bt^T, Cc = L Bc^T share L). Each pair's points see only its own
+    shapes, so no points x every shape product is formed."""
+    offsets = np.concatenate([[0], np.cumsum([pair.factors[0].shape[1] for pair in pairs])])
+    grams = []
+    for pair, s in zip(pairs, contacts.slices.values()):
+        L = np.asarray(pair.factors[0])
+        grams.append((L.T * np.maximum(scale[s], 0.0)) @ L)
+    return offsets, grams
+
+
+def _gram_on(grams, shape, block):
+    """The rows' gram (k, k) on a part's loads: the compatible shapes shape (k,) of the row
+    kinds block (k,) (normal, along, across); loads of other kinds or pairs do not meet."""
+    offsets, blocks = grams
+    pair = np.searchsorted(offsets, shape, side="right") - 1
+    gram = np.zeros((len(shape), len(shape)))
+    for kind, p in np.unique(np.stack([block, pair]), axis=1).T:
+        idx = np.flatnonzero((block == kind) & (pair == p))
+        j = shape[idx] - offsets[p]
+        gram[np.ix_(idx, idx)] = blocks[p][np.ix_(j, j)]
+    return gram
 
 
 def law_tangent(pairs, contacts):
@@ -106,7 +129,9 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
     engine = engine or Engine()
     check_parts(case, model, engine.budget())
     t0 = time.perf_counter()
+    say = _stages(engine, t0)
     tasks = part_tasks(model, M, pairs, contacts, patterns, constant)
+    say("part tasks")
     work = [PartTask(*task, reduction.modes_fmax, solver.shift_hz,
                      reduction.statics_tolerance, solver.linear_solver) for _, task in tasks]
     try:
@@ -116,23 +141,23 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
                         f"on its own ({exc}): is it held by constraints, or free to "
                         "move?") from None
     t_parts = time.perf_counter() - t0
+    say("parts")
     X = synthesis(model.ndof, [dofs for dofs, _ in tasks], [p.T for p in parts])
     Kr = sla.block_diag(*[p.Kr for p in parts])
     w = contacts.weights
     with blas.every_core():         # dense algebra in reduced coordinates, no solve beside it
-        Cr = contacts.observe(X)
-        tangential = (list(contacts.observe_tangential(X)) if contacts.friction is not None
-                      else [])
-        Ct = tangential[0] if tangential else None
-        blocks = PairBlocks(contacts, Cr, Ct)
-        preload = _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant, blocks)
-        K_lin = blocks.stiffness(Kr, w * preload.tangent, sliding=False)
+        rows = PairRows(contacts, X)
+        say("coupling rows")
+        preload = _preload(case, contacts, pairs, X, Kr, rows, constant)
+        say("coupling preload")
+        K_lin = rows.stiffness(Kr, w * preload.tangent, sliding=False)
         omega2, A = sla.eigh(0.5 * (K_lin + K_lin.T))
-        rows, stiffness = [Cr] + tangential, w * critical_tangent(contacts, preload.tangent)
         loads = X.T @ np.stack([constant] + list(patterns), axis=1)
         A, omega2, n_modes, n_shapes = condensed(
-            K_lin, omega2, A, reduction.modes_fmax, pair_gram(contacts, rows, stiffness),
-            loads, X.T @ (M @ preload.u), reduction.statics_tolerance)
+            K_lin, omega2, A, reduction.modes_fmax,
+            rows.gram(w * critical_tangent(contacts, preload.tangent)), loads,
+            X.T @ (M @ preload.u), reduction.statics_tolerance)
+        say("coupling modes")
     timings = {"parts": t_parts, "coupling": time.perf_counter() - t0 - t_parts,
                "part_seconds": {p.name: sum(p.seconds.values()) for p in parts},
                "part_stages": {p.name: p.seconds for p in parts},
@@ -146,6 +171,18 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
                   n_shapes, None, len(omega2) - n_modes, None,
                   np.sqrt(np.maximum(omega2[:n_modes], 0.0)) / (2 * np.pi))
     return basis, preload
+
+
+def _stages(engine, t0):
+    """say(name): engine.stage(name, seconds since the last, peak GB), or nothing."""
+    last = [t0]
+
+    def say(name):
+        if engine.stage is not None:
+            now = time.perf_counter()
+            engine.stage(name, now - last[0], peak_rss_gb())
+            last[0] = now
+    return say
 
 
 def synthesis(ndof, dofs, bases):
@@ -205,10 +242,10 @@ def check_parts(case, model, budget):
                             "mesh of the part")
 
 
-def _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant, blocks):
+def _preload(case, contacts, pairs, X, Kr, rows, constant):
     """The Preload of the coupled reduced model: Newton from the undeformed state, its first
     step at least at each pair's k (first_tangent: an exponential law is far softer at zero
-    gap than where the load takes it); blocks: the rows' PairBlocks."""
+    gap than where the load takes it); rows: the coupling's PairRows."""
     t0 = time.perf_counter()
     g0 = contacts.gap0
     if not np.any(constant):
@@ -217,10 +254,11 @@ def _preload(case, contacts, pairs, X, Kr, Cr, Ct, constant, blocks):
                        time.perf_counter() - t0)
     newton = case.solver.newton
     try:
-        q, g, p, kt, it, res = reduced_preload(Kr, X.T @ constant, Cr, contacts,
-                                               np.zeros(Kr.shape[0]), newton.tolerance,
-                                               newton.max_iter, Ct,
-                                               first_tangent(pairs, contacts), blocks)
+        q, g, p, kt, it, res = reduced_preload(
+            Kr, X.T @ constant, rows.operator(), contacts, np.zeros(Kr.shape[0]),
+            newton.tolerance, newton.max_iter,
+            rows.operator(ALONG) if contacts.friction is not None else None,
+            first_tangent(pairs, contacts), rows)
     except ReducedPreloadError as exc:
         raise CaseError(case.path, "loads", str(exc)) from None
     return Preload(X @ q, g, p, kt, it, res, time.perf_counter() - t0)

@@ -219,10 +219,12 @@ class PartTask:
 @dataclass(frozen=True)
 class Engine:
     """How the components path reduces its parts: on a Dask client (None: in this process),
-    through a cache folder (None: none), done(task, PartBasis) as each part is reduced."""
+    through a cache folder (None: none), done(task, PartBasis) as each part is reduced; and
+    stage(name, seconds, peak GB) as each stage of the setup ends (None: nothing said)."""
     client: object = None
     cache: object = None
     done: object = None
+    stage: object = None
 
     def budget(self):
         """The smallest worker's memory limit [B] on the cluster (None: in this process, or
@@ -317,13 +319,17 @@ def cached(runner, folder):
 
 
 @contextmanager
-def engine_for(case, workers=0, scheduler=None, cache=None, on_part=None):
+def engine_for(case, workers=0, scheduler=None, cache=None, on_part=None, on_stage=None):
     """The Engine of the components path for one call of the API (None: the parts in this
-    process, uncached), its Dask client closed at the end; on_part(name, seconds, cached) as
-    each part is done. Asked of an assembled case, the options are refused: its basis is made
+    process, uncached, nothing said), its Dask client closed at the end; on_part(name,
+    seconds, cached) as each part is done, on_stage(name, seconds, peak GB) as each stage of
+    the setup ends. Asked of an assembled case, the options are refused: its basis is made
     in this process, whole."""
+    done = None if on_part is None else (
+        lambda task, part: on_part(task.name, sum(part.seconds.values()),
+                                   "cache" in part.seconds))
     if not (workers or scheduler or cache):
-        yield None
+        yield None if done is None and on_stage is None else Engine(done=done, stage=on_stage)
         return
     reduction = case.solver.reduction
     if not (reduction.enabled and reduction.method == "components"):
@@ -336,15 +342,12 @@ def engine_for(case, workers=0, scheduler=None, cache=None, on_part=None):
         cache = Path(cache)
         if cache.exists() and not cache.is_dir():
             raise CaseError("command line", "--cache", f"{cache} is not a folder")
-    done = None if on_part is None else (
-        lambda task, part: on_part(task.name, sum(part.seconds.values()),
-                                   "cache" in part.seconds))
     client = cluster = None
     if workers or scheduler:
         check_cluster(scheduler, workers)
         client, cluster = client_for(scheduler, workers)
     try:
-        yield Engine(client, cache, done)
+        yield Engine(client, cache, done, on_stage)
     finally:
         if client is not None:
             client.close()

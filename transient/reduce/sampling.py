@@ -25,7 +25,6 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..solve.preload import STALE
-from .basis import contact_gram
 
 
 @dataclass(frozen=True)
@@ -259,7 +258,8 @@ def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter, Ct=None, start=None,
     tangent holds (dense and small here: exact Newton). start: (P,) the tangent the first step
     takes at least, with a backtracking line search (from the undeformed state, as
     solve_preload), or None (from a preload close by: plain Newton). blocks: with start, the
-    rows' PairBlocks (with Ct), which form the tangent; None: the whole rows."""
+    rows a pair at a time (reduce.coupling.PairRows, whose operators Cr and Ct are), which
+    form the tangent; None: the whole rows."""
     q = q.copy()
     scale = max(np.linalg.norm(fr), 1e-300)
     w = contacts.weights
@@ -319,45 +319,3 @@ def reduced_preload(Kr, fr, Cr, contacts, q, tol, max_iter, Ct=None, start=None,
             q = trial
     raise ReducedPreloadError(f"the preload in the reduced coordinates did not converge in "
                               f"{max_iter} Newton iterations (residual {res:.1e})")
-
-
-def _pair_columns(contacts, rows):
-    """(rows' slice, columns) of each pair: the columns where any of the rows (P, n) is not
-    zero on the pair's points (its two parts' shapes, in the parts' coordinates)."""
-    for s in contacts.slices.values():
-        seen = np.logical_or.reduce([np.any(R[s] != 0.0, axis=0) for R in rows])
-        yield s, np.flatnonzero(seen)
-
-
-class PairBlocks:
-    """The contact stiffness of reduced coordinates a pair at a time: in the parts'
-    coordinates a pair's rows see only its two parts' shapes, so Cr^T diag(wd) Cr (and the
-    steady sliding's Ct^T diag(wd m) Cr) is a sum of blocks that small. The rows' blocks are
-    cut once, for every Newton iteration and the linearized stiffness after it."""
-
-    def __init__(self, contacts, Cr, Ct=None):
-        self.blocks = []
-        for s, c in _pair_columns(contacts, [Cr] + ([] if Ct is None else [Ct])):
-            normal = Cr[s][:, c]
-            rows = (normal if Ct is None
-                    else normal + contacts.friction.m[s, None] * Ct[s][:, c])
-            self.blocks.append((s, np.ix_(c, c), normal, rows))
-
-    def stiffness(self, Kr, wd, sliding=True):
-        """Kr + the contact's tangent at the points' law stiffness wd (P,); sliding=False:
-        its normal part alone, without the steady sliding's friction (symmetric)."""
-        K = Kr.copy()
-        for s, block, normal, rows in self.blocks:
-            K[block] += ((rows if sliding else normal).T * wd[s]) @ normal
-        return K
-
-
-def pair_gram(contacts, rows, d):
-    """basis.contact_gram of the rows stacked (sum over R of R^T diag(d) R, d (P,)), a pair's
-    block at a time (as PairBlocks): the rows in the parts' coordinates."""
-    n = rows[0].shape[1]
-    gram = np.zeros((n, n))
-    for s, c in _pair_columns(contacts, rows):
-        gram[np.ix_(c, c)] += contact_gram(np.vstack([R[s][:, c] for R in rows]),
-                                           np.tile(d[s], len(rows)))
-    return gram

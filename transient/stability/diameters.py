@@ -25,6 +25,9 @@ AXIAL_SHARE = 0.75
 # (still: the part does not move at all in the mode)
 OUT_OF_PLANE, IN_PLANE, MIXED, STILL = "out-of-plane", "in-plane", "mixed", "still"
 
+# the bytes of the block of Fourier rows formed at a time
+FOURIER_BYTES = 64 * 2**20
+
 
 def disc_motion(model, motion, U):
     """One dict per displacement U[:, j] (ndof, k complex) of the model: on the part that the
@@ -48,9 +51,8 @@ def disc_motion(model, motion, U):
     e_axial = mass @ np.abs(axial) ** 2
     e_total = e_axial + sum(mass @ np.abs(w) ** 2 for w in planar)
     axial_share = e_axial / np.maximum(e_total, 1e-300)
-    E = _fourier(theta)
-    n_axial, s_axial = _order(E, mass, [axial])
-    n_planar, s_planar = _order(E, mass, planar)
+    n_axial, s_axial = _order(theta, mass, [axial])
+    n_planar, s_planar = _order(theta, mass, planar)
     out = []
     for j, a in enumerate(axial_share):
         kind = (STILL if e_total[j] == 0 else OUT_OF_PLANE if a >= AXIAL_SHARE else
@@ -63,28 +65,47 @@ def disc_motion(model, motion, U):
     return out
 
 
-def _fourier(theta):
-    """E (orders, nodes): E[n] = exp(-i n theta), n up to half the distinct angles of the nodes
+def _orders(theta):
+    """The circumferential orders the nodes' angles tell apart: 0 to half the distinct angles
     (beyond, orders alias: N - n is n again)."""
-    angles = len(np.unique(np.round(theta, 6)))
-    # as powers of E[1] (a product a row: one exp a node instead of one per order and node,
-    # 0.1 s on pad_disc's disc)
-    E = np.empty((max(angles // 2, 1) + 1, len(theta)), complex)
-    E[0] = 1.0
-    E[1:] = np.exp(-1j * theta)
-    np.cumprod(E, axis=0, out=E)
-    return E
+    return max(len(np.unique(np.round(theta, 6))) // 2, 1) + 1
 
 
-def _order(E, mass, W):
+def _order(theta, mass, W):
     """(n (k,), share (k,)): the circumferential order of largest power summed over the
-    components W (each (nodes, k)), and its share of the power of all orders."""
-    c = 0.0
-    for w in W:
-        mw = mass[:, None] * w
-        # an order n and its mirror -n are one nodal diameter: a standing or travelling wave;
-        # conj(E) w as conj(E conj(w)), the same numbers: no conjugate copy of E
-        c = c + np.abs(E @ mw) ** 2
-        c[1:] += np.abs(E[1:] @ mw.conj()) ** 2
-    n = np.argmax(c, axis=0)
-    return n, c[n, np.arange(len(n))] / np.maximum(c.sum(axis=0), 1e-300)
+    components W (each (nodes, k)), and its share of the power of all orders. The orders'
+    Fourier rows are made a block at a time (FOURIER_BYTES): on a fine disc they are tens of
+    thousands of orders by its nodes, gigabytes held whole."""
+    k = W[0].shape[1]
+    if k == 0:
+        return np.zeros(0, int), np.zeros(0)
+    orders = _orders(theta)
+    step = np.exp(-1j * theta)
+    block = max(1, FOURIER_BYTES // (16 * len(theta)))
+    mws = [mass[:, None] * w for w in W]
+    best, power, total = np.zeros(k, int), np.full(k, -1.0), np.zeros(k)
+    E = None
+    for start in range(0, orders, block):
+        stop = min(start + block, orders)
+        # E[n] = E[n-1] E[1] row after row, from E[start-1]: the same products as one
+        # cumulative product over every order
+        rows = np.empty((stop - start + 1, len(theta)), complex)
+        rows[0] = 1.0 if E is None else E[-1]
+        rows[1:] = step
+        np.cumprod(rows, axis=0, out=rows)
+        E = rows[1:] if start else rows[:-1]
+        c = 0.0
+        for mw in mws:
+            # an order n and its mirror -n are one nodal diameter: a standing or travelling
+            # wave; conj(E) w as conj(E conj(w)), the same numbers: no conjugate copy of E
+            c = c + np.abs(E @ mw) ** 2
+            mirror = np.abs(E @ mw.conj()) ** 2
+            if start == 0:
+                mirror[0] = 0.0
+            c = c + mirror
+        n = np.argmax(c, axis=0)
+        top = c[n, np.arange(k)]
+        better = top > power
+        best[better], power[better] = n[better] + start, top[better]
+        total += c.sum(axis=0)
+    return best, power / np.maximum(total, 1e-300)
