@@ -106,9 +106,15 @@ def test_pad_disc_preload_and_modes_match_the_assembled_path():
     ua, uc = (s.basis[0] @ (s.basis[1] @ s.state.q) for s in (a, c))
     assert np.linalg.norm(uc - ua) <= 1e-3 * np.linalg.norm(ua)
     # the band's modes in the whole model: the assembled basis holds the structure's own
-    # (to the Lanczos' tolerance); the parts' modes and interface shapes approximate them
+    # (to the Lanczos' tolerance); the parts' modes and interface shapes approximate them.
+    # Measured as the displacement their residual makes, K_lin^-1 (K_lin x - omega^2 M x)
+    # against x in the mass norm (the whole model's solve, which the components path has
+    # not): its force residual in M^-1's norm is the contact pressure's detail, large on a
+    # pad riding its contact springs whatever the motion's error
     assert a.meta["band_residual"] < 1e-4
-    assert c.meta["band_residual"] < 0.1
+    assert 0.0 <= c.meta["band_residual"] < 1.0
+    assert _shape_error(load(PAD, SMALL + ['solver.reduction.method="components"']),
+                        fmax) < 2e-3
     assert c.meta["reduction_method"] == "components"
     # each part's interface statics: what the flexibility criterion dropped is below its
     # tolerance, and the contact's directions on the part are not all kept
@@ -117,6 +123,29 @@ def test_pad_disc_preload_and_modes_match_the_assembled_path():
     assert sorted(interfaces) == ["disc", "pad"]
     for i in interfaces.values():
         assert 0 < i["kept"] <= i["fields"] <= i["loads"] and 0.0 <= i["statics_error"] < tol
+
+
+def _shape_error(case, fmax):
+    """The largest over the band's reduced modes x = T a of |K_lin^-1 r|_M / |x|_M, r =
+    K_lin x - omega^2 M x on the whole model's free dofs, K_lin with the contact's tangent at
+    the preload: on the rule's candidates (the unsampled model, on which the basis is made)."""
+    import scipy.sparse.linalg as spl
+    from transient.reduce.stage import reduction_mass
+    setup = prepare(case, unsampled=True, analysis=True)
+    red = setup.unsampled or setup
+    model, system = red.model, red.system
+    band = np.flatnonzero(system.omega2 <= (2 * np.pi * fmax) ** 2)
+    x = red.basis[0] @ red.basis[1][:, band]
+    contacts = system.contacts
+    C = contacts.C
+    free = ~model.fixed
+    K = (model.K + C.T @ sp.diags(contacts.weights * system.tangent) @ C).tocsc()
+    K = K[free][:, free]
+    M = reduction_mass(case, model, None)[0].tocsc()[free][:, free]
+    xf = x[free]
+    y = spl.splu(K).solve(K @ xf - (M @ xf) * system.omega2[band])
+    return float(np.max(np.sqrt(np.einsum("ij,ij->j", y, M @ y)
+                                / np.einsum("ij,ij->j", xf, M @ xf))))
 
 
 def test_a_basis_at_another_friction_is_refused_with_components():

@@ -30,6 +30,12 @@ from .parts import Engine, PartError, PartInterface, PartTask
 from .coupling import ALONG, PairRows
 from .sampling import ReducedPreloadError, reduced_preload
 
+# how far beyond the basis' cutoff each part's modes and interface fields reach: the coupled
+# modes to the cutoff are only as exact as the parts' bases reach past it (component modes
+# beyond the band the assembly keeps), while the coupling's condensation stays at the cutoff,
+# so the reduced model grows little (docs/performance.md: the band modes' shape errors)
+PART_REACH = 2.0
+
 
 def part_tasks(model, M, pairs, contacts, patterns, constant):
     """(dofs, (name, K, M, interface, loads)) of each part: the arguments of part_basis on
@@ -132,7 +138,7 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
     say = _stages(engine, t0)
     tasks = part_tasks(model, M, pairs, contacts, patterns, constant)
     say("part tasks")
-    work = [PartTask(*task, reduction.modes_fmax, solver.shift_hz,
+    work = [PartTask(*task, PART_REACH * reduction.modes_fmax, solver.shift_hz,
                      reduction.statics_tolerance, solver.linear_solver) for _, task in tasks]
     try:
         parts = engine.run(work)
