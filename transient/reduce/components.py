@@ -34,7 +34,7 @@ from .sampling import ReducedPreloadError, reduced_preload
 # modes to the cutoff are only as exact as the parts' bases reach past it (component modes
 # beyond the band the assembly keeps), while the coupling's condensation stays at the cutoff,
 # so the reduced model grows little (docs/performance.md: the band modes' shape errors)
-PART_REACH = 2.0
+PART_REACH = 1.5
 
 
 def part_tasks(model, M, pairs, contacts, patterns, constant):
