@@ -62,9 +62,11 @@ def prepare(case, check=None, built=None, unsampled=False, analysis=False, parts
     candidates (Setup.unsampled), the cea's, from the same stages. analysis: the system is
     linearized, not integrated (the cea's): it gets no critical step and the Setup no rows0
     (the critical step's eigenvalues are dense work an analysis does not use).
-    parts: where the components path reduces its parts (reduce.parts.Engine; None: here)."""
+    parts: where the components path reduces its parts (reduce.parts.Engine; None: here),
+    and its stage(name, seconds, peak GB) said as each stage ends."""
     with blas.one_thread(), heap.setup():
-        return _prepare(case, Stages(check, getattr(parts, "stage", None)), built or Built(None), unsampled, analysis, parts)
+        stages = Stages(check, getattr(parts, "stage", None))
+        return _prepare(case, stages, built or Built(None), unsampled, analysis, parts)
 
 
 def _band_keys(case, analysis):
