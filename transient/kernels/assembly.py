@@ -39,6 +39,26 @@ def _jacobian(X, nodes, dN, J):
 
 
 @njit
+def _gradients(X, nodes, dN, J, G):
+    """G[a, i] = dN_a / dx_i at one point (G (nen, 3)); returns det J (J: _jacobian's)."""
+    det = _jacobian(X, nodes, dN, J)
+    for a in range(nodes.shape[0]):
+        for i in range(3):
+            G[a, i] = dN[a, 0] * J[i, 0] + dN[a, 1] * J[i, 1] + dN[a, 2] * J[i, 2]
+    return det
+
+
+@njit
+def _mirror(Ke, nen):
+    """The blocks below the diagonal from those above: the kernels fill b >= a only."""
+    for a in range(nen):
+        for b in range(a + 1, nen):
+            for i in range(3):
+                for j in range(3):
+                    Ke[3 * b + j, 3 * a + i] = Ke[3 * a + i, 3 * b + j]
+
+
+@njit
 def stiffness_blocks(X, conn, dN, w, lam, mu, blocks, min_det):
     """Stiffness of every cell into blocks (ne, 3 nen, 3 nen); min det J per cell into min_det.
 
@@ -55,11 +75,8 @@ def stiffness_blocks(X, conn, dN, w, lam, mu, blocks, min_det):
         Ke[:, :] = 0.0
         md = np.inf
         for g in range(ng):
-            det = _jacobian(X, nodes, dN[g], J)
+            det = _gradients(X, nodes, dN[g], J, G)
             md = min(md, det)
-            for a in range(nen):
-                for i in range(3):
-                    G[a, i] = dN[g, a, 0] * J[i, 0] + dN[g, a, 1] * J[i, 1] + dN[g, a, 2] * J[i, 2]
             c = w[g] * det
             cl = c * lam[e]
             cm = c * mu[e]
@@ -78,11 +95,7 @@ def stiffness_blocks(X, conn, dN, w, lam, mu, blocks, min_det):
                     Ke[r + 2, q] += cl * ga2 * gb0 + cm * ga0 * gb2
                     Ke[r + 2, q + 1] += cl * ga2 * gb1 + cm * ga1 * gb2
                     Ke[r + 2, q + 2] += cl * ga2 * gb2 + cm * ga2 * gb2 + s
-        for a in range(nen):
-            for b in range(a + 1, nen):
-                for i in range(3):
-                    for j in range(3):
-                        Ke[3 * b + j, 3 * a + i] = Ke[3 * a + i, 3 * b + j]
+        _mirror(Ke, nen)
         min_det[e] = md
 
 
@@ -103,11 +116,8 @@ def anisotropic_stiffness_blocks(X, conn, dN, w, D, blocks, min_det):
         Ke[:, :] = 0.0
         md = np.inf
         for g in range(ng):
-            det = _jacobian(X, nodes, dN[g], J)
+            det = _gradients(X, nodes, dN[g], J, G)
             md = min(md, det)
-            for a in range(nen):
-                for i in range(3):
-                    G[a, i] = dN[g, a, 0] * J[i, 0] + dN[g, a, 1] * J[i, 1] + dN[g, a, 2] * J[i, 2]
             Dg = D[e, g if per_point else 0]
             c = w[g] * det
             for b in range(nen):
@@ -128,11 +138,7 @@ def anisotropic_stiffness_blocks(X, conn, dN, w, D, blocks, min_det):
                                                      + g0 * DB[b, 5, j])
                         Ke[3 * a + 2, 3 * b + j] += (g2 * DB[b, 2, j] + g1 * DB[b, 3, j]
                                                      + g0 * DB[b, 4, j])
-        for a in range(nen):
-            for b in range(a + 1, nen):
-                for i in range(3):
-                    for j in range(3):
-                        Ke[3 * b + j, 3 * a + i] = Ke[3 * a + i, 3 * b + j]
+        _mirror(Ke, nen)
         min_det[e] = md
 
 
