@@ -91,8 +91,10 @@ def test_pad_disc_preload_and_modes_match_the_assembled_path():
     the preload solved in the coupled reduced coordinates carries the assembled preload's
     contact force and displacement, and the reduced frequencies below fmax match the
     assembled basis' within 0.1%, without a factorization of the whole model."""
-    setups = {m: prepare(load(PAD, SMALL + [f'solver.reduction.method="{m}"']), analysis=True)
-              for m in ("assembled", "components")}
+    cases = {m: load(PAD, SMALL + [f'solver.reduction.method="{m}"'])
+             for m in ("assembled", "components")}
+    setups = {m: prepare(case, analysis=True, unsampled=m == "components")
+              for m, case in cases.items()}
     a, c = setups["assembled"], setups["components"]
     assert "factorization" in a.stages and "factorization" not in c.stages
     assert c.meta["preload_residual"] < 1e-9
@@ -113,8 +115,7 @@ def test_pad_disc_preload_and_modes_match_the_assembled_path():
     # pad riding its contact springs whatever the motion's error
     assert a.meta["band_residual"] < 1e-4
     assert 0.0 <= c.meta["band_residual"] < 1.0
-    assert _shape_error(load(PAD, SMALL + ['solver.reduction.method="components"']),
-                        fmax) < 2e-3
+    assert _shape_error(cases["components"], c, fmax) < 2e-3
     assert c.meta["reduction_method"] == "components"
     # each part's interface statics: what the flexibility criterion dropped is below its
     # tolerance, and the contact's directions on the part are not all kept
@@ -125,13 +126,13 @@ def test_pad_disc_preload_and_modes_match_the_assembled_path():
         assert 0 < i["kept"] <= i["fields"] <= i["loads"] and 0.0 <= i["statics_error"] < tol
 
 
-def _shape_error(case, fmax):
+def _shape_error(case, setup, fmax):
     """The largest over the band's reduced modes x = T a of |K_lin^-1 r|_M / |x|_M, r =
     K_lin x - omega^2 M x on the whole model's free dofs, K_lin with the contact's tangent at
-    the preload: on the rule's candidates (the unsampled model, on which the basis is made)."""
+    the preload: on the rule's candidates (the unsampled model, on which the basis is made;
+    setup: prepare's of the case with unsampled=True)."""
     import scipy.sparse.linalg as spl
     from transient.reduce.stage import reduction_mass
-    setup = prepare(case, unsampled=True, analysis=True)
     red = setup.unsampled or setup
     model, system = red.model, red.system
     band = np.flatnonzero(system.omega2 <= (2 * np.pi * fmax) ** 2)

@@ -20,6 +20,7 @@ class PairRows:
     [normal, along, across] dense (points, columns)), the tangential ones with friction."""
 
     def __init__(self, contacts, X):
+        """X (ndof, N) sparse: the parts' bases side by side (components.synthesis)."""
         f = contacts.friction
         self.shape = (contacts.n_points, X.shape[1])
         self.m = None if f is None else f.m
@@ -28,7 +29,7 @@ class PairRows:
             # C = L B^T: B^T X is small (compatible shapes x columns); a pair's points take
             # the factor columns of its own shapes
             L, B = contacts.factors
-            BX = [_dense(b.T @ X) for b in [B] + ([f.along, f.across] if f else [])]
+            BX = [(b.T @ X).toarray() for b in [B] + ([f.along, f.across] if f else [])]
             for s in contacts.slices.values():
                 Ls = L[s]
                 r = np.flatnonzero(np.any(Ls != 0.0, axis=0))
@@ -40,10 +41,6 @@ class PairRows:
                 Y = [sp.csc_matrix(R[s] @ X) for R in rows]
                 c = np.flatnonzero(np.logical_or.reduce([np.diff(y.indptr) > 0 for y in Y]))
                 self.blocks.append((s, c, [y[:, c].toarray() for y in Y]))
-
-    @property
-    def nbytes(self):
-        return sum(b.nbytes for _, _, rows in self.blocks for b in rows)
 
     def observe(self, q, kind=NORMAL):
         """(P,) the rows of that kind times the reduced coordinates q (N,)."""
@@ -88,7 +85,3 @@ class PairRows:
 def _seen(rows):
     """The columns where any of the rows is not zero."""
     return np.flatnonzero(np.logical_or.reduce([np.any(R != 0.0, axis=0) for R in rows]))
-
-
-def _dense(Y):
-    return Y.toarray() if sp.issparse(Y) else np.asarray(Y)
