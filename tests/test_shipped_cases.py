@@ -253,23 +253,26 @@ def test_pad_disc_schemes_agree_below_5khz():
             assert np.sqrt(np.mean((x - y) ** 2) / np.mean((x - x[0]) ** 2)) < 0.01
 
 
-def test_pad_disc_squeal_grows_as_its_complex_modes(tmp_path, capsys):
+def test_pad_disc_squeal_grows_as_its_complex_modes():
     """The squeal case's first 28 ms, the linear growth from its 2 mN tap: the transient's
     dominant frequency (its analytic signal's phase) is the fastest-growing complex mode's
     within 1%, and its growth rate, fitted on the pad sensor's envelope and on the kinetic
     energy over 15-25 ms (where that mode dominates the other unstable one, 243 against 408
-    1/s), its real part within 5% (5e-5, 0.6% and 0.5% measured at the case's step)."""
+    1/s), its real part within 5% (5e-5, 0.6% and 0.5% measured at the case's step). One
+    setup for both: the run's, whose unsampled rule is the analysis's (`transient cea`)."""
     from scipy.signal import hilbert
     from transient.plots.signals import envelope, growth_rate
-    case = str(CASES / "pad_disc_squeal.toml")
-    assert main(["cea", case, "--json"]) == 0
-    modes = [m for m in json.loads(capsys.readouterr().out)["modes"] if m["unstable"]]
-    fastest = max(modes, key=lambda m: m["real"])
+    from transient.stability.stage import analysis_of
+    from transient.stages import choose_dt, simulate
+    case = load(CASES / "pad_disc_squeal.toml")
+    setup = prepare(case, unsampled=True)
+    modes = analysis_of(case, setup.unsampled).summary()["modes"]
+    fastest = max((m for m in modes if m["unstable"]), key=lambda m: m["real"])
     assert 9e3 < fastest["frequency_hz"] < 11e3
-    out = tmp_path / "squeal.h5"
-    assert main(["run", case, "-o", str(out), "--quiet", "--set", "solver.t_end=0.028"]) == 0
-    with h5py.File(out) as f:
-        t, x, kinetic = f["time"][()], f["sensors/pad_back"][()], f["energy/kinetic"][()]
+    step = choose_dt(case, setup)
+    series, status, _ = simulate(case, setup, step, int(round(0.028 / step)), case.output.every)
+    assert status == "complete"
+    t, x, kinetic = series["time"], series["sensors/pad_back"], series["energy/kinetic"]
     dt = t[1] - t[0]
     window = (t > 15e-3) & (t < 25e-3)
     # the frequency from the analytic signal's phase (a spectrum of 10 ms resolves 100 Hz)
@@ -282,32 +285,45 @@ def test_pad_disc_squeal_grows_as_its_complex_modes(tmp_path, capsys):
     assert rate == pytest.approx(fastest["real"], rel=5e-2)
 
 
-def _cycle_run(case, setup, dt, lead, span):
-    """(pad sensor, energies, q) of the squeal case over [lead, lead + span] at step dt,
-    a row a step (the balance below is then the kernel's own sums), after `lead` unstored."""
-    step = stepper(case, setup.system, dt)
-    state = setup.state.copy()
-    n_lead, n_span = int(round(lead / dt)), int(round(span / dt))
-    assert step(state, n_lead, n_lead, buffer(setup.system, 1, False)) == (0, n_lead)
-    out = buffer(setup.system, n_span, False)
-    assert step(state, n_span, 1, out) == (0, n_span)
+def _lead(case, setup, state, dt, lead):
+    """Step state on by `lead` [s] at step dt, nothing stored."""
+    n = int(round(lead / dt))
+    assert stepper(case, setup.system, dt)(state, n, n, buffer(setup.system, 1, False)) == (0, n)
+
+
+def _cycle_run(case, setup, state, dt, lead, span):
+    """(pad sensor, energies, q) of the squeal case over `span` at step dt after `lead`
+    unstored, from state (stepped on), a row a step (the balance below is then the kernel's
+    own sums)."""
+    _lead(case, setup, state, dt, lead)
+    n = int(round(span / dt))
+    out = buffer(setup.system, n, False)
+    assert stepper(case, setup.system, dt)(state, n, 1, out) == (0, n)
     names = setup.system.sensor_names
     return out.sensors[:, names.index("pad_back")], out.energy, out.sensors[:, len(names):]
 
 
 def test_pad_disc_squeal_limit_cycle_holds_under_half_the_step():
     """The squeal case's limit cycle (9.41 kHz with the other mode at 10.91 kHz, from 0.1 s):
-    over 0.15-0.17 s the pad's RMS changes by less than 1% when dt is halved (0.28% measured),
-    and the energy balance closes within 1% of the sliding's input in every cycle: the
-    kernel's own residual dW - dD - dE (work of the loads and the sliding in, damping and slip
-    out) against the input, the work in less the piston's (0.27% at most measured at the
-    case's step, 0.09% on average; 0.045% and 0.019% at half the step). About a minute."""
+    over 0.15-0.17 s the pad's RMS changes by less than 1% when dt is halved, and the energy
+    balance closes within 1% of the sliding's input in every cycle: the kernel's own residual
+    dW - dD - dE (work of the loads and the sliding in, damping and slip out) against the
+    input, the work in less the piston's (0.27% at most measured at the case's step, 0.09% on
+    average; 0.045% and 0.019% at half the step from rest). The half step starts on the cycle
+    at 0.13 s, 20 ms (five times the growth's time constant) before its window: its RMS is
+    0.18% from the case step's, 0.22% from a half step's from rest, and the windows of the
+    two from rest differ by 0.40%. About a minute."""
     case = load(CASES / "pad_disc_squeal.toml", ["output.field=true"])
     setup = prepare(case)
     piston = setup.system.patterns[list(case.loads).index("piston")]
+    dt = case.solver.dt
+    state = setup.state.copy()
+    _lead(case, setup, state, dt, 0.13)
+    branch = state.copy()
+    runs = [_cycle_run(case, setup, state, dt, 0.02, 0.02),
+            _cycle_run(case, setup, branch, dt / 2, 0.02, 0.02)]
     rms, balance = [], []
-    for dt in (case.solver.dt, case.solver.dt / 2):
-        x, e, q = _cycle_run(case, setup, dt, 0.15, 0.02)
+    for x, e, q in runs:
         rms.append(np.std(x))
         # cycles between up-crossings of the pad's motion about its mean
         up = np.flatnonzero((x[:-1] < x.mean()) & (x[1:] >= x.mean()))
