@@ -254,6 +254,24 @@ def test_nodal_diameter_of_a_disc_wave():
         assert shares["disc"] == pytest.approx(1.0) and shares["pad"] == 0.0
 
 
+def test_nodal_diameters_on_scattered_nodes_count_the_orders_they_sample():
+    """On nodes scattered over an annulus (an unstructured mesh: every angle distinct) the
+    orders summed stop at pi R / d (d their median spacing), not at half the nodes, and a
+    wave cos(4 theta) is 4 nodal diameters carrying nearly all of it (half, summed over every
+    order to half the nodes: the rest is the scattered sampling's leakage)."""
+    from scipy.spatial import cKDTree
+    from transient.stability.diameters import _order, _orders
+    rng = np.random.default_rng(3)
+    r, theta = np.sqrt(rng.uniform(0.05 ** 2, 0.14 ** 2, 4000)), rng.uniform(-np.pi, np.pi, 4000)
+    x = np.stack([r * np.cos(theta), r * np.sin(theta), rng.uniform(0, 0.02, 4000)], axis=1)
+    orders = _orders(theta, x, r)
+    step = np.median(cKDTree(x).query(x, k=2)[0][:, 1])
+    assert orders == int(np.ceil(np.pi * r.max() / step)) + 1
+    assert 10 < orders < 4000 // 20
+    n, share = _order(theta, np.full(4000, 1.0), [np.cos(4 * theta)[:, None]], orders)
+    assert n[0] == 4 and share[0] > 0.9
+
+
 @pytest.mark.parametrize("basis", [[], ["contact.pad_disc.friction.basis_mu=0.3"]])
 def test_plot_cea_draws_the_diagram_the_unstable_shapes_and_the_mu_map(tmp_path, capsys,
                                                                       basis):

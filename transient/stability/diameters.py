@@ -13,6 +13,7 @@ order: a count of the axial motion would describe a minor part of it (an in-plan
 Poisson motion gave "340 nodal diameters, 3% of its axial motion").
 """
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..mesh.mesh import unit
 
@@ -42,6 +43,7 @@ def disc_motion(model, motion, U):
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(axis, e1)
     theta = np.arctan2(x @ e2, x @ e1)
+    orders = _orders(theta, x, np.hypot(x @ e1, x @ e2))
     radial = np.cos(theta)[:, None] * e1 + np.sin(theta)[:, None] * e2
     tangential = np.cross(axis, radial)
     u = np.asarray(U)[dofs].reshape(len(theta), 3, -1)
@@ -51,8 +53,8 @@ def disc_motion(model, motion, U):
     e_axial = mass @ np.abs(axial) ** 2
     e_total = e_axial + sum(mass @ np.abs(w) ** 2 for w in planar)
     axial_share = e_axial / np.maximum(e_total, 1e-300)
-    n_axial, s_axial = _order(theta, mass, [axial])
-    n_planar, s_planar = _order(theta, mass, planar)
+    n_axial, s_axial = _order(theta, mass, [axial], orders)
+    n_planar, s_planar = _order(theta, mass, planar, orders)
     out = []
     for j, a in enumerate(axial_share):
         kind = (STILL if e_total[j] == 0 else OUT_OF_PLANE if a >= AXIAL_SHARE else
@@ -65,21 +67,28 @@ def disc_motion(model, motion, U):
     return out
 
 
-def _orders(theta):
-    """The circumferential orders the nodes' angles tell apart: 0 to half the distinct angles
-    (beyond, orders alias: N - n is n again)."""
-    return max(len(np.unique(np.round(theta, 6))) // 2, 1) + 1
+def _orders(theta, points, radius):
+    """The count of circumferential orders, 0 up, that the nodes tell apart: those below half
+    the distinct angles (beyond, orders alias: N - n is n again), and below pi R / d, R the
+    largest radius and d the median distance from a node to its nearest: an order of shorter
+    wavelength than two such steps around the rim is not sampled by the mesh, its Fourier row
+    reads where the nodes happen to lie (an unstructured mesh has as many angles as nodes)."""
+    distinct = max(len(np.unique(np.round(theta, 6))) // 2, 1) + 1
+    if len(points) < 2:
+        return distinct
+    step = np.median(cKDTree(points).query(points, k=2)[0][:, 1])
+    resolved = int(np.ceil(np.pi * radius.max() / step)) + 1 if step > 0 else distinct
+    return min(distinct, resolved)
 
 
-def _order(theta, mass, W):
+def _order(theta, mass, W, orders):
     """(n (k,), share (k,)): the circumferential order of largest power summed over the
-    components W (each (nodes, k)), and its share of the power of all orders. The orders'
-    Fourier rows are made a block at a time (FOURIER_BYTES): on a fine disc they are tens of
-    thousands of orders by its nodes, gigabytes held whole."""
+    components W (each (nodes, k)), and its share of the power of the `orders` first orders
+    (_orders). Their Fourier rows are made a block at a time (FOURIER_BYTES): on a fine disc
+    they are thousands of orders by its nodes, gigabytes held whole."""
     k = W[0].shape[1]
     if k == 0:
         return np.zeros(0, int), np.zeros(0)
-    orders = _orders(theta)
     step = np.exp(-1j * theta)
     block = max(1, FOURIER_BYTES // (16 * len(theta)))
     mws = [mass[:, None] * w for w in W]
