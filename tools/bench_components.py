@@ -5,16 +5,18 @@ the reduced dofs, each part's stages, the contact-linearized frequencies below f
 system the analysis solves (the sampled rules' candidates: each method samples its own points
 for a run, which moves a run's K_lin, not the cea's), and the unstable modes of components
 against assembled (frequency, and real part against 2% of its own size or 5 1/s: issue 45's
-allowance).
+allowance). With --run T, each method's `transient run` to T (the case's own friction): its
+sensors' RMS about their mean, components against assembled.
 
-    python tools/bench_components.py [CASE] [--mu 0.4] [--repeat 1] [--set key=value ...]
-                                     [--markdown FILE] [--json FILE]
+    python tools/bench_components.py [CASE] [--mu 0.4] [--repeat 1] [--run T]
+                                     [--set key=value ...] [--markdown FILE] [--json FILE]
 """
 import argparse
 import json
 import os
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -56,6 +58,31 @@ def analysed(case, overrides, method):
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+def run_rms(case, overrides, method, t_end):
+    """{sensor: RMS about its mean} of the case's `transient run` to t_end by method, and
+    the run's energy drift."""
+    import h5py
+    with tempfile.TemporaryDirectory(prefix="bench_components_") as tmp:
+        out = Path(tmp) / "run.h5"
+        args = [sys.executable, "-m", "transient", "run", str(case), "-o", str(out),
+                "--quiet", "--json", "--set", f"solver.t_end={t_end!r}", "--set",
+                f'solver.reduction.method="{method}"']
+        for o in overrides:
+            args += ["--set", o]
+        done = subprocess.run(args, cwd=ROOT, capture_output=True, text=True)
+        if done.returncode != 0:
+            sys.exit(f"run with {method} failed ({done.returncode}): {done.stderr.strip()}")
+        with h5py.File(out) as f:
+            rms = {name: float(np.std(f["sensors"][name][()])) for name in f["sensors"]}
+    return rms, json.loads(done.stdout)["energy_drift"]
+
+
+def runs_compared(case, overrides, t_end):
+    """Rows (sensor, assembled RMS, components RMS, relative difference) and the drifts."""
+    (a, da), (c, dc) = (run_rms(case, overrides, m, t_end) for m in METHODS)
+    return [(name, a[name], c[name], abs(c[name] - a[name]) / a[name]) for name in a], da, dc
+
+
 def linearized_error(ref, other):
     """The worst relative error of other's contact-linearized frequencies below fmax against
     ref's, mode by mode in ascending order (over the modes both hold)."""
@@ -93,6 +120,7 @@ def main(argv=None):
     parser.add_argument("case", nargs="?", default=str(ROOT / "cases" / "pad_disc.toml"))
     parser.add_argument("--mu", type=float, default=0.4)
     parser.add_argument("--repeat", type=int, default=1)
+    parser.add_argument("--run", type=float, metavar="T")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     parser.add_argument("--markdown")
     parser.add_argument("--json")
@@ -114,8 +142,17 @@ def main(argv=None):
                   f"{runs[m]['peak_gb']:.2f} GB, linearized {worst_k:.1e}, {count} unstable, "
                   f"frequency {worst_f:.1e}, "
                   f"real {worst_r:.2f} of allowed; parts {runs[m]['parts']}", flush=True)
+    text = None
+    if args.run:
+        sensors, da, dc = runs_compared(args.case, args.set, args.run)
+        text = "\n".join([f"\n`transient run` to {args.run:g} s, sensors' RMS about their mean "
+                          f"(energy drift assembled {da:.1e}, components {dc:.1e}):\n",
+                          "| sensor | assembled | components | difference |", "|---|---|---|---|"]
+                         + [f"| {n} | {a:.4e} | {c:.4e} | {d:.1e} |" for n, a, c, d in sensors])
+        print(text, flush=True)
     load = 0.5 * (load0 + os.getloadavg()[0])
-    publish(markdown(args.case, args.mu, rows, load), args.markdown, args.json, rows)
+    table = markdown(args.case, args.mu, rows, load) + ("\n" + text if text else "")
+    publish(table, args.markdown, args.json, rows)
     return 0
 
 

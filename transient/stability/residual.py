@@ -15,7 +15,7 @@ against the full model).
 import numpy as np
 
 from .linearize import preload_pressure
-from .shapes import real_times
+from .shapes import real_apply, real_times
 
 
 def mode_residuals(model, M, system, state, basis, modes, which):
@@ -32,18 +32,18 @@ def mode_residuals(model, M, system, state, basis, modes, which):
     Z = modes.vectors[:, which]
     lam = modes.eigenvalues[which]
     U = real_times(X, AW @ Z)                        # x = T z, (ndof, k)
-    Cx = contacts.observe(U)
-    force = real_times(model.K, U) + contacts.normal_load((w * kt)[:, None] * Cx)
+    Cx = real_apply(contacts.observe, U)
+    force = real_times(model.K, U) + real_apply(contacts.normal_load, (w * kt)[:, None] * Cx)
     if system.loss is not None:
         force = force + 1j * real_times(model.loss, U)
     damp = system.damp if system.loss is None else system.base_damp
     damping = real_times(M, real_times(X, AW @ (damp[:, None] * Z)))
     if contacts.friction is not None:
         f = contacts.friction
-        along, across = contacts.observe_tangential(U)
-        force += contacts.tangential_load((w * f.m * kt)[:, None] * Cx)
-        damping += (contacts.tangential_load((w * p * f.dm)[:, None] * along)
-                    + contacts.across_load((w * p * f.turn)[:, None] * across))
+        along, across = real_apply(contacts.observe_tangential, U)
+        force += real_apply(contacts.tangential_load, (w * f.m * kt)[:, None] * Cx)
+        damping += (real_apply(contacts.tangential_load, (w * p * f.dm)[:, None] * along)
+                    + real_apply(contacts.across_load, (w * p * f.turn)[:, None] * across))
     r = (force + lam * damping + lam ** 2 * real_times(M, U))[free][held]
     x = U[free][held]
     top = np.sqrt(np.sum(np.abs(r) ** 2 / mass[held][:, None], axis=0))
