@@ -151,7 +151,8 @@ def main(argv=None):
                          + [f"| {n} | {a:.4e} | {c:.4e} | {d:.1e} |" for n, a, c, d in sensors])
         print(text, flush=True)
     load = 0.5 * (load0 + os.getloadavg()[0])
-    table = markdown(args.case, args.mu, rows, load) + ("\n" + text if text else "")
+    table = "\n".join(([markdown(args.case, args.mu, rows, load)] if rows else [])
+                      + ([text] if text else []))
     publish(table, args.markdown, args.json, rows)
     return 0
 
