@@ -11,3 +11,29 @@ os.environ.setdefault("TRANSIENT_LOCK_NOTICE_S", "inf")
 import transient  # noqa: E402
 
 transient.configure()
+
+
+# the instances of parametrized tests over about a second whose other instances are quick;
+# whole tests that slow are marked where they are defined (`pytest -m "not slow"`)
+SLOW_INSTANCES = {
+    "test_bar_on_a_rigid_wall[implicit]", "test_bar_on_a_rigid_wall[implicit-lumped-superlu]",
+    "test_bar_on_a_rigid_wall[implicit-reduced]", "test_outputs_stored_are_those_asked_for[True]",
+    "test_kernel_equals_its_twin[newmark_full-friction]",
+    "test_kernel_equals_its_twin[newmark_reduced-friction]",
+    "test_kernel_equals_its_twin[exponential_implicit-friction]",
+    "test_energy_balance_holds_with_every_scheme_and_converges_at_second_order"
+    "[False-implicit-None]",
+    "test_the_contact_and_the_factorization_read_only_what_their_keys_hold[case1-more1]",
+    "test_exact_tie_is_the_constrained_problem[rule0]",
+    "test_exact_tie_is_the_constrained_problem[rule2]",
+    "test_reduced_model_agrees_with_the_full_one_without_contact[explicit]",
+    "test_reduced_model_agrees_with_the_full_one_without_contact[exponential]",
+    "test_a_mirrored_outboard_pad_has_the_modes_of_one_built_in_place[tet10 gmsh]",
+    "test_plot_cea_draws_the_diagram_the_unstable_shapes_and_the_mu_map[basis1]"}
+
+
+def pytest_collection_modifyitems(items):
+    import pytest
+    for item in items:
+        if item.name in SLOW_INSTANCES:
+            item.add_marker(pytest.mark.slow)

@@ -79,6 +79,7 @@ def test_bad_input_is_a_case_error_naming_the_file_and_the_key(tmp_path):
     assert exc.value.key == "--param" and not (tmp_path / "campaign").exists()
 
 
+@pytest.mark.slow
 def test_run_writes_the_history_and_returns_its_path_and_summary(tmp_path, capsys):
     case = transient.load(BAR, SHORT)
     result = transient.run(case, tmp_path / "api.h5")
@@ -155,6 +156,7 @@ def test_a_mu_map_equals_the_cea_of_each_variant():
         transient.mu_map(case, [-0.1])
 
 
+@pytest.mark.slow
 def test_compat_equals_the_commands_json(capsys):
     result = transient.compat(transient.load(CUBE))
     out = cli_json(capsys, "compat", CUBE)
@@ -167,6 +169,7 @@ def test_compat_equals_the_commands_json(capsys):
     assert comp.shapes.shape == (comp.n1 + comp.n2, comp.n1 + comp.n2)
 
 
+@pytest.mark.slow
 def test_sweep_runs_the_variants_the_command_would(tmp_path):
     campaign = transient.sweep(BAR, {"initial.impact.velocity": [[1.0, 0.0, 0.0],
                                                                 [2.0, 0.0, 0.0]]},
@@ -182,6 +185,7 @@ def test_sweep_runs_the_variants_the_command_would(tmp_path):
     assert [v.name for v in same] == [v.name for v in campaign.variants]
 
 
+@pytest.mark.slow
 def test_the_api_pages_example_runs(tmp_path):
     """docs/api.md's examples as a user runs them from a checkout, one after the other as the
     page reads, on a coarser mesh and a shorter run (every load appends them): a test of the

@@ -104,6 +104,7 @@ def _untimed(rows):
     return json.dumps([{k: v for k, v in r.items() if k not in TIMED} for r in rows])
 
 
+@pytest.mark.slow
 def test_bench_returns_the_rows_the_command_prints(tmp_path, capsys):
     """A rigid wall has no second mesh: the fine rule's row, then the others refused."""
     options = {"eps": [1e-3], "points": [0], "tolerances": [1e-2], "t_end": 2e-5}
@@ -144,6 +145,7 @@ def test_bench_and_compare_modes_refuse_bad_input_before_the_model(monkeypatch):
         transient.compare_modes(case, case, "tip", "tip", damping=1.0)
 
 
+@pytest.mark.slow
 def test_compat_pairs_are_compat_of_each_pair(capsys):
     case = transient.load(CUBE)
     (found,) = transient.compat_pairs(case)

@@ -28,6 +28,7 @@ def test_compare_measures_what_it_says():
     assert out["frequency_error"] == pytest.approx(0.01)
 
 
+@pytest.mark.slow
 def test_bench_sweeps_the_rules_of_a_small_pad_on_a_disc():
     rows = bench(CASES / "pad_disc.toml", SMALL, eps_list=[1e-6, 1.0], points_list=[0, 20],
                  t_end=1e-3, tolerances=[1e-2])
@@ -50,6 +51,7 @@ def test_bench_sweeps_the_rules_of_a_small_pad_on_a_disc():
     assert best is None or (best["error_rms"] <= 0.01 and best["rule"] != "fine")
 
 
+@pytest.mark.slow
 def test_bench_command_writes_csv_json_png(tmp_path, capsys):
     args = ["bench", str(CASES / "pad_disc.toml"), "--eps", "1e-3", "--points", "15",
             "--tolerances", "1e-2",
@@ -73,6 +75,7 @@ def test_bench_refuses_bad_options(tmp_path, capsys):
     assert "--eps" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_rules_a_scene_refuses_are_rows_that_say_why(tmp_path):
     """A rigid wall has no second mesh: every rule but the fine one is refused, the sweep goes
     on and its files are written."""
@@ -93,6 +96,7 @@ SQUEAL = ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1
           "contact.pad_disc.friction.mu=0.4", "loads.tap.vector=[0.0,0.0,-0.02]"]
 
 
+@pytest.mark.slow
 def test_bench_measures_a_squeal_against_half_the_step(tmp_path, capsys):
     """With friction and reference 'case': the case's rule at dt / 2 first, then at dt, then
     the sweep; each row's growth rate (the small pad and disc's flutter mode grows at the CEA's

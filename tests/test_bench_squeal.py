@@ -5,6 +5,7 @@ import json
 from pathlib import Path
 
 import h5py
+import pytest
 
 from transient.integration import run
 
@@ -16,6 +17,7 @@ bench = importlib.util.module_from_spec(spec)
 spec.loader.exec_module(bench)
 
 
+@pytest.mark.slow
 def test_roofline_of_a_squeal_history(tmp_path, capsys):
     path = tmp_path / "squeal.h5"
     case = small("contact.pad_disc.friction.mu=0.4", "solver.dt=2e-6", "solver.t_end=4e-4")

@@ -152,6 +152,7 @@ def test_linearization_against_finite_differences(full_setup, falling_setup, law
 HEX20 = [o for o in SMALL if "element" not in o]
 
 
+@pytest.mark.slow
 def test_reduced_complex_modes_match_the_full_model_mode_by_mode():
     """Every mode below fmax that is unstable in the full model's shift-invert Arnoldi or in
     the reduced analysis: the frequency within 0.1% and the real part within 5% of its own

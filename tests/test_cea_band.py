@@ -23,6 +23,7 @@ SMALL = ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1,
          "solver.damping.residual=0.0", "contact.pad_disc.friction.mu=0.5"]
 
 
+@pytest.mark.slow
 def test_slotted_two_material_pad_matches_the_full_model():
     """Every mode unstable in either analysis below fmax: frequency within 0.1%, real part
     within 5% of its own (or 5 1/s), the same stability. The disc turns at 5 rad/s, where the

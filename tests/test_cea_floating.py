@@ -68,6 +68,7 @@ def test_free_bars_rigid_modes_at_zero_and_axial_modes_at_n_c_over_2l(alpha):
     np.testing.assert_allclose(found, expected, atol=1e-9 * np.abs(expected).max())
 
 
+@pytest.mark.slow
 def test_bars_tied_by_a_closed_contact_float_as_one():
     # a linear contact closed at zero gap ties the bars' ends along x: the assembly's rigid
     # motions and each bar's own ones that the contact does not see are deflated together
@@ -98,6 +99,7 @@ def test_the_reduced_cea_of_free_bars_has_the_consistent_mass_modes():
     assert 12 <= np.count_nonzero(~elastic) <= 24
 
 
+@pytest.mark.slow
 def test_a_cluster_beyond_the_bound_is_unresolved_not_a_hang():
     # 200 modes within one shift's disc: k doubles to MAX_NEAR, then the bound says so
     n = 200

@@ -89,6 +89,7 @@ def test_flipped_bytes_inside_a_dataset_are_refused_in_one_line(base, tmp_path, 
     assert path.read_bytes() == before          # nothing written over the damaged file
 
 
+@pytest.mark.slow
 def test_a_history_written_before_the_checksums_still_reads(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(transient.io.checksums, "FILTER", {})
     monkeypatch.setattr(transient.io.history, "FILTER", {})

@@ -3,6 +3,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 import scipy.linalg as sla
 
 from transient.case.loading import load
@@ -44,6 +45,7 @@ def tied_frequencies(case_path, overrides, count=30):
 GREEDY = ["contact.interface.rule=greedy", "contact.interface.regularized=true"]
 
 
+@pytest.mark.slow
 def test_drilled_cube_exact_weights_reproduce_the_energy():
     ref, fine = tied_frequencies(CASES / "drilled_cube.toml",
                                  ["contact.interface.regularized=true"], 12)
@@ -55,6 +57,7 @@ def test_drilled_cube_exact_weights_reproduce_the_energy():
     np.testing.assert_allclose(f, ref, rtol=1e-8)
 
 
+@pytest.mark.slow
 def test_drilled_cube_greedy_rule_of_rank_size_beats_the_centre_rule():
     ref, _ = tied_frequencies(CASES / "drilled_cube.toml",
                               ["contact.interface.regularized=true"], 12)
@@ -66,6 +69,7 @@ def test_drilled_cube_greedy_rule_of_rank_size_beats_the_centre_rule():
     assert err < 0.01 and np.abs(centre / ref - 1).max() > 7 * err
 
 
+@pytest.mark.slow
 def test_pad_disc_coarse_rule_within_one_percent_on_30_tied_modes():
     path = CASES / "pad_disc.toml"
     ref, fine = tied_frequencies(path, ["contact.pad_disc.rule=fine",

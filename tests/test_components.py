@@ -86,6 +86,7 @@ def test_one_part_without_contact_or_load_is_its_own_modes(tmp_path):
     np.testing.assert_allclose(reduced[:len(reference)], reference, rtol=1e-9)
 
 
+@pytest.mark.slow
 def test_pad_disc_preload_and_modes_match_the_assembled_path():
     """The small pad and disc (a sampled rule, the pad held by its abutments and the contact):
     the preload solved in the coupled reduced coordinates carries the assembled preload's
@@ -165,6 +166,7 @@ def _reduced(case, engine):
     return setup.basis[0] @ setup.basis[1], setup.system.omega2
 
 
+@pytest.mark.slow
 def test_a_cached_part_is_read_back_and_only_a_changed_part_is_reduced_again(tmp_path):
     """Through a cache folder each part's reduction is kept under the key of what it is made
     from: the same case again reads both parts back, bit for bit; a stiffer pad reduces the
@@ -237,6 +239,7 @@ class _CrashOnce:
         return self.task.run()
 
 
+@pytest.mark.slow
 def test_parts_on_a_cluster_equal_parts_here_and_a_killed_worker_is_made_up(tmp_path):
     """One task a part on a LocalCluster of two one-thread workers: the same basis as in this
     process (to round-off: other BLAS threads), each part reported as it finishes. The
@@ -293,6 +296,7 @@ def test_parts_on_a_cluster_equal_parts_here_and_a_killed_worker_is_made_up(tmp_
     assert np.array_equal(bases[0].omega2, bases[1].omega2)
 
 
+@pytest.mark.slow
 def test_the_commands_reduce_the_parts_through_a_cache_and_refuse_it_when_assembled(
         tmp_path, capsys):
     """`transient cea --cache DIR`: a line a part as it is reduced, then as it is read back;
@@ -318,6 +322,7 @@ def test_the_commands_reduce_the_parts_through_a_cache_and_refuse_it_when_assemb
     assert len(refused) == 1 and "--workers" in refused[0]
 
 
+@pytest.mark.slow
 def test_a_lining_campaign_reduces_the_disc_once(tmp_path):
     """`transient sweep --kind cea --cache DIR` with the components path: each variant's pad
     is its own, the disc is reduced once and read back by the others (3 parts kept for 2

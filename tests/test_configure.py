@@ -5,6 +5,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parent.parent
 
 # what an import could change: the environment, NumPy's page advice, the OpenMP runtime loaded,
@@ -43,6 +45,7 @@ def test_the_issues_check_passes():
     subprocess.run([sys.executable, "-c", code], cwd=ROOT, check=True, env=_clean_env())
 
 
+@pytest.mark.slow
 def test_importing_the_stages_changes_nothing():
     out = _state("import transient, transient.stages, transient.integration, "
                  "transient.campaign.campaign, transient.cli", env=_clean_env())

@@ -112,6 +112,7 @@ def test_regularized_centre_rule_passes_it(tmp_path):
 CUBE = Path(__file__).resolve().parent.parent / "cases" / "drilled_cube.toml"
 
 
+@pytest.mark.slow
 def test_drilled_cube_regularization_against_the_conforming_reference():
     errors, _ = drilled_cube_errors(CUBE)
     # the paper's ordering: the coarse centre rule dimples the fine side; regularized, it is at

@@ -5,6 +5,8 @@ import re
 import sys
 from pathlib import Path
 
+import pytest
+
 from transient.case.schema import reference_markdown
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -95,6 +97,7 @@ def test_the_readme_is_a_front_door():
     assert text.isascii()
 
 
+@pytest.mark.slow
 def test_the_readmes_python_example_runs(tmp_path):
     """The README's Python example, as a user runs it from a checkout (the shipped cases under
     cases/), in a folder of its own."""

@@ -37,6 +37,7 @@ def _printed(capsys):
     return [Path(p) for p in capsys.readouterr().out.split()]
 
 
+@pytest.mark.slow
 def test_xdmf_of_a_full_model(full, tmp_path, capsys):
     out = tmp_path / "xdmf"
     assert main(["export", str(full), "--out", str(out)]) == 0
@@ -71,6 +72,7 @@ def test_xdmf_of_a_full_model(full, tmp_path, capsys):
     assert np.allclose(grid.point_data["displacement"], u.reshape(-1, 3))
 
 
+@pytest.mark.slow
 def test_vtu_and_pvd_of_a_reduced_model(tmp_path, capsys):
     path = tmp_path / "reduced.h5"
     case = load(CASE, REDUCED)

@@ -77,6 +77,7 @@ def test_a_mutant_is_the_same_whatever_ran_before_it(tmp_path):
         assert text(first) == text(again)
 
 
+@pytest.mark.slow
 def test_fixed_seed_has_no_failure(tmp_path):
     report = fuzz.fuzz(MUTANTS, SEED, keep=tmp_path, timeout=fuzz.TIMEOUT_S, interrupts=False)
     assert sum(report["outcomes"].values()) == MUTANTS
@@ -114,6 +115,7 @@ def test_what_a_sweep_must_not_do_is_a_failure(tmp_path):
     assert fuzz.mislabelled(tmp_path) == ["v-1: v-1.json"]
 
 
+@pytest.mark.slow
 def test_sweep_mutants_have_no_failure(tmp_path):
     """A fixed seed of sweep mutants (a campaign's command line mutated, files of the user in
     its folder, a second campaign, a resume after a changed --param list or a killed sweep):

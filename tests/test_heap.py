@@ -56,6 +56,7 @@ def test_a_retaining_heap_reuses_a_freed_block_without_faulting_it_again():
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt")
 @pytest.mark.parametrize("share, configured, retains", [
     (0.1, True, True), (0.8, True, False), (0.1, False, False)])
+@pytest.mark.slow
 def test_the_setup_retains_freed_blocks_only_far_below_the_memory_bound(share, configured,
                                                                           retains):
     """A setup estimated at over half of limits.memory keeps glibc's defaults (its freed blocks

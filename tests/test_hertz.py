@@ -186,6 +186,7 @@ def contact_time(t, force):
 
 
 @pytest.mark.parametrize("model", MODELS)
+@pytest.mark.slow
 def test_hertz_impact_within_5_percent_of_johnson(case_path, model):
     result = run(load(case_path, MODELS[model]), case_path.with_name(f"{model}.h5"))
     assert result.status == "complete"
@@ -214,6 +215,7 @@ def test_hertz_impact_within_5_percent_of_johnson(case_path, model):
 
 
 @pytest.mark.parametrize("corrector, limit", [("propagated", 0.5), ("evaluated", 2.0)])
+@pytest.mark.slow
 def test_explicit_correctors_of_a_stiff_penalty_are_refused_by_name(case_path, corrector, limit,
                                                                     capsys):
     # the exponential scheme at the implicit runs' step: the penalty, open at the preload, is

@@ -108,6 +108,7 @@ def test_frf_refuses_a_segment_longer_than_the_history(history, capsys):
     _one_line_error(capsys, str(history), "--segment", "307 rows, fewer than the segment")
 
 
+@pytest.mark.slow
 def test_pressure_maps_side_by_side(history, tmp_path, capsys):
     finer = tmp_path / "finer.h5"
     run(load(CASE, SHORT + ["parts.bar.mesh.divisions=[100,3,3]"]), finer)   # 108 points

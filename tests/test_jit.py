@@ -81,6 +81,7 @@ print(inside, after, lib.kmp_get_blocktime())
 """
 
 
+@pytest.mark.slow
 def test_spinning_sets_mkls_blocktime_for_the_block_only():
     """Under MKL's OpenMP runtime the kernel's threads spin between the steps' parallel
     regions inside the block, and the runtime's own setting comes back after it (a fresh
@@ -120,6 +121,7 @@ print(jit._iomp() is not None, b"libiomp5" in info.fname)
 """
 
 
+@pytest.mark.slow
 def test_numbas_threads_are_mkls_whatever_runs_first():
     """With MKL installed and transient configured, Numba's OpenMP pool is served by libiomp5
     even when a parallel kernel starts it before PARDISO's first call: `spinning` then keeps
@@ -141,6 +143,7 @@ print(core.multiarray._get_madvise_hugepage(), os.environ.get("NUMPY_MADVISE_HUG
 """
 
 
+@pytest.mark.slow
 def test_numpy_arrays_on_small_pages_unless_the_user_says():
     """transient.configure turns NumPy's huge-page advice off (its arrays' huge pages are
     zeroed through the host on a ballooned VM), whether NumPy was imported before it or after,
@@ -177,6 +180,7 @@ def _lines(stream):
 
 @pytest.mark.parametrize("command, sig, code", [
     ("modes", signal.SIGTERM, 143), ("run", signal.SIGTERM, 143), ("run", signal.SIGINT, 130)])
+@pytest.mark.slow
 def test_a_wait_for_the_lock_says_who_holds_it_and_a_signal_ends_it(tmp_path, monkeypatch,
                                                                      command, sig, code):
     """A command whose kernels are not compiled waits for the lock another process holds:

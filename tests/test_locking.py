@@ -58,6 +58,7 @@ def modes_of(blocks, *overrides):
     return contact_modes(case, model, pairs), pairs
 
 
+@pytest.mark.slow
 def test_gauss_rule_holds_each_master_faces_gauss_points_and_integrates_exactly(blocks):
     (_, _), (gauss,) = modes_of(blocks, "contact.c.rule=gauss")
     (_, _), (fine,) = modes_of(blocks, "contact.c.rule=fine")
@@ -107,6 +108,7 @@ def test_exact_tie_is_the_constrained_problem(blocks, rule):
     np.testing.assert_allclose(modes.frequencies, reference, rtol=1e-8)
 
 
+@pytest.mark.slow
 def test_penalty_modes_rise_to_the_exact_tie(blocks):
     (exact, _), _ = modes_of(blocks, "solver.modes.tie=exact")
     gaps = []
@@ -118,6 +120,7 @@ def test_penalty_modes_rise_to_the_exact_tie(blocks):
     assert gaps == sorted(gaps, reverse=True) and gaps[-1] < 1e-3 < gaps[0]
 
 
+@pytest.mark.slow
 def test_preload_tie_is_the_exponential_laws_tangent_at_the_pressure(blocks):
     """The rollers make the contact pressure uniform, P: the tangent of p0 exp(-lambda g) there
     is lambda P at every point, so the preload tie is the penalty tie at k = lambda P."""
@@ -167,6 +170,7 @@ def test_plot_modal_frf_refuses_bad_options_in_one_line(blocks, tmp_path, capsys
     assert not (tmp_path / "x.png").exists()
 
 
+@pytest.mark.slow
 def test_the_compared_model_keeps_its_own_loads(blocks):
     """Two cases of one structure share its meshes and matrices, each with its own loads: the
     second's preload holds its own pressure."""

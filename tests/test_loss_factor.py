@@ -74,6 +74,7 @@ PAD = (LINED_PAD[:LINED_PAD.index("[solver.modes]")].replace(
     '[solver.reduction]\nenabled = true\nfmax = 15000.0\n')
 
 
+@pytest.mark.slow
 def test_a_lossy_lining_on_steel_reduced_against_full(tmp_path):
     """Only the lining's cells are lossy: each mode's damping is its share of strain energy
     in the lining (the reduced model's T^T K_lining T, not diagonal), against the full model's

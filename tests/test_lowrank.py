@@ -173,6 +173,7 @@ def test_factored_rows_give_the_same_row_space_and_solves():
     assert np.allclose(factored.solver(d)(b), spla.spsolve(direct, b), rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_regularized_pairs_carry_their_rows_factored():
     """A regularized pair holds its rows as factors only (its rule's C1, C2 are None): the
     rows, their subsets, C T, the contact force and the interface stiffness they give are those
@@ -254,6 +255,7 @@ def test_pardiso_analysis_says_what_the_factorization_takes(capsys):
     assert row["peak_rss_gb"] >= row["model_peak_rss_gb"] > 0
 
 
+@pytest.mark.slow
 def test_a_setup_frees_the_factors_it_owns_after_its_last_solve(monkeypatch):
     """The setup that factorized K - sigma M frees the factors once the basis has made its
     last solve (at 1M dofs they were 10.3 GB of the 24 GB the Grams after them ran out of);

@@ -43,6 +43,7 @@ def corner(tmp_path_factory, mesh_corner):
     return out, case, {name: part_mesh(case, name) for name in case.parts}
 
 
+@pytest.mark.slow
 def test_every_set_the_case_names_is_in_its_file(corner):
     _, case, meshes = corner
     found = named_sets(case)
@@ -64,6 +65,7 @@ def radial_offset(points, degrees):
     return np.abs(points[:, 0] * math.sin(t) - points[:, 1] * math.cos(t))
 
 
+@pytest.mark.slow
 def test_tied_faces_lie_on_one_plane(corner):
     # each tied pair's two faces on one plane (a gap of zero at the start, and the plane the
     # pair projects on), the friction faces on the disc's, the line pressure on the bores'
@@ -119,6 +121,7 @@ def test_the_outer_pad_is_the_inner_one_mirrored(corner):
     assert r.min() == pytest.approx(0.09) and r.max() == pytest.approx(0.135)
 
 
+@pytest.mark.slow
 def test_same_arguments_same_files(corner, mesh_corner, tmp_path):
     out, _, _ = corner
     mesh_corner.main([str(tmp_path)] + ARGUMENTS)

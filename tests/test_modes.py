@@ -52,6 +52,7 @@ def block_operators(mesh):
 
 @pytest.mark.parametrize("element, divisions", [("hexahedron20", (20, 2, 2)),
                                                  ("tetra10", (20, 2, 2))])
+@pytest.mark.slow
 def test_cantilever_bending_frequencies_match_timoshenko(element, divisions):
     L, h = 1.0, 0.1     # L / h = 10: shear and rotary inertia matter (a few %)
     mesh = box((L, h, h), divisions, element=element)
@@ -98,6 +99,7 @@ def test_backends_agree_with_dense(backend):
     np.testing.assert_allclose(phi.T @ (ops.M @ phi), np.eye(8), atol=1e-9)
 
 
+@pytest.mark.slow
 def test_fmax_returns_every_mode_below_it():
     mesh = box((0.4, 0.1, 0.1), (12, 3, 3), element="hexahedron")
     ops = block_operators(mesh)
@@ -110,6 +112,7 @@ def test_fmax_returns_every_mode_below_it():
     np.testing.assert_allclose(some.frequencies, all_modes.frequencies[:41], rtol=1e-9)
 
 
+@pytest.mark.slow
 def test_pardiso_is_found_without_importing_pypardiso():
     """The MKL runtime is loaded from where the wheel puts it: importing pypardiso builds a
     solver that globs the environment's lib tree (0.6 s a process), so it is not imported

@@ -66,6 +66,7 @@ def test_output_file_of_the_case_is_named_by_its_key(tmp_path, capsys, no_model)
     assert ": output.file: cannot write" in err
 
 
+@pytest.mark.slow
 def test_a_second_writer_is_refused(tmp_path, capsys):
     path = tmp_path / "bar.h5"
     assert main(["run", BAR, "-o", str(path), "--quiet"]) == 0
@@ -79,6 +80,7 @@ def test_a_second_writer_is_refused(tmp_path, capsys):
     assert main(["run", BAR, "-o", str(path), "--quiet"]) == 0   # released
 
 
+@pytest.mark.slow
 def test_sigint_during_the_setup_leaves_no_file(tmp_path):
     path = tmp_path / "pad.h5"
     child = subprocess.Popen([sys.executable, "-m", "transient", "run",
@@ -160,6 +162,7 @@ def test_bench_refuses_an_unwritable_directory_first_and_writes_under_the_cwd(
     assert os.access(tmp_path, os.W_OK)
 
 
+@pytest.mark.slow
 def test_sigkill_during_the_setup_leaves_an_empty_file_a_next_run_takes(tmp_path, capsys):
     path = tmp_path / "pad.h5"
     child = subprocess.Popen([sys.executable, "-m", "transient", "run",

@@ -38,6 +38,7 @@ def _png_size(path):
     return int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
 
 
+@pytest.mark.slow
 def test_writes_three_pictures_per_pair(tmp_path, capsys):
     out = tmp_path / "pictures"
     assert main(_args("--out", str(out), "--shapes", "1,5,30")) == 0

@@ -102,6 +102,7 @@ contact = true
 """
 
 
+@pytest.mark.slow
 def test_a_free_body_keeps_its_contact_statics_and_lands_as_the_full_model(tmp_path):
     """A block with no constraint falls on a wall. The static responses to its contact loads
     are its rigid motion, 1e10 times their elastic part: normalized as they were, the

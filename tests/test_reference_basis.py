@@ -39,6 +39,7 @@ def analyses():
 
 
 @pytest.mark.parametrize("basis_mu", ["0.3", "0.6"])
+@pytest.mark.slow
 def test_a_rebased_basis_gives_the_complex_modes_of_its_own(analyses, basis_mu):
     """Every mode below fmax: against the own basis' within 3e-4 in frequency and 1% of the
     largest unstable real part (measured: 6e-5 and 0.13% from 0.3, 1.3e-4 and 0.29% from
@@ -58,6 +59,7 @@ def test_a_rebased_basis_gives_the_complex_modes_of_its_own(analyses, basis_mu):
     assert np.abs(rebased.real[near] - ref.real).max() <= 0.05 * big
 
 
+@pytest.mark.slow
 def test_basis_mu_at_mu_is_the_own_basis_bit_for_bit(analyses):
     same = analyse(small(MU + "0.4", BASIS + "0.4")).modes
     own = analyses["own"].modes

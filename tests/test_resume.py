@@ -70,6 +70,7 @@ def assert_same(a, b):
 
 
 @pytest.mark.parametrize("name", sorted(SHORT))
+@pytest.mark.slow
 def test_resume_is_bit_for_bit_under_other_thread_counts(tmp_path, name):
     t1, t2, chunk, coarse = SHORT[name]
     case = str(CASES / f"{FILES.get(name, name)}.toml")
@@ -104,6 +105,7 @@ def wait_for_checkpoint(path, process, timeout=300.0):
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGKILL])
+@pytest.mark.slow
 def test_a_run_stopped_by_a_signal_resumes_to_the_uninterrupted_run(tmp_path, sig):
     # the run is long enough never to end by itself; the uninterrupted reference and the
     # resume go to a time set after the stop, whenever the signal landed
@@ -139,6 +141,7 @@ def test_a_run_stopped_by_a_signal_resumes_to_the_uninterrupted_run(tmp_path, si
     ("parts.bar.mesh.divisions=[50,1,1]", "parts.bar.mesh.divisions"),
     ("contact.wall.law.lambda=1e6", "contact.wall.law.lambda"),
 ])
+@pytest.mark.slow
 def test_resume_with_a_case_that_changes_results_is_refused_by_name(tmp_path, capsys, change,
                                                                      key):
     path = tmp_path / "bar.h5"
@@ -196,6 +199,7 @@ def test_thread_choice_follows_the_last_chunks_and_retries_the_other():
 
 
 @pytest.mark.parametrize("name", ["two_bars", "pad_disc_squeal"])
+@pytest.mark.slow
 def test_automatic_chunks_give_the_fixed_chunks_history(tmp_path, name):
     """solver.chunk = 0 cuts the run by the kernel's speed (dynamics.chunks.ChunkSize): the
     history, its last checkpoint included, is the one of a fixed chunk bit for bit."""

@@ -34,6 +34,7 @@ def test_plan_is_whole_steps_and_a_shortened_last_one():
     assert (half.steps, half.every, half.grid) == (1227, 14, 1218)
 
 
+@pytest.mark.slow
 def test_a_run_ends_on_t_end_with_its_end_a_row_of_its_own(tmp_path):
     path = bar(tmp_path, "bar.h5", "solver.t_end=6e-5", "output.every=7")
     with h5py.File(path, "r") as f:
@@ -60,6 +61,7 @@ def test_every_larger_than_the_run_stores_its_end(tmp_path, capsys):
     assert d["t_end"] == 2e-5 and d["steps"] == 2
 
 
+@pytest.mark.slow
 def test_resumed_past_an_end_row_is_the_fresh_run(tmp_path):
     sets = ["output.every=7", "solver.chunk=70"]
     whole = bar(tmp_path, "whole.h5", "solver.t_end=1.2e-4", *sets)
@@ -70,6 +72,7 @@ def test_resumed_past_an_end_row_is_the_fresh_run(tmp_path):
         assert f.attrs["end_row"] and f["time"][-1] == 1.2e-4
 
 
+@pytest.mark.slow
 def test_a_resumed_history_keeps_the_case_it_was_resumed_with(tmp_path):
     path = bar(tmp_path, "bar.h5", "solver.t_end=6e-5")
     bar(tmp_path, "bar.h5", "solver.t_end=1.2e-4", "solver.drift_tolerance=0.1", resume=True)
@@ -82,6 +85,7 @@ def test_a_resumed_history_keeps_the_case_it_was_resumed_with(tmp_path):
     assert summary(path)["t_end"] == 1.2e-4
 
 
+@pytest.mark.slow
 def test_the_exponential_schemes_shortened_step_lands_on_t_end(tmp_path):
     """The small pad and disc tapped, ended half way through a step: its last step, with
     propagators of its own, lands where a run at an eighth of the step is at t_end within the

@@ -103,6 +103,7 @@ def test_nnls_in_gram_form_matches_scipy():
     assert res3 < 1e-6
 
 
+@pytest.mark.slow
 def test_nnls_in_gram_form_grows_its_buffers_past_the_first_256_points():
     # every candidate may be taken (max_points = N): the buffers double as points are taken
     _, _, _, _, idx, _ = _nnls_against_scipy(3, 700, 600, 0.8, 0.1)
@@ -163,6 +164,7 @@ def test_sampled_rule_needs_a_reduced_model(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("corrector", ["evaluated", "implicit"])
+@pytest.mark.slow
 def test_a_resumed_sampled_run_equals_an_uninterrupted_one(tmp_path, corrector):
     """Resuming prepares again: the sampling must pick the same points and weights, and the
     kernel restart from the state stored (its end forces recomputed there) bit for bit."""

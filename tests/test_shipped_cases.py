@@ -42,6 +42,7 @@ def test_every_case_is_tested():
         "two_bars.toml"]
 
 
+@pytest.mark.slow
 def test_pad_disc_tet10_locks_tied_exactly_with_the_rich_rule_only():
     """The paper's figure 11 on the pad and disc meshed in tet10, each part on its own: tied
     exactly (the gap held at zero on the rule's rows), the fine rule raises the first 50
@@ -94,6 +95,7 @@ def test_slotted_pad_sets_and_mass(overrides, ndof):
     assert total_mass(model) == pytest.approx(disc + lining + backplate, rel=1e-4)
 
 
+@pytest.mark.slow
 def test_slotted_pad_contact_carries_the_piston(tmp_path):
     """A short run of the small slotted pad: the pad is held in its plane only, so at the
     preload the contact carries the whole piston force, 1 MPa on the backplate's whole back
@@ -123,6 +125,7 @@ def test_brake_corner_parts_and_mass():
     assert total_mass(model) == pytest.approx(mass, rel=1e-4)
 
 
+@pytest.mark.slow
 def test_brake_corner_preload_with_friction():
     """The corner's preload at mu = 0.4 on both linings, the disc turning about +z: each
     friction pair carries its piston's force, the line pressure on the piston's area (the
@@ -159,6 +162,7 @@ def test_brake_corner_preload_with_friction():
         assert force[f"abutment_{side}_lo"] < -0.1 * piston
 
 
+@pytest.mark.slow
 def test_drilled_cube_mass_and_modes(capsys):
     case = load(CASES / "drilled_cube.toml")
     model = build_model(case)
@@ -181,6 +185,7 @@ def test_drilled_cube_mass_and_modes(capsys):
     assert abs(free["frequencies_hz"][0]) < 1e-3 * f[0]
 
 
+@pytest.mark.slow
 def test_pad_disc_mass_and_modes_to_16khz(capsys):
     case = load(CASES / "pad_disc.toml")
     model = build_model(case)
@@ -195,6 +200,7 @@ def test_pad_disc_mass_and_modes_to_16khz(capsys):
     assert f[-1] <= 16000 and len(f) > 30
 
 
+@pytest.mark.slow
 def test_pad_disc_transient_preload_and_energy_over_1e5_steps(tmp_path, capsys):
     out = tmp_path / "pad_disc.h5"
     assert main(["run", str(CASES / "pad_disc.toml"), "-o", str(out), "--quiet",
@@ -216,6 +222,7 @@ def test_pad_disc_transient_preload_and_energy_over_1e5_steps(tmp_path, capsys):
     assert force == pytest.approx(1.0e6 * sector, rel=1e-4)     # quadratic arcs
 
 
+@pytest.mark.slow
 def test_pad_disc_schemes_agree_below_5khz():
     # a 0.4 ms half-sine tap: a response mostly below 5 kHz. One setup, four integrations over
     # 5 ms: central differences at 0.9 times the critical step, Newmark at the same step, and
@@ -253,6 +260,7 @@ def test_pad_disc_schemes_agree_below_5khz():
             assert np.sqrt(np.mean((x - y) ** 2) / np.mean((x - x[0]) ** 2)) < 0.01
 
 
+@pytest.mark.slow
 def test_pad_disc_squeal_grows_as_its_complex_modes():
     """The squeal case's first 28 ms, the linear growth from its 2 mN tap: the transient's
     dominant frequency (its analytic signal's phase) is the fastest-growing complex mode's
@@ -303,6 +311,7 @@ def _cycle_run(case, setup, state, dt, lead, span):
     return out.sensors[:, names.index("pad_back")], out.energy, out.sensors[:, len(names):]
 
 
+@pytest.mark.slow
 def test_pad_disc_squeal_limit_cycle_holds_under_half_the_step():
     """The squeal case's limit cycle (9.41 kHz with the other mode at 10.91 kHz, from 0.1 s):
     over 0.15-0.17 s the pad's RMS changes by less than 1% when dt is halved, and the energy

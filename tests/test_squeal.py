@@ -76,6 +76,7 @@ def test_growth_in_time_is_the_complex_modes_real_part(scheme, corrector):
     assert drift < 1e-3
 
 
+@pytest.mark.slow
 def test_growth_rate_converges_with_the_step():
     """The exponential scheme's error on the growth rate falls at least 3 times as dt halves
     (second order: 1.6%, 0.39%, 0.09% measured)."""
@@ -86,6 +87,7 @@ def test_growth_rate_converges_with_the_step():
     assert errors[1] < errors[0] / 3
 
 
+@pytest.mark.slow
 def test_newmark_growth_rate_converges_with_the_step():
     """So does implicit Newmark's, which integrates friction with its exact Jacobian
     (1.3%, 0.33%, 0.08% measured as dt halves from 3.125 us)."""
@@ -96,6 +98,7 @@ def test_newmark_growth_rate_converges_with_the_step():
     assert errors[1] < errors[0] / 3 and errors[2] < errors[1] / 3
 
 
+@pytest.mark.slow
 def test_newmark_on_the_full_model_grows_at_the_full_models_complex_mode():
     """Newmark on the full model (852 free dofs, the 492 fine points: its friction's exact
     terms through S^-1 [C; Ct; Cc]^T) grows at the real part of the full model's own complex

@@ -61,12 +61,14 @@ def test_quick_subset_covers_every_axis():
     assert len(ids) == len(set(ids))
 
 
+@pytest.mark.slow
 def test_no_outcome_failed(rows):
     failed = {k: (r["command"], r["evidence"]) for k, r in rows.items()
               if r["outcome"] == "FAILED"}
     assert not failed
 
 
+@pytest.mark.slow
 def test_outcomes_are_those_pinned(rows):
     assert set(rows) == set(EXPECTED)
     wrong = {k: (r["outcome"], study.note(r)) for k, r in rows.items()
@@ -74,6 +76,7 @@ def test_outcomes_are_those_pinned(rows):
     assert not wrong
 
 
+@pytest.mark.slow
 def test_dt_above_the_critical_step_is_refused_by_name(rows):
     row = rows["dt/1.2x"]
     assert row["outcome"] == "refused" and row["exit_code"] == 2
@@ -81,6 +84,7 @@ def test_dt_above_the_critical_step_is_refused_by_name(rows):
     assert "force_dt" in row["reason"]
 
 
+@pytest.mark.slow
 def test_dt_above_the_contacts_step_is_refused_by_name(rows):
     # stable, but the penalty runs at omega_c dt = 1.13 where impacts need not keep their
     # energy (dynamics.critical.CONTACT_OMEGA_DT)
@@ -90,6 +94,7 @@ def test_dt_above_the_contacts_step_is_refused_by_name(rows):
     assert "omega_c dt = 1.13" in row["reason"] and "force_dt" in row["reason"]
 
 
+@pytest.mark.slow
 def test_dt_below_the_critical_step_is_stable(rows):
     for key in ("dt/auto", "dt/0.5x", "dt/0.9x forced"):
         row = rows[key]
@@ -102,6 +107,7 @@ def test_dt_below_the_critical_step_is_stable(rows):
     assert rows["dt/auto"]["dt"] == pytest.approx(0.556 * rows["dt/auto"]["dt_critical"], rel=0.01)
 
 
+@pytest.mark.slow
 def test_forced_dt_above_critical_never_leaves_a_nan_in_a_complete_file(rows):
     row = rows["dt/1.2x forced"]
     assert row["outcome"] in ("aborted", "stable")
@@ -109,6 +115,7 @@ def test_forced_dt_above_critical_never_leaves_a_nan_in_a_complete_file(rows):
         assert row["status"].startswith("aborted:") and row["rows"] > 1
 
 
+@pytest.mark.slow
 def test_scenes_without_contact_are_stable_with_a_tiny_drift(rows):
     for key in ("open/bar linear", "no contact/bar explicit"):
         row = rows[key]
@@ -116,6 +123,7 @@ def test_scenes_without_contact_are_stable_with_a_tiny_drift(rows):
         assert row["energy_drift"] < 1e-9
 
 
+@pytest.mark.slow
 def test_greedy_m_above_the_fine_points_is_refused_by_name(rows):
     row = rows[f"m/greedy m=1000 (> {study.PAD_FINE_POINTS} fine points)"]
     assert row["outcome"] == "refused"
@@ -123,12 +131,14 @@ def test_greedy_m_above_the_fine_points_is_refused_by_name(rows):
     assert rows["m/greedy m=1"]["points"] == 1
 
 
+@pytest.mark.slow
 def test_aborts_keep_their_rows_and_say_why(rows):
     for key, row in rows.items():
         if row["outcome"] == "aborted":
             assert row["exit_code"] == 3 and row["rows"] > 0 and row["reason"], key
 
 
+@pytest.mark.slow
 def test_table_shows_every_row(rows):
     lines = [study.format_row(r, 120) for r in rows.values()]
     assert all(r["id"] in line and r["outcome"] in line for r, line in zip(rows.values(), lines))

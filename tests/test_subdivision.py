@@ -53,6 +53,7 @@ def test_a_failing_step_is_halved_until_it_holds(tmp_path, capsys):
     assert f"subdivided at t = {steps[0]['t']:.6g} s to 2e-07 s: energy balance" in out
 
 
+@pytest.mark.slow
 def test_where_the_step_is_halved_does_not_depend_on_the_chunks(tmp_path):
     runs = []
     for chunk in (0, 10, 50):
@@ -64,6 +65,7 @@ def test_where_the_step_is_halved_does_not_depend_on_the_chunks(tmp_path):
     assert_same(runs[0], runs[2])
 
 
+@pytest.mark.slow
 def test_a_subdivided_run_stopped_and_resumed_is_the_fresh_run(tmp_path):
     case = load(BAR, FORCED + ["solver.chunk=20"])
     fresh = run(case, tmp_path / "fresh.h5")
@@ -95,6 +97,7 @@ def test_no_step_down_to_the_floor_holds_and_the_run_stops(tmp_path, capsys):
     assert d["status"].startswith("aborted: ") and d["meta"]["dt_end"] == 2e-7
 
 
+@pytest.mark.slow
 def test_a_friction_run_failing_at_the_default_step_completes_subdivided(tmp_path):
     """The small pad and disc of test_cea at mu = 0.6, at the default step: the evaluated
     corrector fails as the vibration saturates (its balance at 0.14 by 6.4 ms: the run stops

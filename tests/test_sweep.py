@@ -104,6 +104,7 @@ def campaign(tmp_path_factory):
     return out / "campaign", rows, alone
 
 
+@pytest.mark.slow
 def test_a_sweep_equals_its_variants_run_one_by_one(campaign):
     out, rows, alone = campaign
     assert [r["variant"] for r in rows] == [variant_name({"contact.pad_disc.friction.mu": mu})
@@ -134,6 +135,7 @@ def test_a_sweep_equals_its_variants_run_one_by_one(campaign):
     assert len(lines) == 4 and lines[0].startswith("variant,status,seconds,")
 
 
+@pytest.mark.slow
 def test_resume_runs_only_the_missing_variants(campaign, capsys):
     out, rows, _ = campaign
     (out / rows[1]["output"]).unlink()
@@ -169,6 +171,7 @@ def _holders(path, own):
     return pids
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_variant_leaves_the_sweep_complete(campaign, tmp_path):
     """The worker running a variant is killed (SIGKILL) once it holds that variant's history
     open: the scheduler reruns the task on the other worker, and every history comes out
@@ -207,6 +210,7 @@ def test_a_worker_killed_mid_variant_leaves_the_sweep_complete(campaign, tmp_pat
             assert np.array_equal(got[name], ref[name]), (killed, row["variant"], name)
 
 
+@pytest.mark.slow
 def test_the_run_sweeps_pictures(campaign, capsys):
     out, _, _ = campaign
     assert main(["plot", "sweep", str(out)]) == 0
@@ -241,6 +245,7 @@ def _modes(path):
     return [(m["frequency_hz"], m["real"]) for m in json.loads(path.read_text())["modes"]]
 
 
+@pytest.mark.slow
 def test_a_cea_sweep_and_its_stability_map(campaign, cea_campaign, tmp_path, capsys):
     """mu 0 and 0.4 on the small pad and disc: no unstable mode, then its flutter pair's
     growing member (11-12.5 kHz); the map of every mode against mu."""
@@ -329,6 +334,7 @@ def _group(group):
     return pids
 
 
+@pytest.mark.slow
 def test_a_killed_sweep_resumes_to_the_fresh_outputs(campaign, cea_campaign, tmp_path, capsys):
     """A sweep of both kinds killed (SIGKILL, its workers with it) with one variant complete
     and the other's run half way, then resumed: the complete one read back, the other's
@@ -382,6 +388,7 @@ def test_a_killed_sweep_resumes_to_the_fresh_outputs(campaign, cea_campaign, tmp
     assert [r["contact.pad_disc.friction.mu"] for r in saved] == [0.2, 0.4]
 
 
+@pytest.mark.slow
 def test_a_sweep_resumed_to_a_longer_t_end_continues_its_histories(campaign, tmp_path,
                                                                    capsys):
     """Stopped at half the time, then resumed to the whole: each history continues from its
@@ -517,6 +524,7 @@ def test_the_contact_and_the_factorization_read_only_what_their_keys_hold(case, 
     assert not _outside(reads, "factorization") and "solver.linear_solver" in reads
 
 
+@pytest.mark.slow
 def test_a_friction_sweep_at_one_basis_mu_shares_the_basis(tmp_path):
     """With contact.<pair>.friction.basis_mu, the variants of a friction sweep share the basis
     made at that friction (one build, counted) and each rebases it on its own preload; their
@@ -565,6 +573,7 @@ def test_a_friction_sweep_at_one_basis_mu_shares_the_basis(tmp_path):
     assert rows[2]["growth_rate"] > 500 and rows[2]["unstable"] >= 1
 
 
+@pytest.mark.slow
 def test_the_shared_basis_reads_only_what_its_key_holds():
     """The basis at a reference friction through a recording case reads only the fields of
     shared.READS['basis'] (and the sensors that the model's loads place with them)."""
@@ -581,6 +590,7 @@ def test_the_shared_basis_reads_only_what_its_key_holds():
     assert any(r.startswith("contact.") and "friction" in r for r in reads)
 
 
+@pytest.mark.slow
 def test_a_pressure_sweep_shares_every_first_stage(tmp_path, capsys):
     """The piston's pressure is a load: two pressures share the model's structure, the
     contact's geometry and the factorization; each variant's preload is its own (the contact
@@ -597,6 +607,7 @@ def test_a_pressure_sweep_shares_every_first_stage(tmp_path, capsys):
     assert all(r["status"] == "complete" for r in saved["rows"])
 
 
+@pytest.mark.slow
 def test_progress_counts_the_variants_done_and_the_failed(tmp_path):
     """The campaign's bar is told each variant done, and how many failed so far: a step above
     the explicit scheme's critical one is refused at the variant's setup, a row with its

@@ -256,6 +256,7 @@ def test_what_resume_makes_of_stored_complex_modes(tmp_path):
     assert _what(out, v, ["solver.dt=1e-8", "solver.t_end=4e-5"], "both") == "continue"
 
 
+@pytest.mark.slow
 def test_the_exit_code_follows_the_rows(tmp_path, capsys):
     """A variant refused at its setup (a step above the critical one) makes the campaign exit
     2, the others complete or aborted; with none refused, an aborted run makes it exit 3;

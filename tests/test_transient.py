@@ -107,6 +107,7 @@ def test_dt_above_critical_is_refused(tmp_path, capsys):
     assert "solver.dt" in err and "critical step" in err and "Traceback" not in err
 
 
+@pytest.mark.slow
 def test_resumed_run_equals_an_uninterrupted_one_bit_for_bit(tmp_path):
     base = ["solver.chunk=100", "solver.t_end=6e-5"]
     whole, whole_path = run_case(tmp_path, CASES / "bar_impact.toml", base, "whole.h5")
@@ -225,6 +226,7 @@ def test_reduced_model_agrees_with_the_full_one_without_contact(tmp_path, scheme
     assert np.sqrt(np.mean((a - b) ** 2)) / np.sqrt(np.mean(a ** 2)) < 1e-3
 
 
+@pytest.mark.slow
 def test_implicit_newmark_converges_to_the_exact_linear_response(tmp_path):
     # without contact the exponential scheme propagates each mode exactly; Newmark converges to
     # it, though slower than (dt)^2: the load's static shape is a very high mode whose start-up
@@ -277,6 +279,7 @@ def test_a_diverging_run_never_leaves_a_nan_in_its_file(tmp_path, capsys):
             assert np.all(np.isfinite(f[name][...])), name
 
 
+@pytest.mark.slow
 def test_a_penalty_too_stiff_for_the_explicit_step_runs_within_1_percent_or_is_stopped(
         tmp_path, capsys):
     # an aluminium bar at 5 m/s on the shipped bar's wall (k = 2e14 Pa/m). At 0.9 times the

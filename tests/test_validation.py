@@ -102,6 +102,7 @@ def test_bad_input_is_one_line_naming_the_key(tmp_path, capsys, command, case, o
     assert f": {key}: " in err if key else ": tables or arrays nested too deeply" in err
 
 
+@pytest.mark.slow
 def test_vectors_and_sizes_of_any_magnitude_double_precision_holds(tmp_path):
     # |v|^2 of a direction of 1e-300 is 0 and of 1e300 inf; a part 1e160 m long squares past
     # 1e308 too: the same run as with unit vectors, and no warning
