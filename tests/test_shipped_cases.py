@@ -293,21 +293,21 @@ def test_pad_disc_squeal_grows_as_its_complex_modes():
     assert rate == pytest.approx(fastest["real"], rel=5e-2)
 
 
-def _lead(case, setup, state, dt, lead):
-    """Step state on by `lead` [s] at step dt, nothing stored."""
+def _lead(step, system, state, dt, lead):
+    """Step state on by `lead` [s] with step (stages.stepper's at dt), nothing stored."""
     n = int(round(lead / dt))
-    assert stepper(case, setup.system, dt)(state, n, n, buffer(setup.system, 1, False)) == (0, n)
+    assert step(state, n, n, buffer(system, 1, False)) == (0, n)
 
 
-def _cycle_run(case, setup, state, dt, lead, span):
-    """(pad sensor, energies, q) of the squeal case over `span` at step dt after `lead`
-    unstored, from state (stepped on), a row a step (the balance below is then the kernel's
-    own sums)."""
-    _lead(case, setup, state, dt, lead)
+def _cycle_run(step, system, state, dt, lead, span):
+    """(pad sensor, energies, q) of the squeal case over `span` with step (at dt) after
+    `lead` unstored, from state (stepped on), a row a step (the balance below is then the
+    kernel's own sums)."""
+    _lead(step, system, state, dt, lead)
     n = int(round(span / dt))
-    out = buffer(setup.system, n, False)
-    assert stepper(case, setup.system, dt)(state, n, 1, out) == (0, n)
-    names = setup.system.sensor_names
+    out = buffer(system, n, False)
+    assert step(state, n, 1, out) == (0, n)
+    names = system.sensor_names
     return out.sensors[:, names.index("pad_back")], out.energy, out.sensors[:, len(names):]
 
 
@@ -325,12 +325,13 @@ def test_pad_disc_squeal_limit_cycle_holds_under_half_the_step():
     case = load(CASES / "pad_disc_squeal.toml", ["output.field=true"])
     setup = prepare(case)
     piston = setup.system.patterns[list(case.loads).index("piston")]
-    dt = case.solver.dt
+    dt, system = case.solver.dt, setup.system
+    step, half = stepper(case, system, dt), stepper(case, system, dt / 2)
     state = setup.state.copy()
-    _lead(case, setup, state, dt, 0.13)
+    _lead(step, system, state, dt, 0.13)
     branch = state.copy()
-    runs = [_cycle_run(case, setup, state, dt, 0.02, 0.02),
-            _cycle_run(case, setup, branch, dt / 2, 0.02, 0.02)]
+    runs = [_cycle_run(step, system, state, dt, 0.02, 0.02),
+            _cycle_run(half, system, branch, dt / 2, 0.02, 0.02)]
     rms, balance = [], []
     for x, e, q in runs:
         rms.append(np.std(x))

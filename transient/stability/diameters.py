@@ -42,8 +42,9 @@ def disc_motion(model, motion, U):
     e1 = np.cross(axis, [1.0, 0, 0] if abs(axis[0]) < 0.9 else [0, 1.0, 0])
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(axis, e1)
-    theta = np.arctan2(x @ e2, x @ e1)
-    orders = _orders(theta, x, np.hypot(x @ e1, x @ e2))
+    x1, x2 = x @ e1, x @ e2
+    theta = np.arctan2(x2, x1)
+    orders = _orders(theta, x, np.hypot(x1, x2))
     radial = np.cos(theta)[:, None] * e1 + np.sin(theta)[:, None] * e2
     tangential = np.cross(axis, radial)
     u = np.asarray(U)[dofs].reshape(len(theta), 3, -1)
