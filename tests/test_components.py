@@ -360,7 +360,8 @@ def test_the_coupling_rows_a_pair_at_a_time_are_the_whole_rows(regularized):
     from transient.contact.contactset import stack
     from transient.contact.pair import build_contact
     from transient.reduce.basis import contact_gram
-    from transient.reduce.components import law_tangent, part_tasks, synthesis
+    from transient.reduce.components import law_tangent, part_tasks
+    from transient.reduce.synthesis import Synthesis
     from transient.reduce.coupling import PairRows
     case = load(PAD, SMALL + ['solver.reduction.method="components"',
                               "contact.pad_disc.friction.mu=0.4",
@@ -371,7 +372,7 @@ def test_the_coupling_rows_a_pair_at_a_time_are_the_whole_rows(regularized):
     assert (contacts.factors is not None) == regularized
     rng = np.random.default_rng(1)
     dofs = [model.part_dofs(name) for name in model.parts]
-    X = synthesis(model.ndof, dofs, [rng.normal(size=(len(d), 7)) for d in dofs])
+    X = Synthesis(model.ndof, dofs, [rng.normal(size=(len(d), 7)) for d in dofs])
     rows = PairRows(contacts, X)
     whole = [contacts.observe(X)] + list(contacts.observe_tangential(X))
     q, y, wd = rng.normal(size=X.shape[1]), rng.normal(size=contacts.n_points), \
@@ -405,3 +406,34 @@ def test_the_coupling_rows_a_pair_at_a_time_are_the_whole_rows(regularized):
         expected = (Cp.T @ sp.diags(scale) @ Cp).toarray()[np.ix_(touched, touched)]
         np.testing.assert_allclose(E @ interface.G @ E.T, expected, rtol=1e-9,
                                    atol=1e-10 * np.abs(expected).max(), err_msg=name)
+
+
+def test_the_synthesis_held_by_part_multiplies_as_its_dense_matrix():
+    """reduce.synthesis.Synthesis (the parts' bases side by side, a dof in none) against the
+    dense X it stands for: X Y and X^T Y on real and complex blocks and vectors, R X for sparse
+    R dense on the interface (BLAS) and scattered (csr_dot) and for a dense R, a pair's
+    restricted product, the congruence X^T H X, and a pickled copy (a Dask task's)."""
+    import pickle
+    from transient.reduce.synthesis import Synthesis
+    rng = np.random.default_rng(3)
+    ndof, dofs = 40, [np.arange(0, 15), np.arange(16, 28), np.arange(28, 40)]
+    X = Synthesis(ndof, dofs, [rng.normal(size=(len(d), w)) for d, w in zip(dofs, (4, 3, 5))])
+    Xd = X.toarray()
+    assert Xd.shape == X.shape == (40, 12) and not Xd[15].any()
+    Y = rng.normal(size=(12, 3)) + 1j * rng.normal(size=(12, 3))
+    Z = rng.normal(size=(40, 3))
+    for got, want in ((X @ Y, Xd @ Y), (X @ Y[:, 0].real, Xd @ Y[:, 0].real),
+                      (X.T @ Z, Xd.T @ Z), (X.T @ Z[:, 0], Xd.T @ Z[:, 0])):
+        np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-13 * np.abs(want).max())
+    dense_rows = sp.csr_matrix(rng.normal(size=(5, 40)) * (rng.random((5, 40)) < 0.8))
+    scattered = sp.random(60, 40, density=0.02, random_state=4, format="csr")
+    for R in (dense_rows, scattered, dense_rows.T.tocsr().T, dense_rows.toarray()):
+        np.testing.assert_allclose(R @ X, R @ Xd, rtol=1e-13, atol=1e-13 * np.abs(R @ Xd).max())
+    R = sp.csr_matrix(scattered.toarray() * (np.arange(40) < 15))       # the first part's
+    cols, RX = X.restricted(R)
+    assert cols.tolist() == [0, 1, 2, 3]
+    np.testing.assert_allclose(RX, (R @ Xd)[:, cols], rtol=1e-13)
+    H = sp.random(40, 40, density=0.1, random_state=5, format="csr")
+    np.testing.assert_allclose(X.congruence(H), Xd.T @ (H @ Xd), rtol=1e-12,
+                               atol=1e-13 * np.abs(Xd.T @ (H @ Xd)).max())
+    assert np.array_equal(pickle.loads(pickle.dumps(X)).toarray(), Xd)

@@ -149,18 +149,22 @@ def test_no_loss_factor_adds_nothing(tmp_path):
     assert setup.system.base_damp is None and not setup.system.damp.any()
 
 
-def test_the_loss_on_a_sparse_basis_is_the_dense_ones():
-    """The components path holds its basis sparse (the parts' bases side by side): T^T H T
-    on it is the dense basis', and a vector without stiffness takes no loss."""
+def test_the_loss_on_a_basis_held_by_part_is_the_dense_ones():
+    """The components path holds its basis by part (reduce.synthesis.Synthesis, the parts'
+    bases side by side, two dofs in none): T^T H T on it is the dense basis', with H coupling
+    the parts too, and a vector without stiffness takes no loss."""
+    from transient.reduce.synthesis import Synthesis
     rng = np.random.default_rng(0)
     B = sp.random(30, 30, density=0.2, random_state=1)
     H = (B @ B.T).tocsr()
-    X = rng.standard_normal((30, 6)) * (rng.random((30, 6)) < 0.5)
+    dofs = [np.arange(12), np.arange(14, 30)]
+    X = Synthesis(30, dofs, [rng.standard_normal((12, 2)), rng.standard_normal((16, 4))])
     AW = rng.standard_normal((6, 4))
     omega2 = np.array([0.0, 1e3, 2e3, 3e3])
-    dense = reduced_loss(H, X, AW, omega2)
-    assert np.allclose(reduced_loss(H, sp.csc_matrix(X), AW, omega2), dense, rtol=1e-13,
+    dense = reduced_loss(H, X.toarray(), AW, omega2)
+    assert np.allclose(reduced_loss(H, X, AW, omega2), dense, rtol=1e-13,
                        atol=1e-13 * np.abs(dense).max())
+    X = X.toarray()
     T = X @ AW
     exact = T.T @ (H @ T)
     assert not dense[0].any() and not dense[:, 0].any()

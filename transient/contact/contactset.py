@@ -78,23 +78,23 @@ class ContactSet:
                           friction)
 
     def observe(self, T, W=None):
-        """C T (P, k) for T (ndof, k) dense or sparse, C T W for W (k, n): from the factors
-        when held, L (B^T T), which reads r x ndof sparse entries instead of the P dense
-        rows, and W taken on the r factor rows before the P points'."""
+        """C T (P, k) for T (ndof, k) dense or held by part (reduce.synthesis), C T W for W
+        (k, n): from the factors when held, L (B^T T), which reads r x ndof sparse entries
+        instead of the P dense rows, and W taken on the r factor rows before the P points'."""
         if self.factors is None:
-            return _times(_dense(self.C @ T), W)
+            return _times(self.C @ T, W)
         L, B = self.factors
-        return L @ _times(_dense(B.T @ T), W)
+        return L @ _times(B.T @ T, W)
 
     def observe_tangential(self, T, W=None):
         """(Ct T, Cc T): the tangential observations along and across the sliding of a dense
         T (ndof, k); (Ct T W, Cc T W) for W (k, n), as in observe."""
         f = self.friction
         if self.factors is None:
-            return _times(_dense(f.along @ T), W), _times(_dense(f.across @ T), W)
+            return _times(f.along @ T, W), _times(f.across @ T, W)
         L = self.factors[0]
-        return (L @ _times(_dense(f.along.T @ T), W),
-                L @ _times(_dense(f.across.T @ T), W))
+        return (L @ _times(f.along.T @ T, W),
+                L @ _times(f.across.T @ T, W))
 
     def tangential(self):
         """(Ct, Cc) as CSR rows (P, ndof) (formed from the factors when held)."""
@@ -221,12 +221,6 @@ def _friction(pairs, ndof, factored):
     return FrictionSet(join(along).tocsr(), join(across).tocsr(),
                        *map(np.concatenate, (speed, m, dm, turn, code, v_eps, table)),
                        (tab_v, tab_mu, counts))
-
-
-def _dense(Y):
-    """A product of the rows with a basis as an array: a sparse basis (the components path's
-    parts side by side) gives a sparse product."""
-    return Y.toarray() if sp.issparse(Y) else np.asarray(Y)
 
 
 def _times(Y, W):

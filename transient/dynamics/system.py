@@ -131,12 +131,12 @@ def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, si
 
 
 def reduced_loss(H, X, AW, omega2):
-    """(n, n) T^T H T, T = X AW, of the loss H on a basis X dense, or sparse (the components
-    path's parts side by side), with eigenvalues omega2 of K_lin. A vector without stiffness
-    (a free part's rigid motion) has no loss, H <= max(eta) K_lin in energy: its round-off,
-    square-rooted by the cea, would grow."""
-    if sp.issparse(X):
-        G = (X.T @ (H @ X)).toarray()
+    """(n, n) T^T H T, T = X AW, of the loss H on a basis X dense, or held by part (the
+    components path's reduce.synthesis.Synthesis, which forms X^T H X a part at a time), with
+    eigenvalues omega2 of K_lin. A vector without stiffness (a free part's rigid motion) has no
+    loss, H <= max(eta) K_lin in energy: its round-off, square-rooted by the cea, would grow."""
+    if hasattr(X, "congruence"):
+        G = X.congruence(H)
     else:
         # on both cores (SciPy's product is single-threaded), the same sums on any
         G = X.T @ csr_dot(H, X)

@@ -29,6 +29,7 @@ from .fields import part_rigid_motions, support_stiffness
 from .parts import Engine, PartError, PartInterface, PartTask
 from .coupling import ALONG, PairRows
 from .sampling import ReducedPreloadError, reduced_preload
+from .synthesis import Synthesis
 
 # how far beyond the basis' cutoff each part's modes and interface fields reach: the coupled
 # modes to the cutoff are only as exact as the parts' bases reach past it (component modes
@@ -131,24 +132,14 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
     """(Basis, Preload) of the components path: each part's PartBasis (engine: a
     reduce.parts.Engine, where and through which cache; None: in this process), the preload
     by Newton in the coupled reduced coordinates, the basis diagonalized on K_lin there."""
-    reduction, solver = case.solver.reduction, case.solver
+    reduction = case.solver.reduction
     engine = engine or Engine()
-    check_parts(case, model, engine.budget())
     t0 = time.perf_counter()
     say = _stages(engine, t0)
-    tasks = part_tasks(model, M, pairs, contacts, patterns, constant)
-    say("part tasks")
-    work = [PartTask(*task, PART_REACH * reduction.modes_fmax, solver.shift_hz,
-                     reduction.statics_tolerance, solver.linear_solver) for _, task in tasks]
-    try:
-        parts = engine.run(work)
-    except PartError as exc:
-        raise CaseError(case.path, f"parts.{exc.part}", f"its stiffness cannot be factorized "
-                        f"on its own ({exc}): is it held by constraints, or free to "
-                        "move?") from None
+    dofs, parts = reduce_parts(case, model, M, pairs, contacts, patterns, constant, engine,
+                               say)
     t_parts = time.perf_counter() - t0
-    say("parts")
-    X = synthesis(model.ndof, [dofs for dofs, _ in tasks], [p.T for p in parts])
+    X = Synthesis(model.ndof, dofs, [p.T for p in parts])
     Kr = sla.block_diag(*[p.Kr for p in parts])
     w = contacts.weights
     with blas.every_core():         # dense algebra in reduced coordinates, no solve beside it
@@ -181,6 +172,27 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
     return basis, preload
 
 
+def reduce_parts(case, model, M, pairs, contacts, patterns, constant, engine, say=None):
+    """(dofs, PartBasis) of each part, reduced through engine (a reduce.parts.Engine): the
+    components path's first stage, and all a campaign does before its variants fan out
+    (reduce.parts.cached then holds the parts they share)."""
+    reduction, solver = case.solver.reduction, case.solver
+    say = say or _stages(engine, time.perf_counter())
+    check_parts(case, model, engine.budget())
+    tasks = part_tasks(model, M, pairs, contacts, patterns, constant)
+    say("part tasks")
+    work = [PartTask(*task, PART_REACH * reduction.modes_fmax, solver.shift_hz,
+                     reduction.statics_tolerance, solver.linear_solver) for _, task in tasks]
+    try:
+        parts = engine.run(work)
+    except PartError as exc:
+        raise CaseError(case.path, f"parts.{exc.part}", f"its stiffness cannot be factorized "
+                        f"on its own ({exc}): is it held by constraints, or free to "
+                        "move?") from None
+    say("parts")
+    return [d for d, _ in tasks], parts
+
+
 def _stages(engine, t0):
     """say(name): engine.stage(name, seconds since the last, peak GB), or nothing."""
     last = [t0]
@@ -191,19 +203,6 @@ def _stages(engine, t0):
             engine.stage(name, now - last[0], peak_rss_gb())
             last[0] = now
     return say
-
-
-def synthesis(ndof, dofs, bases):
-    """X (ndof, sum of the widths) sparse, CSC: each part's basis T (n_p, w_p) on its dofs,
-    zero elsewhere. Held dense it would be ndof times every part's width; this way it is
-    the parts' bases side by side, no more."""
-    widths = [T.shape[1] for T in bases]
-    counts = np.repeat([len(d) for d in dofs], widths)
-    indptr = np.concatenate([[0], np.cumsum(counts)])
-    index = np.int32 if indptr[-1] < np.iinfo(np.int32).max else np.int64
-    indices = np.concatenate([np.tile(d.astype(index), w) for d, w in zip(dofs, widths)])
-    data = np.concatenate([np.asarray(T).ravel(order="F") for T in bases])
-    return sp.csc_matrix((data, indices, indptr.astype(index)), shape=(ndof, sum(widths)))
 
 
 def condensed(K_lin, omega2, A, cutoff, gram, loads, q, tol):

@@ -20,7 +20,7 @@ class PairRows:
     [normal, along, across] dense (points, columns)), the tangential ones with friction."""
 
     def __init__(self, contacts, X):
-        """X (ndof, N) sparse: the parts' bases side by side (components.synthesis)."""
+        """X (ndof, N): the parts' bases side by side (reduce.synthesis.Synthesis)."""
         f = contacts.friction
         self.shape = (contacts.n_points, X.shape[1])
         self.m = None if f is None else f.m
@@ -29,7 +29,7 @@ class PairRows:
             # C = L B^T: B^T X is small (compatible shapes x columns); a pair's points take
             # the factor columns of its own shapes
             L, B = contacts.factors
-            BX = [(b.T @ X).toarray() for b in [B] + ([f.along, f.across] if f else [])]
+            BX = [b.T @ X for b in [B] + ([f.along, f.across] if f else [])]
             for s in contacts.slices.values():
                 Ls = L[s]
                 r = np.flatnonzero(np.any(Ls != 0.0, axis=0))
@@ -38,9 +38,10 @@ class PairRows:
         else:
             rows = [contacts.C] + (list(contacts.tangential()) if f else [])
             for s in contacts.slices.values():
-                Y = [sp.csc_matrix(R[s] @ X) for R in rows]
-                c = np.flatnonzero(np.logical_or.reduce([np.diff(y.indptr) > 0 for y in Y]))
-                self.blocks.append((s, c, [y[:, c].toarray() for y in Y]))
+                # the columns of the parts the pair's rows (of any kind) touch
+                c, Y = X.restricted(sp.vstack([R[s] for R in rows]))
+                m = s.stop - s.start
+                self.blocks.append((s, c, [Y[k * m:(k + 1) * m] for k in range(len(rows))]))
 
     def observe(self, q, kind=NORMAL):
         """(P,) the rows of that kind times the reduced coordinates q (N,)."""
