@@ -324,19 +324,21 @@ def test_the_commands_reduce_the_parts_through_a_cache_and_refuse_it_when_assemb
 
 @pytest.mark.slow
 def test_a_lining_campaign_reduces_the_disc_once(tmp_path):
-    """`transient sweep --kind cea --cache DIR` with the components path: each variant's pad
-    is its own, the disc is reduced once and read back by the others (3 parts kept for 2
-    moduli), and a variant's modes equal `transient cea`'s of the same case through the same
-    cache."""
+    """`transient sweep --kind cea --cache DIR` with the components path on two workers: the
+    first variant's parts are reduced on the cluster before the variants fan out, so the disc
+    is reduced once and every variant reads it back, each reducing its own pad at most (3
+    parts kept for 2 moduli), and a variant's modes equal `transient cea`'s of the same case
+    through the same cache."""
     pytest.importorskip("dask.distributed")
     import json
     from transient import api
     overrides = SMALL + ['solver.reduction.method="components"',
                          "contact.pad_disc.friction.mu=0.4"]
     campaign = api.sweep(PAD, ["materials.lining.E=[4.0e9,5.0e9]"], tmp_path / "sweep",
-                         kind="cea", overrides=overrides, workers=1, cache=tmp_path / "parts")
+                         kind="cea", overrides=overrides, workers=2, cache=tmp_path / "parts")
     assert [r["status"] for r in campaign.rows] == ["complete", "complete"]
     assert len(list((tmp_path / "parts").glob("part-*.npz"))) == 3
+    assert [r["parts_reduced"] for r in campaign.rows] == [[], ["pad"]]
     alone = api.cea(load(PAD, overrides + ["materials.lining.E=4.0e9"]), cache=tmp_path / "parts")
     swept = json.loads((tmp_path / "sweep" / campaign.rows[0]["output"]).read_text())
     assert [m["frequency_hz"] for m in swept["modes"]] == alone.modes.frequency_hz.tolist()

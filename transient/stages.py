@@ -23,7 +23,7 @@ from .kernels.codes import ENERGY_TERMS, NO_CONVERGENCE, NOT_FINITE, OK
 from .model import build_model, constant_load
 from .model.band import check_band
 from .reduce.basis import rebase
-from .reduce.components import components_basis
+from .reduce.components import components_basis, reduce_parts
 from .reduce.reference import rebased, reference_basis
 from .reduce.stage import reduce, reduction_mass
 from .shared import Built, factorization
@@ -67,6 +67,19 @@ def prepare(case, check=None, built=None, unsampled=False, analysis=False, parts
     with blas.one_thread(), heap.setup():
         stages = Stages(check, getattr(parts, "stage", None))
         return _prepare(case, stages, built or Built(None), unsampled, analysis, parts)
+
+
+def prepare_parts(case, parts):
+    """The components path's parts of a case reduced through parts (a reduce.parts.Engine),
+    nothing after them: a campaign does this for one variant before the others fan out, so
+    that the parts they share are reduced once on the whole cluster and read back from its
+    cache (reduce.parts.cached) by every variant."""
+    with blas.one_thread():
+        model = build_model(case)
+        pairs = build_contact(case, model) if case.contact else []
+        reduce_parts(case, model, reduction_mass(case, model, None)[0], pairs,
+                     stack(pairs, model.ndof), [model.load_patterns[n] for n in case.loads],
+                     constant_load(case, model), parts)
 
 
 def _band_keys(case, analysis):

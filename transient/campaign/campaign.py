@@ -124,6 +124,8 @@ def _gather(client, case_path, overrides, variants, todo, out, kind, rows, progr
             counts[depth] += 1
             for v in members:
                 built[v.name] = before[v.name] = future
+    if cache is not None and fresh:
+        _prime(client, case_path, list(overrides) + fresh[0].overrides(), kind, cache)
     futures = {client.submit(run_variant, str(case_path), list(overrides) + v.overrides(),
                              str(outputs(out, v.name, kind)[0]), kind, built.get(v.name),
                              todo[v.name] == "continue", cache,
@@ -145,6 +147,27 @@ def _gather(client, case_path, overrides, variants, todo, out, kind, rows, progr
         if progress:
             progress(len(rows), len(variants), failed)
     return counts
+
+
+def _prime(client, case_path, overrides, kind, cache):
+    """The components path's parts of one variant reduced on the cluster, one task a part,
+    into the cache, before the variants fan out: the parts they share (a lining campaign's
+    disc, caliper and bracket) are then reduced once on every worker, not once by each
+    variant of the first round on its one thread, and read back by all. A variant refused
+    here says why in its own row."""
+    from ..case.loading import load
+    from ..reduce.parts import Engine
+    from ..stability.stage import analysed_case
+    from ..stages import prepare_parts
+    case = load(case_path, overrides)
+    reduction = case.solver.reduction
+    if not (reduction.enabled and reduction.method == "components"):
+        return
+    try:
+        prepare_parts(analysed_case(case) if kind == "cea" else case,
+                      Engine(client=client, cache=Path(cache)))
+    except CaseError:
+        pass
 
 
 def _row(v, row, kind, out):

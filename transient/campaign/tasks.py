@@ -67,7 +67,16 @@ def _run(case, out, built, parts=None, on_setup=None, resume=False):
                  on_setup=on_setup, parts=parts)
     return {"status": result.status, "steps": result.steps, "dt": result.dt,
             "kernel_s": result.timings.get("kernel"), "energy_drift": result.energy_drift,
-            "stages": sorted(result.stages), **summary(out)}
+            "stages": sorted(result.stages), **_parts_reduced(result.meta), **summary(out)}
+
+
+def _parts_reduced(meta):
+    """The components path's parts the variant reduced itself, not read back from the
+    campaign's cache ({} on the assembled path)."""
+    stages = ((meta or {}).get("basis_timings") or {}).get("part_stages")
+    if stages is None:
+        return {}
+    return {"parts_reduced": sorted(name for name, s in stages.items() if "cache" not in s)}
 
 
 def summary(path):
@@ -88,7 +97,7 @@ def _cea(case, out, built, parts=None):
     from ..stability.stage import analyse
     result = analyse(case, built=built, parts=parts)
     return {"status": "complete", "stages": sorted(result.stages),
-            **_modes_written(result, case, out)}
+            **_parts_reduced(result.meta), **_modes_written(result, case, out)}
 
 
 def _both(case, out, built, parts=None):
