@@ -225,6 +225,65 @@ def test_regularized_pairs_carry_their_rows_factored():
     assert np.abs(K - K_ref).max() <= 1e-11 * np.abs(K_ref).max()
 
 
+def test_several_pairs_factors_held_by_pair_multiply_as_the_block_diagonal():
+    """contact.blocks.PairFactors (each pair's L on its own points and shapes, a pair with no
+    point kept, one with none at all) against the block-diagonal dense L it stands for: L Y and
+    L^T y on blocks and vectors, a subset of the points (sorted indices, a slice), and the
+    contact set's products through it (observe, the normal load, the rows) against the
+    explicit rows of the same factors."""
+    from transient.contact.blocks import PairFactors, pair_factors
+    from transient.contact.regularize import factored_rows
+    rng = np.random.default_rng(2)
+    blocks = [rng.normal(size=(7, 3)), rng.normal(size=(5, 4)), np.zeros((0, 2)),
+              rng.normal(size=(6, 2))]
+    L = PairFactors(blocks)
+    dense = L.toarray()
+    assert dense.shape == L.shape == (18, 11)
+    assert np.array_equal(dense[7:12, 3:7], blocks[1]) and not dense[:7, 3:].any()
+    Y, y = rng.normal(size=(11, 4)), rng.normal(size=(18, 3))
+    for got, want in ((L @ Y, dense @ Y), (L @ Y[:, 0], dense @ Y[:, 0]),
+                      (L.T @ y, dense.T @ y), (L.T @ y[:, 0], dense.T @ y[:, 0])):
+        np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-13 * np.abs(want).max())
+    keep = np.array([0, 3, 6, 12, 13, 17])           # none of the second pair's points
+    assert np.array_equal(L[keep].toarray(), dense[keep])
+    assert L[keep].shape == (6, 11) and L[keep].blocks[1].shape == (0, 4)
+    assert np.array_equal(L[7:12].toarray(), dense[7:12])
+    assert [(r, c) for r, c, _ in pair_factors(L)][1] == (slice(7, 12), slice(3, 7))
+    B = sp.random(30, 11, density=0.3, random_state=3, format="csr")
+    explicit = factored_rows(dense, B)
+    assert np.abs((factored_rows(L, B) - explicit).toarray()).max() <= \
+        1e-13 * np.abs(explicit.toarray()).max()
+    # the brake corner's eleven pairs, with friction on the pads: its contact set against
+    # the same set with L dense
+    from dataclasses import replace
+    from pathlib import Path
+
+    from transient.case.loading import load
+    from transient.contact.contactset import stack
+    from transient.contact.pair import build_contact
+    from transient.model import build_model
+    case = load(Path(__file__).resolve().parent.parent / "cases" / "brake_corner.toml",
+                ["contact.pad_in_disc.friction.mu=0.4", "contact.pad_out_disc.friction.mu=0.4"])
+    model = build_model(case)
+    contacts = stack(build_contact(case, model), model.ndof)
+    L, B = contacts.factors
+    assert isinstance(L, PairFactors) and len(L.blocks) == 11
+    twin = replace(contacts, factors=(L.toarray(), B))
+    T = rng.normal(size=(model.ndof, 3))
+    z = rng.normal(size=(contacts.n_points, 2))
+
+    def close(got, want):
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+    close(contacts.observe(T), twin.observe(T))
+    for got, want in zip(contacts.observe_tangential(T), twin.observe_tangential(T)):
+        close(got, want)
+    for load_of in ("normal_load", "tangential_load", "across_load"):
+        close(getattr(contacts, load_of)(z), getattr(twin, load_of)(z))
+    keep = np.arange(0, contacts.n_points, 5)
+    close(contacts.subset(keep, contacts.weights[keep]).observe(T),
+          twin.subset(keep, twin.weights[keep]).observe(T))
+
+
 def test_pardiso_analysis_says_what_the_factorization_takes(capsys):
     """The symbolic analysis reports the factors a factorization then holds: nonzeros at least
     those of the upper triangle (no fewer than the matrix), memory and flops positive; and

@@ -3,11 +3,11 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..kernels.codes import EXPONENTIAL, FRICTIONLESS
 from ..kernels.laws import evaluate
+from .blocks import PairFactors
 from .friction import CODES, steady, tangential_rows
 from .laws import law_params
 from .regularize import factored_rows
@@ -46,7 +46,8 @@ class ContactSet:
     params: np.ndarray       # (P, 4) law parameters of each point
     slices: dict             # pair name -> slice of its points
     factors: tuple = None    # (L (P, r), B (ndof, r) sparse) with C = L B^T, when every pair's
-    #                          rows are factored (regularized rules: contact.pair.row_factors)
+    #                          rows are factored (regularized rules: contact.pair.row_factors);
+    #                          L dense for one pair, a contact.blocks.PairFactors for several
     friction: FrictionSet = None   # None when no pair has friction
 
     @cached_property
@@ -157,9 +158,10 @@ def stack(pairs, ndof):
     C, factors = None, None
     if factored:
         # the rows are held as factors only: dense points x interface dofs otherwise
-        # one pair's held as they are: a copy of L was 0.81 GB at 1M dofs (64602 x 1560)
+        # one pair's held as they are: a copy of L was 0.81 GB at 1M dofs (64602 x 1560);
+        # several pairs' a pair at a time (contact.blocks), never block-diagonal dense
         factors = ((pairs[0].factors[0], sp.csr_matrix(pairs[0].factors[1])) if len(pairs) == 1
-                   else (sla.block_diag(*[pair.factors[0] for pair in pairs]),
+                   else (PairFactors([pair.factors[0] for pair in pairs]),
                          sp.hstack([pair.factors[1] for pair in pairs]).tocsr()))
     else:
         C = sp.vstack(rows).tocsr()

@@ -10,6 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator
 
+from ..contact.blocks import pair_factors
 from .basis import contact_gram
 
 NORMAL, ALONG, ACROSS = 0, 1, 2
@@ -30,11 +31,9 @@ class PairRows:
             # the factor columns of its own shapes
             L, B = contacts.factors
             BX = [b.T @ X for b in [B] + ([f.along, f.across] if f else [])]
-            for s in contacts.slices.values():
-                Ls = L[s]
-                r = np.flatnonzero(np.any(Ls != 0.0, axis=0))
+            for s, r, Ls in pair_factors(L):
                 c = _seen([Y[r] for Y in BX])
-                self.blocks.append((s, c, [Ls[:, r] @ Y[np.ix_(r, c)] for Y in BX]))
+                self.blocks.append((s, c, [Ls @ Y[r, c] for Y in BX]))
         else:
             rows = [contacts.C] + (list(contacts.tangential()) if f else [])
             for s in contacts.slices.values():
