@@ -178,3 +178,32 @@ def test_stick_bound_is_where_explicit_friction_turns_unstable(factor, grows):
     # the slip, at the half step's velocity, changes sign and by 1 - c dt each step
     slip = np.abs(out[4][:, 0, 0])
     assert (slip[-1] > 1e-5) == grows and (slip[-1] < 1e-6) != grows
+
+
+@pytest.mark.parametrize("name", ["brake_corner", "pad_disc"])
+def test_the_friction_terms_through_the_factors_are_the_rows_own(name):
+    """stability.linearize takes a factored reduced system's friction stiffness and damping a
+    pair at a time through its points' gram, Yt^T (L^T diag(d) L) Y: equal to Ct^T diag(d) C
+    of its dense rows, on the brake corner's eleven pairs (two with friction) and on the pad
+    and disc's one, each relative to its own size."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    from transient.case.loading import load
+    from transient.stability.stage import analysed_case
+    pads = (["contact.pad_in_disc.friction.mu=0.4", "contact.pad_out_disc.friction.mu=0.4"]
+            if name == "brake_corner" else ["contact.pad_disc.friction.mu=0.4",
+                                            "parts.disc.mesh.divisions=[4,48,1]",
+                                            "parts.pad.mesh.divisions=[3,8,1,1]"])
+    case = load(Path(__file__).resolve().parent.parent / "cases" / f"{name}.toml", pads)
+    setup = prepare(analysed_case(case), analysis=True)
+    system = setup.system
+    assert system.shape_rows is not None and system.contacts.friction is not None
+    factored = linearized(system, setup.state)
+    rows = linearized(replace(system, shape_rows=None), setup.state)
+    for a, b in zip(factored, rows):
+        np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-10 * np.abs(b).max())
+    # the friction's own part, not only the diagonal that holds it
+    Kf = factored[2] - np.diag(system.omega2)
+    np.testing.assert_allclose(Kf, rows[2] - np.diag(system.omega2), rtol=1e-8,
+                               atol=1e-10 * np.abs(Kf).max())

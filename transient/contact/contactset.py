@@ -78,6 +78,14 @@ class ContactSet:
                                               for name, (a, b) in bounds.items()}, factors,
                           friction)
 
+    def shape_rows(self, T, W=None):
+        """(B^T T W, Bt^T T W, Bc^T T W) (r, k), the right factors of the rows on T (the
+        tangential ones with friction): C T W = L (B^T T W). None without factors."""
+        if self.factors is None:
+            return None
+        f, B = self.friction, self.factors[1]
+        return tuple(_times(R.T @ T, W) for R in [B] + ([f.along, f.across] if f else []))
+
     def observe(self, T, W=None):
         """C T (P, k) for T (ndof, k) dense or held by part (reduce.synthesis), C T W for W
         (k, n): from the factors when held, L (B^T T), which reads r x ndof sparse entries

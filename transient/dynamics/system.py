@@ -55,6 +55,8 @@ class ReducedSystem(System):
     loss: np.ndarray = None      # (n, n) T^T H T, H = sum_m eta_m K_m the materials' loss:
     #                              the cea's i T^T H T; damp holds its diagonal / omega_ref
     base_damp: np.ndarray = None  # (n,) damp without the loss's share (the cea's D)
+    shape_rows: tuple = None     # (r, n) each: C = L Y[0], Ct = L Y[1], Cc = L Y[2] with L the
+    #                              contact set's left factor, when its rows are factored
     reduced = True
 
 
@@ -114,12 +116,16 @@ def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, si
         if loss is not None:
             Hr = reduced_loss(loss, X, AW, omega2)
             damp = base + np.diag(Hr) / (2 * np.pi * loss_hz)
-        Cr = np.ascontiguousarray(contacts.observe(X, AW))
+        Y = contacts.shape_rows(X, AW)
+        Cr = np.ascontiguousarray(contacts.observe(X, AW) if Y is None
+                                  else contacts.factors[0] @ Y[0])
         n = len(omega2)
         S = _observation((sensors @ X) @ AW, n, field, dense=True)
         Ct = Cc = None
         if contacts.friction is not None:
-            Ct, Cc = (np.ascontiguousarray(R) for R in contacts.observe_tangential(X, AW))
+            Ct, Cc = (np.ascontiguousarray(R) for R in (
+                contacts.observe_tangential(X, AW) if Y is None
+                else (contacts.factors[0] @ Y[1], contacts.factors[0] @ Y[2])))
     return ReducedSystem(contacts, tangent,
                          patterns_matrix([AW.T @ (X.T @ p) for p in patterns], n),
                          signals, S, sensor_names, n if field else 0,
@@ -127,7 +133,7 @@ def reduced_system(X, AW, omega2, fmax, damping, contacts, tangent, patterns, si
                          if critical_step else None,
                          omega2=omega2,
                          damp=damp, C=Cr, T=X @ AW if field else None, Ct=Ct, Cc=Cc,
-                         loss=Hr, base_damp=base if Hr is not None else None)
+                         loss=Hr, base_damp=base if Hr is not None else None, shape_rows=Y)
 
 
 def reduced_loss(H, X, AW, omega2):

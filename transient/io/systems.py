@@ -4,7 +4,8 @@ factorizations and eigensolvers need not give the same last bits under another l
 thread count).
 
 Every field of the frozen system is kept but the reduced basis T (ndof x n, the largest by
-far; the history keeps it under /geometry when the field is stored) and the cea's loss:
+far; the history keeps it under /geometry when the field is stored) and what only the cea
+reads (the loss, the factored rows' right factors):
 arrays as datasets, sparse matrices and the contact set and critical step as groups, numbers
 and names as attributes.
 """
@@ -20,8 +21,9 @@ from ..dynamics.system import FullSystem, ReducedSystem
 from ..errors import DamagedHistory
 from .checksums import create
 
-# the materials' loss is the cea's (a run integrates damp, which holds its share)
-SKIPPED = ("T", "loss", "base_damp")
+# the materials' loss is the cea's (a run integrates damp, which holds its share), as are the
+# factored rows' right factors (its friction terms; the contact set is read back as rows)
+SKIPPED = ("T", "loss", "base_damp", "shape_rows")
 FRICTION_ARRAYS = ("speed", "m", "dm", "turn", "code", "v_eps", "table")
 
 GROUP = "system"           # the history's group of the system integrated
