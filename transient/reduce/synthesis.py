@@ -27,7 +27,7 @@ class Synthesis:
     __array_ufunc__ = None     # ndarray @ X defers to __rmatmul__, never an object array
 
     def __init__(self, ndof, dofs, bases):
-        self.parts = tuple((np.asarray(d), np.asfortranarray(T, dtype=np.float64))
+        self.parts = tuple((np.asarray(d), np.asarray(T, dtype=np.float64))
                            for d, T in zip(dofs, bases))
         widths = [T.shape[1] for _, T in self.parts]
         self.offsets = np.concatenate([[0], np.cumsum(widths)]).astype(int)
