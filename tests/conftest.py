@@ -33,7 +33,14 @@ SLOW_INSTANCES = {
 
 
 def pytest_collection_modifyitems(items):
+    """Mark SLOW_INSTANCES slow; a name there whose test is collected but not that instance
+    (a renamed parameter) stops the run, rather than going back to the quick subset."""
     import pytest
+    names = {item.name for item in items}
+    functions = {item.originalname for item in items if hasattr(item, "originalname")}
+    stale = sorted(n for n in SLOW_INSTANCES if n not in names and n.split("[")[0] in functions)
+    if stale:
+        raise pytest.UsageError(f"tests/conftest.py SLOW_INSTANCES: no such instance {stale}")
     for item in items:
         if item.name in SLOW_INSTANCES:
             item.add_marker(pytest.mark.slow)

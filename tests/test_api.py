@@ -15,12 +15,12 @@ import transient
 from transient.cli import main
 from transient.errors import CaseError
 
+from small_cases import PAD_DISC_THIN
+
 ROOT = Path(__file__).resolve().parent.parent
 PAD, BAR, CUBE = (ROOT / "cases" / f"{n}.toml" for n in ("pad_disc", "bar_impact",
                                                           "drilled_cube"))
-SMALL = ["parts.disc.mesh.divisions=[2,36,1]", 'parts.disc.mesh.element="hex8"',
-         "parts.pad.mesh.divisions=[3,8,1,1]", 'parts.pad.mesh.element="hex8"',
-         "solver.reduction.fmax=6000.0", "solver.modes.fmax=6000.0"]
+SMALL = PAD_DISC_THIN + ["solver.reduction.fmax=6000.0", "solver.modes.fmax=6000.0"]
 SHORT = ["solver.t_end=2e-5"]
 
 

@@ -8,11 +8,11 @@ import pytest
 from transient.studies.bench import bench, compare, target, write
 from transient.cli import main
 
+from small_cases import PAD_DISC, PAD_DISC_THIN
+
 CASES = Path(__file__).resolve().parent.parent / "cases"
-SMALL = ["parts.disc.mesh.divisions=[2,36,1]", 'parts.disc.mesh.element="hex8"',
-         "parts.pad.mesh.divisions=[3,8,1,1]", 'parts.pad.mesh.element="hex8"',
-         "solver.reduction.fmax=6000.0", "solver.modes.fmax=6000.0",
-         "loads.tap.signal.duration=2e-4"]
+SMALL = PAD_DISC_THIN + ["solver.reduction.fmax=6000.0", "solver.modes.fmax=6000.0",
+                         "loads.tap.signal.duration=2e-4"]
 
 
 def test_compare_measures_what_it_says():
@@ -90,10 +90,8 @@ def test_rules_a_scene_refuses_are_rows_that_say_why(tmp_path):
     assert all(f.stat().st_size > 0 for f in files)
 
 
-SQUEAL = ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1,1]",
-          'parts.disc.mesh.element="hex8"', 'parts.pad.mesh.element="hex8"',
-          "motion.disc.omega=50.0", "solver.damping.residual=0.0",
-          "contact.pad_disc.friction.mu=0.4", "loads.tap.vector=[0.0,0.0,-0.02]"]
+SQUEAL = PAD_DISC + ["motion.disc.omega=50.0", "solver.damping.residual=0.0",
+                     "contact.pad_disc.friction.mu=0.4", "loads.tap.vector=[0.0,0.0,-0.02]"]
 
 
 @pytest.mark.slow

@@ -17,11 +17,11 @@ from transient.contact.friction import coefficient, regularized_sign, steady
 from transient.kernels.codes import ATAN, TANH
 from transient.stages import prepare
 
+from small_cases import PAD_DISC
+
 PAD = Path(__file__).resolve().parent.parent / "cases" / "pad_disc.toml"
 OMEGA = 50.0
-SMALL = ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1,1]",
-         'parts.disc.mesh.element="hex8"', 'parts.pad.mesh.element="hex8"',
-         f"motion.disc.omega={OMEGA}", "solver.damping.residual=0.0"]
+SMALL = PAD_DISC + [f"motion.disc.omega={OMEGA}", "solver.damping.residual=0.0"]
 
 
 def small(*more):

@@ -12,15 +12,15 @@ from transient.stability.linearize import linearized
 from transient.stability.stage import analyse, analysed_case
 from transient.stages import prepare
 
+from small_cases import PAD_DISC
+
 ROOT = Path(__file__).resolve().parent.parent
 SLOTTED = ROOT / "cases" / "slotted_pad.toml"
 SMALL_SLOTTED = ['parts.disc.mesh.path="../tests/data/slotted_pad/disc.msh"',
                  'parts.pad.mesh.path="../tests/data/slotted_pad/pad.msh"',
                  "contact.pad_disc.friction.mu=0.5"]
 PAD = ROOT / "cases" / "pad_disc.toml"
-SMALL = ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1,1]",
-         'parts.disc.mesh.element="hex8"', 'parts.pad.mesh.element="hex8"',
-         "solver.damping.residual=0.0", "contact.pad_disc.friction.mu=0.5"]
+SMALL = PAD_DISC + ["solver.damping.residual=0.0", "contact.pad_disc.friction.mu=0.5"]
 
 
 @pytest.mark.slow

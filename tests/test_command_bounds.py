@@ -14,10 +14,10 @@ import transient.stages
 from transient.cli import main
 from transient.campaign.variants import MAX_VARIANTS
 
+from small_cases import PAD_DISC
+
 CASES = Path(__file__).resolve().parent.parent / "cases"
 BAR, PAD = (str(CASES / f"{n}.toml") for n in ("bar_impact", "pad_disc"))
-SMALL_PAD = ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1,1]",
-             'parts.disc.mesh.element="hex8"', 'parts.pad.mesh.element="hex8"']
 
 
 def one_error(capsys, args):
@@ -63,9 +63,9 @@ def no_setup(monkeypatch):
     ("cea", BAR, ["solver.damping.beta=1e-3"], "solver.damping.beta"),
     ("cea", BAR, ["solver.damping.beta=1e-5"], "solver.damping.beta"),
     # a rotation about an axis 1e300 m away: an overflow, then "nodes without sliding"
-    ("cea", PAD, SMALL_PAD + ["contact.pad_disc.friction.mu=0.4", "motion.disc.point=[1e300,0,0]"],
+    ("cea", PAD, PAD_DISC + ["contact.pad_disc.friction.mu=0.4", "motion.disc.point=[1e300,0,0]"],
      "motion.disc.point"),
-    ("cea", PAD, SMALL_PAD + ["contact.pad_disc.friction.mu=0.4",
+    ("cea", PAD, PAD_DISC + ["contact.pad_disc.friction.mu=0.4",
                               "motion.disc.point=[1.7e308,-1.7e308,0]"], "motion.disc.point"),
     # a wall behind the whole part (its forces overflowed: exit 3), or so far along itself
     # that the faces lost their areas ("no face faces the wall")
@@ -73,7 +73,7 @@ def no_setup(monkeypatch):
     ("run", BAR, ["contact.wall.wall_point=[0.10001,1e160,0]"], "contact.wall.wall_point"),
     ("run", BAR, ["initial.impact.velocity=[1e300,0,0]"], "initial.impact.velocity"),
     # a mass rule of fewer points than nodes: a singular M, a traceback of the cea's eigh
-    ("cea", PAD, SMALL_PAD + ["contact.pad_disc.friction.mu=0.4", "solver.quadrature.mass=1"],
+    ("cea", PAD, PAD_DISC + ["contact.pad_disc.friction.mu=0.4", "solver.quadrature.mass=1"],
      "solver.quadrature.mass"),
     ("modes", BAR, ["solver.quadrature.mass=1"], "solver.quadrature.mass"),
     # every dof clamped: a traceback of the eigensolver

@@ -12,9 +12,9 @@ from transient.model import build_model
 from transient.solve.modes import normal_modes
 from transient.stages import prepare
 
+from small_cases import PAD_DISC
+
 PAD = "cases/pad_disc.toml"
-SMALL = ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1,1]",
-         'parts.disc.mesh.element="hex8"', 'parts.pad.mesh.element="hex8"']
 FMAX = 60000.0
 LENGTH, DIVISIONS = 0.1, 20
 
@@ -92,7 +92,7 @@ def test_pad_disc_preload_and_modes_match_the_assembled_path():
     the preload solved in the coupled reduced coordinates carries the assembled preload's
     contact force and displacement, and the reduced frequencies below fmax match the
     assembled basis' within 0.1%, without a factorization of the whole model."""
-    cases = {m: load(PAD, SMALL + [f'solver.reduction.method="{m}"'])
+    cases = {m: load(PAD, PAD_DISC + [f'solver.reduction.method="{m}"'])
              for m in ("assembled", "components")}
     setups = {m: prepare(case, analysis=True, unsampled=m == "components")
               for m, case in cases.items()}
@@ -154,7 +154,7 @@ def test_a_basis_at_another_friction_is_refused_with_components():
     """The part bases do not depend on the friction: contact.<pair>.friction.basis_mu, which
     shares a basis across a friction sweep, has nothing to share there, and is refused before
     the model is built."""
-    case = load(PAD, SMALL + ['solver.reduction.method="components"',
+    case = load(PAD, PAD_DISC + ['solver.reduction.method="components"',
                               "contact.pad_disc.friction.mu=0.4",
                               "contact.pad_disc.friction.basis_mu=0.3"])
     with pytest.raises(CaseError, match="basis_mu"):
@@ -175,7 +175,7 @@ def test_a_cached_part_is_read_back_and_only_a_changed_part_is_reduced_again(tmp
     made = []
     engine = Engine(cache=tmp_path / "parts", done=lambda task, part: made.append(
         (task.name, "cache" in part.seconds)))
-    overrides = SMALL + ['solver.reduction.method="components"']
+    overrides = PAD_DISC + ['solver.reduction.method="components"']
     T0, w0 = _reduced(load(PAD, overrides), engine)
     assert sorted(made) == [("disc", False), ("pad", False)]
     made.clear()
@@ -193,7 +193,7 @@ def test_a_part_larger_than_a_worker_is_refused_naming_its_key():
     """The cluster's smallest worker bounds each part's reduction (estimated from its cells):
     a part above it is refused before any is reduced, by the key that sizes it."""
     from transient.reduce.components import check_parts
-    case = load(PAD, SMALL + ['solver.reduction.method="components"'])
+    case = load(PAD, PAD_DISC + ['solver.reduction.method="components"'])
     model = build_model(case)
     check_parts(case, model, None)
     check_parts(case, model, 1e12)
@@ -208,16 +208,16 @@ def test_the_memory_bound_takes_the_model_and_its_largest_part():
     case at load, by the meshes' keys, and lets the components one in."""
     from transient.case.sizes import MODEL_BYTES_PER_ENTRY, entries, generated_cells, \
         setup_bytes
-    cells = {n: [generated_cells(p.mesh)] for n, p in load(PAD, SMALL).parts.items()}
+    cells = {n: [generated_cells(p.mesh)] for n, p in load(PAD, PAD_DISC).parts.items()}
     assembled = setup_bytes(sum(cells.values(), []))
     parts = (MODEL_BYTES_PER_ENTRY * entries(sum(cells.values(), []))
              + max(setup_bytes(c) for c in cells.values()))
     assert parts < assembled
     bound = [f"limits.memory={0.5 * (parts + assembled) / 1e9}"]
     with pytest.raises(CaseError, match="limits.memory") as refused:
-        load(PAD, SMALL + bound)
+        load(PAD, PAD_DISC + bound)
     assert refused.value.key.endswith(".mesh.divisions")
-    load(PAD, SMALL + bound + ['solver.reduction.method="components"',
+    load(PAD, PAD_DISC + bound + ['solver.reduction.method="components"',
                                "solver.reduction.enabled=true"])
 
 
@@ -252,7 +252,7 @@ def test_parts_on_a_cluster_equal_parts_here_and_a_killed_worker_is_made_up(tmp_
     from transient.reduce.components import components_basis
     from transient.cluster import client_for
     cloudpickle.register_pickle_by_value(sys.modules[__name__])
-    case = load(PAD, SMALL + ['solver.reduction.method="components"'])
+    case = load(PAD, PAD_DISC + ['solver.reduction.method="components"'])
     model = build_model(case)
     from transient.contact.pair import build_contact
     from transient.contact.contactset import stack
@@ -305,7 +305,7 @@ def test_the_commands_reduce_the_parts_through_a_cache_and_refuse_it_when_assemb
     from transient.cli import main
     args = ["cea", PAD, "--cache", str(tmp_path / "parts"), "--set",
             'solver.reduction.method="components"', "--set", "contact.pad_disc.friction.mu=0.4"]
-    args += [a for o in SMALL for a in ("--set", o)]
+    args += [a for o in PAD_DISC for a in ("--set", o)]
     assert main(args) == 0
     first = capsys.readouterr()
     assert sorted(line.split(":")[0] for line in first.err.splitlines()
@@ -332,7 +332,7 @@ def test_a_lining_campaign_reduces_the_disc_once(tmp_path):
     pytest.importorskip("dask.distributed")
     import json
     from transient import api
-    overrides = SMALL + ['solver.reduction.method="components"',
+    overrides = PAD_DISC + ['solver.reduction.method="components"',
                          "contact.pad_disc.friction.mu=0.4"]
     campaign = api.sweep(PAD, ["materials.lining.E=[4.0e9,5.0e9]"], tmp_path / "sweep",
                          kind="cea", overrides=overrides, workers=2, cache=tmp_path / "parts")
@@ -365,7 +365,7 @@ def test_the_coupling_rows_a_pair_at_a_time_are_the_whole_rows(regularized):
     from transient.reduce.components import law_tangent, part_tasks
     from transient.reduce.synthesis import Synthesis
     from transient.reduce.coupling import PairRows
-    case = load(PAD, SMALL + ['solver.reduction.method="components"',
+    case = load(PAD, PAD_DISC + ['solver.reduction.method="components"',
                               "contact.pad_disc.friction.mu=0.4",
                               f"contact.pad_disc.regularized={str(regularized).lower()}"])
     model = build_model(case)

@@ -14,9 +14,9 @@ from transient.solve import preload as preload_module
 from transient.solve.lowrank import contact_solver
 from transient.solve.preload import solve_preload
 
+from small_cases import PAD_DISC
+
 PAD = Path(__file__).resolve().parent.parent / "cases" / "pad_disc.toml"
-SMALL = ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1,1]",
-         'parts.disc.mesh.element="hex8"', 'parts.pad.mesh.element="hex8"']
 
 
 class Counted:
@@ -31,7 +31,7 @@ class Counted:
 
 
 def _preload(mu, start, stale):
-    case = load(PAD, SMALL + [f"contact.pad_disc.friction.mu={mu}"])
+    case = load(PAD, PAD_DISC + [f"contact.pad_disc.friction.mu={mu}"])
     model = build_model(case)
     pairs = build_contact(case, model)
     contacts = stack(pairs, model.ndof)

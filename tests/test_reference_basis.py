@@ -12,10 +12,10 @@ from transient.case.loading import load
 from transient.stability.stage import analyse
 from transient.stages import prepare
 
+from small_cases import PAD_DISC
+
 PAD = Path(__file__).resolve().parent.parent / "cases" / "pad_disc.toml"
-SMALL = ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1,1]",
-         'parts.disc.mesh.element="hex8"', 'parts.pad.mesh.element="hex8"',
-         "motion.disc.omega=50.0", "solver.damping.residual=0.0"]
+SMALL = PAD_DISC + ["motion.disc.omega=50.0", "solver.damping.residual=0.0"]
 MU = "contact.pad_disc.friction.mu="
 BASIS = "contact.pad_disc.friction.basis_mu="
 

@@ -16,12 +16,12 @@ from transient.io.history import summary
 from transient.campaign.campaign import THREAD_ENV
 from transient.campaign.variants import make_variants, parse_parameter, variant_name
 
+from small_cases import PAD_DISC
+
 ROOT = Path(__file__).resolve().parent.parent
 PAD = ROOT / "cases" / "pad_disc.toml"
-SMALL = ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1,1]",
-         'parts.disc.mesh.element="hex8"', 'parts.pad.mesh.element="hex8"',
-         "motion.disc.omega=50.0", "solver.damping.residual=0.0", "solver.t_end=5e-3",
-         "output.every=2", "loads.tap.vector=[0.0,0.0,-0.02]"]
+SMALL = PAD_DISC + ["motion.disc.omega=50.0", "solver.damping.residual=0.0", "solver.t_end=5e-3",
+                    "output.every=2", "loads.tap.vector=[0.0,0.0,-0.02]"]
 
 
 def test_parameters_and_their_variants():

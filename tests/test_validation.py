@@ -9,6 +9,8 @@ import pytest
 
 from transient.cli import main
 
+from small_cases import PAD_DISC
+
 CASES = Path(__file__).resolve().parent.parent / "cases"
 BAR, TWO, PAD = (str(CASES / f"{n}.toml") for n in ("bar_impact", "two_bars", "pad_disc"))
 
@@ -79,9 +81,8 @@ def sets(*overrides):
     ("cea", PAD, ["contact.pad_disc.friction.basis_mu=0.3", "motion.disc.omega=0.0"],
      "contact.pad_disc.friction.basis_mu"),
     # the friction's explicit step bound, known only once set up: on a coarse pad and disc
-    ("run", PAD, ["parts.disc.mesh.divisions=[3,36,1]", "parts.pad.mesh.divisions=[3,6,1,1]",
-                  'parts.disc.mesh.element="hex8"', 'parts.pad.mesh.element="hex8"',
-                  "contact.pad_disc.friction.mu=0.4", "solver.dt=3e-5"], "solver.dt"),
+    ("run", PAD, PAD_DISC + ["contact.pad_disc.friction.mu=0.4", "solver.dt=3e-5"],
+     "solver.dt"),
     # Newmark on the full model with friction keeps S^-1 [C; Ct; Cc]^T: 12 GB here
     ("run", PAD, ["contact.pad_disc.friction.mu=0.4", 'solver.scheme="implicit"',
                   "solver.reduction.enabled=false", 'contact.pad_disc.rule="fine"',
