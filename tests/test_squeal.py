@@ -180,6 +180,7 @@ def test_stick_bound_is_where_explicit_friction_turns_unstable(factor, grows):
     assert (slip[-1] > 1e-5) == grows and (slip[-1] < 1e-6) != grows
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["brake_corner", "pad_disc"])
 def test_the_friction_terms_through_the_factors_are_the_rows_own(name):
     """stability.linearize takes a factored reduced system's friction stiffness and damping a
