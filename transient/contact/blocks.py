@@ -7,7 +7,7 @@ pair, each product is one BLAS call on a pair's block.
 """
 import numpy as np
 
-from ..solve.transposed import Transposed
+from ..transposed import Transposed
 
 
 class PairFactors:

@@ -10,7 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..kernels.sparse import csr_dot
-from ..solve.transposed import Transposed
+from ..transposed import Transposed
 
 # a sparse row block R (m, n_p) is taken dense against a part's basis where at least this
 # share of its (touched rows x touched dofs) holds entries: the compatible shapes' B^T, dense
