@@ -208,13 +208,6 @@ class PartTask:
             h.update(a.data)
         return h.hexdigest()
 
-    def bytes(self):
-        """An estimate of the peak memory of its reduction [B]: the factor of K (about 40 times
-        K's entries for tet10 in 3D), the modes and responses (n x their columns), twice."""
-        n = self.K.shape[0]
-        k = 0 if self.interface is None else self.interface.E.shape[1]
-        return int(40 * 12 * self.K.nnz + 8 * n * (3 * (k + self.loads.shape[1]) + 400))
-
 
 @dataclass(frozen=True)
 class Engine:
