@@ -14,6 +14,10 @@ TETS_PER_HEX = 6          # the generators split each hex in six tets (Kuhn)
 # setup's multiple of them (factorization, basis, contact): the largest of the setups' measured
 # peaks per entry, from pad_disc to a 1M-dof tet10 brake (docs/performance.md, "Memory")
 BYTES_PER_ENTRY = 130
+# a part's reduction alone, on a worker of the components path (its interface fields, its
+# factorization, modes and statics): the largest measured per entry of a brake corner's parts,
+# a pad's many interface columns (docs/performance.md, "A part's reduction alone")
+PART_BYTES_PER_ENTRY = 200
 # the model alone (K and M assembled, and their COO triplets while they are): the components
 # path's process holds it whole beside one part's setup at a time (docs/performance.md)
 MODEL_BYTES_PER_ENTRY = 30
@@ -39,6 +43,12 @@ def generated_cells(mesh):
 def setup_bytes(cells):
     """Estimated peak memory [bytes] of the model and its setup: cells (count, nodes) pairs."""
     return BYTES_PER_ENTRY * entries(cells)
+
+
+def part_bytes(cells):
+    """Estimated peak memory [bytes] of one part's reduction on a worker: cells (count, nodes)
+    pairs of the part."""
+    return PART_BYTES_PER_ENTRY * entries(cells)
 
 
 def parts_cells(parts):

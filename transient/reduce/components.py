@@ -17,7 +17,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from ..case.sizes import cells_by_part, peak_rss_gb, setup_bytes
+from ..case.sizes import cells_by_part, part_bytes, peak_rss_gb
 from ..contact.contactset import first_tangent
 from ..dynamics.critical import critical_tangent
 from ..errors import CaseError
@@ -239,7 +239,7 @@ def check_parts(case, model, budget):
     if budget is None:
         return
     for name, cells in cells_by_part(model.parts).items():
-        need = setup_bytes(cells)
+        need = part_bytes(cells)
         if need > budget:
             mesh = case.parts[name].mesh
             key = f"parts.{name}.mesh." + ("path" if mesh.kind == "file" else "divisions")
