@@ -3,8 +3,8 @@
 Written from the kernels' docstrings, not from their loops: a Python loop over the steps, NumPy
 within a step, dense linear algebra where the kernels use triangular factors or the Woodbury
 identity. Each twin takes the kernel's positional arguments and has its in-place semantics: the
-state (q, v, a rows and state[3, 0] the time), acc (external work, dissipated energy), gmin and
-fprev are updated, the out_* rows filled, and (status, steps done) returned.
+state and acc (the rows and slots transient.kernels.layout names), gmin and fprev are updated,
+the out_* rows filled, and (status, steps done) returned.
 
 The implicit twins iterate as their kernels' docstrings say (the fixed operator plus the
 exact corrections of the rows in active_rows, their Jacobian J_A solved densely), not by plain
@@ -21,6 +21,8 @@ import scipy.sparse as sp
 
 from transient.kernels.codes import NO_CONVERGENCE, NOT_FINITE, OK
 from transient.kernels.exponential import IMPLICIT_TOL
+from transient.kernels.layout import (A_ROW, DAMPING_ACC, DISSIPATED_ACC, FRICTION_ROW, Q_ROW,
+                                      SLIDING_ACC, TIME_ROW, V_ROW, WORK_ACC)
 from transient.kernels.woodbury import ARMIJO, FIXED_POINT_RATE, MIN_STEP, WOODBURY_REST
 
 # contact laws: the codes and parameter rows (4,) of kernels/laws.py
@@ -211,9 +213,9 @@ def remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press):
 
 def _energies(acc, kinetic, strain, contact, work, dissipated):
     """The output row of energies, after adding the step's work and dissipation to acc."""
-    acc[0] += work
-    acc[1] += dissipated
-    return np.array([kinetic, strain, contact, acc[0], acc[1]])
+    acc[WORK_ACC] += work
+    acc[DISSIPATED_ACC] += dissipated
+    return np.array([kinetic, strain, contact, acc[WORK_ACC], acc[DISSIPATED_ACC]])
 
 
 def _modal_energies(acc, q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt):
@@ -302,14 +304,15 @@ def friction_force(fr, w, press, v):
 
 def friction_energy(state, acc, energy, ff, dq, p_in, dt):
     """The friction's energies of a step (kernels.friction.friction_energy): its work on the
-    structure 1/2 (ff0 + ff) . dq, the sliding's input by the trapezoid; ff0 in state[6]."""
-    onto = 0.5 * np.dot(state[6] + ff, dq)
-    inflow = 0.5 * dt * (acc[3] + p_in)
-    acc[0] += inflow
-    acc[1] += inflow - onto
-    acc[3] = p_in
-    state[6] = ff
-    energy[3], energy[4] = acc[0], acc[1]
+    structure 1/2 (ff0 + ff) . dq, the sliding's input by the trapezoid; ff0 in the state's
+    FRICTION_ROW."""
+    onto = 0.5 * np.dot(state[FRICTION_ROW] + ff, dq)
+    inflow = 0.5 * dt * (acc[SLIDING_ACC] + p_in)
+    acc[WORK_ACC] += inflow
+    acc[DISSIPATED_ACC] += inflow - onto
+    acc[SLIDING_ACC] = p_in
+    state[FRICTION_ROW] = ff
+    energy[3], energy[4] = acc[WORK_ACC], acc[DISSIPATED_ACC]
 
 
 def slip_tangent(code, v_eps, mu, dmu, st, sc):
@@ -437,8 +440,8 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
     """Velocity Verlet on the modal system, the diagonal damping taken implicitly at the end
     of the step: v_{n+1} = (v_{n+1/2} + dt/2 f_{n+1}) / (1 + dt/2 c); friction at the
     half-step velocity."""
-    q, v, a = state[0], state[1], state[2]
-    t = state[3, 0]
+    q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
+    t = state[TIME_ROW, 0]
     m, n = C.shape
     f, gap, press = np.empty(n), np.empty(m), np.empty(m)
     fbuf = np.empty((len(blocks) - 1, n))
@@ -468,12 +471,12 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
             friction_energy(state, acc, energy, ff, dq, p_in, dt)
         fext_old = fext
         if not _finite(q, v, energy):
-            state[3, 0] = t
+            state[TIME_ROW, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
             _store(outs, row, t, S @ q, gap, press, energy, slip)
             row += 1
-    state[3, 0] = t
+    state[TIME_ROW, 0] = t
     return OK, n_steps
 
 
@@ -481,10 +484,10 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
                   params, fr, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_v, out_e):
     """Central differences with a lumped mass: alpha M implicit at the end of the step, beta K
     on the half-step velocity. The dissipation is the trapezoid of the damping power
-    v . (alpha M v + beta K v_half) at the steps' ends, carried between calls in acc[2].
+    v . (alpha M v + beta K v_half) at the steps' ends, carried between calls in acc[DAMPING_ACC].
     Friction (fr with CSR rows) at the half-step velocity, as explicit_reduced takes it."""
-    q, v, a = state[0], state[1], state[2]
-    t = state[3, 0]
+    q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
+    t = state[TIME_ROW, 0]
     n, m = len(q), len(g0)
     Km, Sm = csr(K, n), csr(S, n)
     fr = (csr(fr[0], n).toarray(), csr(fr[1], n).toarray()) + tuple(fr[2:])
@@ -492,7 +495,7 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
     f, gap, press = np.empty(n), np.empty(m), np.empty(m)
     outs = (out_t, out_s, out_g, out_p, out_v, out_e)
     fext_old = external(t, patterns, sig)
-    power_old = acc[2]                  # the damping power the last call ended with
+    power_old = acc[DAMPING_ACC]                  # the damping power the last call ended with
     row = 0
     for step in range(1, n_steps + 1):
         v_half = v + 0.5 * dt * a
@@ -514,17 +517,17 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
         power = np.dot(alpha * mass * v + beta * kv, v)     # v . the damping force
         energy = _energies(acc, 0.5 * np.dot(mass * v, v), 0.5 * np.dot(q, ku) - lin, phi,
                            0.5 * np.dot(fext_old + fext, dq), 0.5 * dt * (power_old + power))
-        power_old = acc[2] = power
+        power_old = acc[DAMPING_ACC] = power
         if ff is not None:
             friction_energy(state, acc, energy, ff, dq, p_in, dt)
         fext_old = fext
         if not _finite(q, v, energy):
-            state[3, 0] = t
+            state[TIME_ROW, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
             _store(outs, row, t, Sm @ q, gap, press, energy, slip)
             row += 1
-    state[3, 0] = t
+    state[TIME_ROW, 0] = t
     return OK, n_steps
 
 
@@ -533,9 +536,9 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
 def _finish(state, t, f0, fstart, omega2, damp):
     """The exponential twins' end of a call: the time, the start forces handed on, and the
     acceleration they give."""
-    state[3, 0] = t
+    state[TIME_ROW, 0] = t
     fstart[:] = f0
-    state[2] = f0 - omega2 * state[0] - damp * state[1]
+    state[A_ROW] = f0 - omega2 * state[Q_ROW] - damp * state[V_ROW]
 
 
 def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
@@ -547,8 +550,8 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     propagate_last, a final propagation with the last forces ends the step (the gaps,
     pressures and contact energy stay those of the last evaluation). The start forces come
     in fstart and go out there for the next call; the acceleration left is theirs."""
-    q, v = state[0], state[1]
-    t = state[3, 0]
+    q, v = state[Q_ROW], state[V_ROW]
+    t = state[TIME_ROW, 0]
     m, n = C.shape
     rem, gap, press = np.empty(n), np.empty(m), np.empty(m)
     fbuf = np.empty((len(blocks) - 1, n))
@@ -594,8 +597,8 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
     densely: GQ and GV are taken for the signature only. Converged when |D R| <= IMPLICIT_TOL
     |q - q0| (and with friction |Dv R| <= IMPLICIT_TOL |v - v0|); q stays the last state
     evaluated, v is propagated with the forces found there."""
-    q, v = state[0], state[1]
-    t = state[3, 0]
+    q, v = state[Q_ROW], state[V_ROW]
+    t = state[TIME_ROW, 0]
     m, n = C.shape
     friction = len(fr[0]) > 0
     rem, gap, press = np.empty(n), np.empty(m), np.empty(m)
@@ -668,8 +671,8 @@ def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, 
     friction force at v joins the remainder and the Jacobian is that of coupled_terms (x = a,
     P = S, Dq = dt^2/4, Dv = dt/2), after the fixed point a -= S^-1 R; its work and the
     sliding's input as friction_energy takes them."""
-    q, v, a = state[0], state[1], state[2]
-    t = state[3, 0]
+    q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
+    t = state[TIME_ROW, 0]
     remainder, code, params, w, kt0 = contact
     friction = fr is not None and len(fr[0]) > 0
     h2 = 0.25 * dt * dt
@@ -721,15 +724,15 @@ def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, 
             friction_energy(state, acc, energy, ff, q - q_old, p_in, dt)
         fext_old = fext
         if not _finite(q, v, energy):
-            state[3, 0] = t
+            state[TIME_ROW, 0] = t
             return NOT_FINITE, step
         if not converged:
-            state[3, 0] = t
+            state[TIME_ROW, 0] = t
             return NO_CONVERGENCE, step
         if step % every == 0:
             _store(outs, row, t, observe(q), gap, press, energy, slip)
             row += 1
-    state[3, 0] = t
+    state[TIME_ROW, 0] = t
     return OK, n_steps
 
 

@@ -11,7 +11,7 @@ checkpointed, so a resume drops it (io.history.History.open_for_resume).
 import math
 from dataclasses import dataclass
 
-from .state import FORCES
+from ..kernels.layout import FORCES_ROW
 
 WHOLE = 1e-9      # t_end / dt within this of an integer (relative) is a whole number of steps:
 #                   0.01 / 3.125e-6 is 3200 only to round-off, and the shipped cases must run
@@ -56,5 +56,5 @@ def retime(state, scheme, ratio):
     F(t + dt) = 2 F(t) - F(t - dt), which assumes the same step (the other schemes carry no
     slope)."""
     if scheme == "exponential":
-        f0, before = state.start, state.array[FORCES]
+        f0, before = state.start, state.array[FORCES_ROW]
         before[:] = f0 - ratio * (f0 - before)

@@ -1,20 +1,20 @@
 """What the kernels update in place, under names: the integrated state and a chunk's output rows.
 
-The kernels take the state as one (7, n) array (q, v, a, the time in [3, 0], the forces at
-the start of the previous step in [4] and of the next step in [5], which the exponential
-scheme carries between chunks, and the friction force at the next step's start in [6]) and
-the outputs as five arrays; only this module and the scheme factories know that layout.
+The kernels take the state as one (STATE_ROWS, n) array (q, v, a, the time, the forces at
+the start of the previous step and of the next, which the exponential scheme carries between
+chunks, and the friction force at the next step's start: the rows kernels.layout names) and
+the outputs as five arrays.
 """
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..kernels.codes import ENERGY_TERMS
+from ..kernels.layout import (A_ROW, ACC_SLOTS, FORCES_ROW, Q_ROW, START_ROW, STATE_ROWS,
+                              TIME_ROW, V_ROW)
 
-Q, V, A, TIME, FORCES, START, FRICTION = range(7)
-ROWS, ACC = 7, 4     # the state's rows and the accumulators' length (a history of an earlier
-#                      version holds 6 and 3: padded with zeros when resumed, as it has no
-#                      friction)
+# a history of an earlier version holds 6 rows and 3 slots: padded with zeros when resumed,
+# as it has no friction
 
 
 class State:
@@ -31,21 +31,21 @@ class State:
 
     @classmethod
     def zeros(cls, n, m):
-        return cls(np.zeros((ROWS, n)), np.zeros(ACC), np.zeros(m))
+        return cls(np.zeros((STATE_ROWS, n)), np.zeros(ACC_SLOTS), np.zeros(m))
 
-    q = property(lambda self: self.array[Q])
-    v = property(lambda self: self.array[V])
-    a = property(lambda self: self.array[A])
-    forces = property(lambda self: self.array[FORCES])
-    start = property(lambda self: self.array[START])
+    q = property(lambda self: self.array[Q_ROW])
+    v = property(lambda self: self.array[V_ROW])
+    a = property(lambda self: self.array[A_ROW])
+    forces = property(lambda self: self.array[FORCES_ROW])
+    start = property(lambda self: self.array[START_ROW])
 
     @property
     def time(self):
-        return float(self.array[TIME, 0])
+        return float(self.array[TIME_ROW, 0])
 
     @time.setter
     def time(self, t):
-        self.array[TIME, 0] = t
+        self.array[TIME_ROW, 0] = t
 
     def copy(self):
         return State(self.array.copy(), self.acc.copy(), self.gmin.copy())

@@ -8,7 +8,8 @@ import h5py
 import numpy as np
 
 from ..case.compare import RESUMABLE, changed
-from ..dynamics.state import ACC, ROWS, State
+from ..dynamics.state import State
+from ..kernels.layout import ACC_SLOTS, STATE_ROWS
 from ..errors import CaseError, DamagedHistory
 from ..kernels.codes import BILATERAL, TABLE
 from .attributes import read_attrs
@@ -60,7 +61,7 @@ def resumed(path, case):
         raise CaseError(case.path, keys[0], f"--resume: differs from the case the history "
                         f"was run with ({', '.join(keys)}); a resumed run may change only "
                         f"{', '.join(RESUMABLE)}")
-    state = State(_padded(saved["state"], (ROWS, system.n)), _padded(saved["acc"], (ACC,)),
+    state = State(_padded(saved["state"], (STATE_ROWS, system.n)), _padded(saved["acc"], (ACC_SLOTS,)),
                   saved["gmin"])
     step = int(saved["step"][0])
     # a history before the step's subdivision keeps its step in the attributes only
@@ -77,7 +78,7 @@ def _fits(system, saved):
     n, m = system.n, system.n_points
     c = system.contacts
     # blocks: any length on a full system, which does not use them
-    checkpoint = {"state": (ROWS, n), "acc": (ACC,), "gmin": (m,), "step": (1,),
+    checkpoint = {"state": (STATE_ROWS, n), "acc": (ACC_SLOTS,), "gmin": (m,), "step": (1,),
                   "balance": (3,), "blocks": (len(np.atleast_1d(saved.get("blocks", ()))),)}
     # an earlier version's state and accumulators, without the friction's rows
     legacy = {"state": (6, n), "acc": (3,)} if system.contacts.friction is None else {}

@@ -7,6 +7,7 @@ import numpy as np
 
 from ..jit import njit_fast
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
+from .layout import A_ROW, FRICTION_ROW, Q_ROW, TIME_ROW, V_ROW
 from .contact import block_buffers, contact_pass
 from .friction import friction_energy
 from .stepping import _external, _finite, _store, modal_step_energies
@@ -28,8 +29,8 @@ def _propagate(coef, q0, v0, f0, f1, q, v):
 def _finish(state, t, f0, fstart, omega2, damp):
     """A chunk's end: the time, the forces at the start of the next step (carried, so that a
     run cut into chunks is the same run), and the acceleration they give."""
-    state[3, 0] = t
-    q, v, a = state[0], state[1], state[2]
+    state[TIME_ROW, 0] = t
+    q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     for k in range(q.shape[0]):
         fstart[k] = f0[k]
         a[k] = f0[k] - omega2[k] * q[k] - damp[k] * v[k]
@@ -58,9 +59,10 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     evaluation, a local error away from the final state. state, acc and outputs as in
     explicit_reduced; the acceleration left in the state is that of the forces carried.
     fr: the friction's arrays (contact.contact_pass), its tractions part of the remainder,
-    at each evaluation's velocity; state[6] and acc[3] carry its force and input power."""
-    q, v = state[0], state[1]
-    t = state[3, 0]
+    at each evaluation's velocity; the state's FRICTION_ROW and the SLIDING_ACC accumulator
+    carry its force and input power."""
+    q, v = state[Q_ROW], state[V_ROW]
+    t = state[TIME_ROW, 0]
     n = q.shape[0]
     m = C.shape[0]
     rem = np.empty(n)
@@ -80,7 +82,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     dq = np.empty(n)
     # the friction force at the step's start, carried in the state (with friction only: a
     # frictionless state may have fewer rows)
-    ff0 = state[6] if fr[0].shape[0] > 0 else np.empty(n)
+    ff0 = state[FRICTION_ROW] if fr[0].shape[0] > 0 else np.empty(n)
     _external(t, patterns, sig, svals, fext0)
     for k in range(n):
         f0[k] = fstart[k]
@@ -147,8 +149,8 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
     and with friction Dv R below IMPLICIT_TOL of the velocity's change; NO_CONVERGENCE after
     max_iter iterations. q stays the last state evaluated, v is propagated with the forces
     found there. Otherwise as exponential_reduced."""
-    q, v = state[0], state[1]
-    t = state[3, 0]
+    q, v = state[Q_ROW], state[V_ROW]
+    t = state[TIME_ROW, 0]
     n = q.shape[0]
     m = C.shape[0]
     friction = fr[0].shape[0] > 0
@@ -181,7 +183,7 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
     ff = np.empty(n)
     slip = np.empty((2, fr[0].shape[0]))
     dq = np.empty(n)
-    ff0 = state[6] if friction else np.empty(n)
+    ff0 = state[FRICTION_ROW] if friction else np.empty(n)
     _external(t, patterns, sig, svals, fext0)
     for k in range(n):
         f0[k] = fstart[k]

@@ -18,6 +18,8 @@ import numpy as np
 
 from ..jit import njit_fast
 from .codes import DISSIPATED, FRICTIONLESS, TANH, WORK
+from .layout import DISSIPATED_ACC, SLIDING_ACC, WORK_ACC
+
 SMALL = 1e-6     # |s| / v_eps below which sgn_reg(|s|) / |s| is its series (no 0 / 0)
 
 
@@ -159,8 +161,9 @@ def friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt):
     """The friction's share of a step's energies. Its work on the structure is taken as the
     loads' is, 1/2 (ff0 + ff) . dq (ff0 at the step's start, ff at its end), so that the
     balance closes on the scheme's own arithmetic; the sliding's input, tau_t V, by the
-    trapezoid of its power (acc[3] carries the power at the start) goes to the external work,
-    and what of it the structure did not take to the dissipated energy. ff0 becomes ff."""
+    trapezoid of its power (acc[SLIDING_ACC] carries the power at the start) goes to the
+    external work, and what of it the structure did not take to the dissipated energy. ff0
+    becomes ff."""
     if fr[0].shape[0] == 0:
         return
     friction_work(acc, energy, ff0, ff, dq, p_in, dt)
@@ -173,9 +176,9 @@ def friction_work(acc, energy, ff0, ff, dq, p_in, dt):
     for j in range(ff.shape[0]):
         onto += 0.5 * (ff0[j] + ff[j]) * dq[j]
         ff0[j] = ff[j]
-    inflow = 0.5 * dt * (acc[3] + p_in)
-    acc[0] += inflow
-    acc[1] += inflow - onto
-    acc[3] = p_in
-    energy[WORK] = acc[0]
-    energy[DISSIPATED] = acc[1]
+    inflow = 0.5 * dt * (acc[SLIDING_ACC] + p_in)
+    acc[WORK_ACC] += inflow
+    acc[DISSIPATED_ACC] += inflow - onto
+    acc[SLIDING_ACC] = p_in
+    energy[WORK] = acc[WORK_ACC]
+    energy[DISSIPATED] = acc[DISSIPATED_ACC]

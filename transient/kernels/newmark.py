@@ -17,6 +17,7 @@ import numpy as np
 from ..jit import njit_fast
 from .sparse import csr_abs_matvec, csr_matvec, factor_solve
 from .codes import NO_CONVERGENCE, NOT_FINITE, OK
+from .layout import A_ROW, FRICTION_ROW, Q_ROW, TIME_ROW, V_ROW
 from .contact import block_buffers, contact_pass
 from .friction import friction_energy, friction_pass_sparse, friction_work
 from .stepping import (_energies, _external, _finite, _store, _store_sparse, modal_step_energies,
@@ -46,10 +47,11 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
     Converged when the residual is below tol times the force
     scale (external, contact, elastic, inertial, and the momentum over a half step, which sets
     the scale in free flight); NO_CONVERGENCE after max_iter iterations. state, acc and
-    outputs as in stepping.explicit_reduced; friction at the end velocity, state[6] and
-    acc[3] carrying its force and input power (friction.friction_energy)."""
-    q, v, a = state[0], state[1], state[2]
-    t = state[3, 0]
+    outputs as in stepping.explicit_reduced; friction at the end velocity, the state's
+    FRICTION_ROW and the SLIDING_ACC accumulator carrying its force and input power
+    (friction.friction_energy)."""
+    q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
+    t = state[TIME_ROW, 0]
     n = q.shape[0]
     m = C.shape[0]
     friction = fr[0].shape[0] > 0
@@ -77,7 +79,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
     ff = np.empty(n)
     slip = np.empty((2, fr[0].shape[0]))
     dq = np.empty(n)
-    ff0 = state[6] if friction else np.empty(n)
+    ff0 = state[FRICTION_ROW] if friction else np.empty(n)
     h2 = 0.25 * dt * dt
     Dq = np.full(n, h2)
     Dv = np.full(n, 0.5 * dt)
@@ -135,16 +137,16 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
             dq[k] = q[k] - q_old[k]
         friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
         if not (_finite(q) and _finite(v) and _finite(energy)):
-            state[3, 0] = t
+            state[TIME_ROW, 0] = t
             return NOT_FINITE, step
         if not converged:
-            state[3, 0] = t
+            state[TIME_ROW, 0] = t
             return NO_CONVERGENCE, step
         if step % every == 0:
             _store(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v,
                    out_e)
             row += 1
-    state[3, 0] = t
+    state[TIME_ROW, 0] = t
     return OK, n_steps
 
 
@@ -159,8 +161,8 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
     G = C Z (m, m) for active_rows; with it Z = S^-1 Cs^T (n, 3m), G = h2 C Z and GV =
     dt/2 [Ct; Cc] Z for coupled_rows, the fixed point first and then Newton with backtracking,
     as newmark_reduced. Otherwise as newmark_reduced."""
-    q, v, a = state[0], state[1], state[2]
-    t = state[3, 0]
+    q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
+    t = state[TIME_ROW, 0]
     n = q.shape[0]
     m = g0.shape[0]
     Kp, Ki, Kd = K
@@ -194,7 +196,7 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
     friction = fr[0][0].shape[0] > 1
     ff = np.empty(n)
     slip = np.empty((2, fr[0][0].shape[0] - 1))
-    ff0 = state[6] if friction else np.empty(n)
+    ff0 = state[FRICTION_ROW] if friction else np.empty(n)
     dq = np.empty(n)
     a_prev = np.empty(n)
     delta = np.empty(n)
@@ -295,16 +297,16 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
         if friction:
             friction_work(acc, energy, ff0, ff, dq, p_in, dt)
         if not (_finite(q) and _finite(v) and _finite(energy)):
-            state[3, 0] = t
+            state[TIME_ROW, 0] = t
             return NOT_FINITE, step
         if not converged:
-            state[3, 0] = t
+            state[TIME_ROW, 0] = t
             return NO_CONVERGENCE, step
         if step % every == 0:
             _store_sparse(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g,
                           out_p, out_v, out_e)
             row += 1
-    state[3, 0] = t
+    state[TIME_ROW, 0] = t
     return OK, n_steps
 
 

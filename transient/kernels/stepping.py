@@ -20,6 +20,8 @@ import numpy as np
 
 from ..jit import njit, njit_fast
 from .codes import CONTACT, DISSIPATED, KINETIC, NOT_FINITE, OK, STRAIN, WORK
+from .layout import (A_ROW, DAMPING_ACC, DISSIPATED_ACC, FRICTION_ROW, Q_ROW, TIME_ROW, V_ROW,
+                     WORK_ACC)
 from .contact import block_buffers, contact_pass
 from .friction import friction_energy, friction_pass_sparse, friction_work
 from .laws import pressure_potential
@@ -65,13 +67,13 @@ def _track_min(gap, gmin):
 @njit_fast
 def _energies(energy, kin, strain, phi, acc, work, dissipated):
     """Adds a step's external work and dissipation to acc, and fills the energy terms."""
-    acc[0] += work
-    acc[1] += dissipated
+    acc[WORK_ACC] += work
+    acc[DISSIPATED_ACC] += dissipated
     energy[KINETIC] = kin
     energy[STRAIN] = strain
     energy[CONTACT] = phi
-    energy[WORK] = acc[0]
-    energy[DISSIPATED] = acc[1]
+    energy[WORK] = acc[WORK_ACC]
+    energy[DISSIPATED] = acc[DISSIPATED_ACC]
 
 
 @njit_fast
@@ -97,14 +99,15 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
                      params, fr, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p, out_v,
                      out_e):
     """Central differences (velocity Verlet) on the reduced system, diagonal damping taken
-    implicitly in the half step. state (6, n): q, v, a, state[3, 0] the time, and the forces
-    the exponential kernels carry (dynamics.state). acc (3,): external work and dissipated
-    energy so far, and a damping power explicit_full carries; gmin (m,): smallest gap of each
-    point so far (the critical step is rechecked against it). fr: the friction's arrays
-    (contact.contact_pass), taken at the half-step velocity; state[6] and acc[3] then carry its
-    force and input power (friction_energy). Returns (status, steps done)."""
-    q, v, a = state[0], state[1], state[2]
-    t = state[3, 0]
+    implicitly in the half step. state (STATE_ROWS, n), acc (ACC_SLOTS,): the rows and slots
+    kernels.layout names (q, v, a, the time, the forces the exponential kernels carry; the
+    external work and dissipated energy so far, a damping power explicit_full carries);
+    gmin (m,): smallest gap of each point so far (the critical step is rechecked against it).
+    fr: the friction's arrays (contact.contact_pass), taken at the half-step velocity; the
+    state's FRICTION_ROW and the SLIDING_ACC accumulator then carry its force and input power
+    (friction_energy). Returns (status, steps done)."""
+    q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
+    t = state[TIME_ROW, 0]
     n = q.shape[0]
     m = C.shape[0]
     f = np.empty(n)
@@ -120,7 +123,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
     slip = np.empty((2, fr[0].shape[0]))
     # the friction force at the step's start, carried in the state (with friction only: a
     # frictionless state may have fewer rows)
-    ff0 = state[6] if fr[0].shape[0] > 0 else np.empty(n)
+    ff0 = state[FRICTION_ROW] if fr[0].shape[0] > 0 else np.empty(n)
     _external(t, patterns, sig, svals, fext_old)
     row = 0
     for step in range(1, n_steps + 1):
@@ -153,13 +156,13 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
         _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
         friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
         if not (_finite(q) and _finite(v) and _finite(energy)):
-            state[3, 0] = t
+            state[TIME_ROW, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
             _store(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v,
                    out_e)
             row += 1
-    state[3, 0] = t
+    state[TIME_ROW, 0] = t
     return OK, n_steps
 
 
@@ -192,10 +195,10 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
     K_lin (CSR), lumped mass (n,), Rayleigh damping alpha M (implicit in the half step) and
     beta K (on the half-step velocity); C and S dense-free CSR triplets; fr the friction's
     arrays with CSR rows (friction_pass_sparse), taken at the half-step velocity as in
-    explicit_reduced. Same state and outputs as explicit_reduced; acc[2] carries the damping
-    power at the end of the last step."""
-    q, v, a = state[0], state[1], state[2]
-    t = state[3, 0]
+    explicit_reduced. Same state and outputs as explicit_reduced; acc[DAMPING_ACC] carries the
+    damping power at the end of the last step."""
+    q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
+    t = state[TIME_ROW, 0]
     n = q.shape[0]
     m = g0.shape[0]
     Kp, Ki, Kd = K
@@ -213,11 +216,11 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
     friction = fr[0][0].shape[0] > 1
     ff = np.empty(n)
     slip = np.empty((2, fr[0][0].shape[0] - 1))
-    ff0 = state[6] if friction else np.empty(n)
+    ff0 = state[FRICTION_ROW] if friction else np.empty(n)
     _external(t, patterns, sig, svals, fext_old)
     # the damping power at the end of the last step, carried (it takes K at the half-step
     # velocity, which a chunk's start does not have)
-    power_old = acc[2]
+    power_old = acc[DAMPING_ACC]
     row = 0
     for step in range(1, n_steps + 1):
         for k in range(n):
@@ -253,17 +256,17 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w
                 power += beta * vn * kv[k]
         _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
         power_old = power
-        acc[2] = power
+        acc[DAMPING_ACC] = power
         if friction:
             friction_work(acc, energy, ff0, ff, dq, p_in, dt)
         if not (_finite(q) and _finite(v) and _finite(energy)):
-            state[3, 0] = t
+            state[TIME_ROW, 0] = t
             return NOT_FINITE, step
         if step % every == 0:
             _store_sparse(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p,
                           out_v, out_e)
             row += 1
-    state[3, 0] = t
+    state[TIME_ROW, 0] = t
     return OK, n_steps
 
 
