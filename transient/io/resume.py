@@ -61,8 +61,8 @@ def resumed(path, case):
         raise CaseError(case.path, keys[0], f"--resume: differs from the case the history "
                         f"was run with ({', '.join(keys)}); a resumed run may change only "
                         f"{', '.join(RESUMABLE)}")
-    state = State(_padded(saved["state"], (STATE_ROWS, system.n)), _padded(saved["acc"], (ACC_SLOTS,)),
-                  saved["gmin"])
+    state = State(_padded(saved["state"], (STATE_ROWS, system.n)),
+                  _padded(saved["acc"], (ACC_SLOTS,)), saved["gmin"])
     step = int(saved["step"][0])
     # a history before the step's subdivision keeps its step in the attributes only
     dt = float(saved["dt"][0]) if "dt" in saved else float(meta["dt"])
