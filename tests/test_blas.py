@@ -5,7 +5,7 @@ import os
 import numpy as np
 from threadpoolctl import threadpool_info
 
-from transient.solve import blas
+from transient import blas
 
 
 def openblas_threads():
@@ -43,7 +43,7 @@ def test_every_core_keeps_to_a_one_thread_worker(monkeypatch):
     """A campaign's workers run with OPENBLAS_NUM_THREADS=1: every_core stays at one thread
     there, and takes every core where nothing caps it."""
     from threadpoolctl import threadpool_info
-    from transient.solve import blas
+    from transient import blas
     monkeypatch.setenv("OPENBLAS_NUM_THREADS", "1")
     assert blas.budget() == 1
     with blas.every_core():
@@ -62,9 +62,9 @@ def test_this_thread_alone_sets_numba_and_mkl_for_its_thread_only():
     import numba
     import pytest
 
-    from transient.solve.linsolve import _mkl
+    from transient.blas import mkl_runtime
     try:
-        mkl = _mkl()
+        mkl = mkl_runtime()
     except OSError:
         pytest.skip("no MKL")
     outside = (numba.get_num_threads(), mkl.MKL_Get_Max_Threads())

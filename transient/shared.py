@@ -13,7 +13,7 @@ from .contact.pair import GEOMETRY, build_contact, build_geometry
 from .model import build_model
 from .reduce.reference import reference_basis, reference_case
 from .reduce.stage import reduction_mass
-from .solve import blas
+from . import blas
 from .solve.lowrank import contact_solver
 from .timings import Stages
 

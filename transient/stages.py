@@ -28,7 +28,7 @@ from .reduce.reference import rebased, reference_basis
 from .reduce.stage import reduce, reduction_mass
 from .shared import Built, factorization
 from .timings import Stages
-from .solve import blas
+from . import blas
 from .solve.linsolve import why
 from .solve.preload import PreloadError, solve_preload
 
@@ -56,7 +56,7 @@ def prepare(case, check=None, built=None, unsampled=False, analysis=False, parts
     (eigh of a few thousand, products of n x a few hundred), where two threads contend with
     PARDISO's and Numba's (docs/performance.md). PARDISO (MKL) keeps its threads, which pay
     for its solves.
-    The large products of sections that solve nothing run on every core (solve.blas).
+    The large products of sections that solve nothing run on every core (transient.blas).
     built: the first stages' results when built already (a Built: cea bounds the model's size
     first, a campaign's variants share them). unsampled: also the Setup of a sampled rule's
     candidates (Setup.unsampled), the cea's, from the same stages. analysis: the system is

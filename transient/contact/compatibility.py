@@ -12,7 +12,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from ..solve import blas
+from .. import blas
 
 ROUND_OFF = 1e-13   # normalized singular values below this are zero to round-off
 

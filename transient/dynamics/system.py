@@ -13,7 +13,7 @@ import scipy.sparse as sp
 from . import critical
 from ..kernels.sparse import csr_dot
 from ..model.dofs import free_block, restrict
-from ..solve import blas
+from .. import blas
 
 
 # vectors whose stiffness is below this fraction of the largest are rigid motions, their

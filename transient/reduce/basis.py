@@ -15,7 +15,7 @@ import scipy.sparse as sp
 from ..case.sizes import peak_rss_gb
 from ..kernels.sparse import shares_pattern
 from ..model.dofs import free_block, restrict
-from ..solve import blas
+from .. import blas
 from ..solve.lowrank import TangentStiffness, block_columns
 from ..solve.modes import normal_modes
 

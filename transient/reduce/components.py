@@ -22,7 +22,7 @@ from ..contact.contactset import first_tangent
 from ..dynamics.critical import critical_tangent
 from ..errors import CaseError
 from ..model.dofs import free_block
-from ..solve import blas
+from .. import blas
 from ..solve.preload import Preload
 from .basis import Basis, flexible_shapes
 from .fields import part_rigid_motions, support_stiffness

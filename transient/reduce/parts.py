@@ -20,7 +20,7 @@ import scipy.sparse as sp
 from ..cluster import WHERE
 from ..errors import CaseError
 from ..model.dofs import shifted
-from ..solve import blas
+from .. import blas
 from ..solve.linsolve import FactorizationError, factorize
 from ..solve.modes import normal_modes, shift_sigma
 from .basis import MODES_TOL, flexible_shapes

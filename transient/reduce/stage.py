@@ -9,7 +9,7 @@ import scipy.sparse as sp
 
 from ..contact.coarse import subset_rule
 from ..errors import CaseError
-from ..solve import blas
+from .. import blas
 from ..solve.preload import Preload
 from .basis import reduced_basis
 from .sampling import ReducedPreloadError, sample_contact

@@ -5,16 +5,12 @@ the pypardiso wheel: what a plain pip install brings) and SuperLU (scipy, the fa
 slower and hungrier on 3D solids). `factorize(A)` returns a callable x = solve(b).
 """
 import ctypes
-import functools
-import os
-import sys
-from ctypes.util import find_library
-from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..blas import mkl_runtime
 from ..errors import FactorizationError  # noqa: F401 (raised here, caught by callers)
 from ..kernels.sparse import csr_upper
 
@@ -28,7 +24,7 @@ def available():
     except ImportError:
         pass
     try:
-        _mkl()
+        mkl_runtime()
         names.append("pardiso")
     except (ImportError, OSError):
         pass
@@ -91,28 +87,6 @@ def _superlu(A):
     return solve
 
 
-@functools.cache
-def _mkl():
-    """The MKL runtime (mkl_rt, which the pypardiso wheel brings), loaded once a process.
-
-    Looked for where pypardiso looks, without its cost: importing pypardiso builds a solver
-    at import, and each solver it builds globs the environment's whole lib tree for mkl_rt
-    when the loader's path lacks it (0.19 s each, 0.6 s a process here). The wheel puts it in
-    the environment's lib directory, read here first; pypardiso's own search is the fallback
-    (another layout, Windows)."""
-    path = os.environ.get("PYPARDISO_MKL_RT") or find_library("mkl_rt")
-    if path is None:
-        import site
-        found = [p for root in (sys.prefix, site.USER_BASE)
-                 for p in sorted(Path(root, "lib").glob("libmkl_rt.so*"), key=lambda p:
-                                 len(p.name))]
-        path = str(found[0]) if found else None
-    if path is None:
-        from pypardiso import PyPardisoSolver
-        return PyPardisoSolver().libmkl
-    return ctypes.CDLL(path)
-
-
 def factorize_complex(A):
     """Factorize a complex unsymmetric sparse matrix (the full model's K + s D + s^2 M of the
     complex modes' shifts); returns solve(b). PARDISO (complex unsymmetric, METIS ordering)
@@ -140,7 +114,7 @@ class _Pardiso:
     backend = "pardiso"
 
     def __init__(self, A, mtype, phase=12):
-        self._lib = _mkl()
+        self._lib = mkl_runtime()
         fn = self._lib.pardiso
         i32 = ctypes.POINTER(ctypes.c_int32)
         fn.argtypes = [ctypes.POINTER(ctypes.c_int64), i32, i32, i32, i32, i32, ctypes.c_void_p,

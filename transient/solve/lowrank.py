@@ -18,7 +18,7 @@ import scipy.sparse as sp
 from ..contact.regularize import factored_rows
 from ..kernels.sparse import csr_dot, csr_dot_pair
 from ..model.dofs import restrict, restricted, shifted
-from . import blas
+from .. import blas
 from .linsolve import factorize
 from .rowspace import factored_row_space, row_space
 

@@ -2,7 +2,7 @@
 it, for the low-rank update of the tangent (lowrank.ContactSolver)."""
 import numpy as np
 
-from . import blas
+from .. import blas
 
 ROW_SPACE_TOL = 1e-12
 

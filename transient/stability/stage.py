@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.sparse as sp
 
-from ..solve import blas
+from .. import blas
 from .linearize import linearized
 from .residual import mode_residuals
 from .modes import complex_modes

@@ -1,4 +1,6 @@
-"""Thread counts of the setup's dense algebra (OpenBLAS, through threadpoolctl).
+"""Thread counts of the setup's dense algebra (OpenBLAS, through threadpoolctl), and the MKL
+runtime whose threads (PARDISO's) this_thread_alone sets and solve.linsolve calls: the
+process's numerical runtimes, on the ground floor every stage may import.
 
 The setup runs on one OpenBLAS thread (stages.prepare): most of its dense calls are mid-sized
 and come between PARDISO's solves, whose MKL threads two OpenBLAS threads contend with. The
@@ -9,9 +11,13 @@ The section, not a timing, decides, so the arithmetic is the same run after run:
 a product by blocks of its result, each summed whole by one thread. Two threads sum some entries
 in another order than one thread does, a difference of round-off (1e-16 of the entries).
 """
+import ctypes
 import functools
 import os
+import sys
 from contextlib import contextmanager
+from ctypes.util import find_library
+from pathlib import Path
 
 
 @functools.cache
@@ -56,8 +62,7 @@ def this_thread_alone():
     runs (PARDISO's conditional reproducibility is per thread count)."""
     import numba
     try:
-        from .linsolve import _mkl
-        mkl = _mkl()
+        mkl = mkl_runtime()
     except (ImportError, OSError):
         mkl = None
     before = numba.get_num_threads()
@@ -69,3 +74,25 @@ def this_thread_alone():
         numba.set_num_threads(before)
         if mkl is not None:
             mkl.MKL_Set_Num_Threads_Local(local)
+
+
+@functools.cache
+def mkl_runtime():
+    """The MKL runtime (mkl_rt, which the pypardiso wheel brings), loaded once a process.
+
+    Looked for where pypardiso looks, without its cost: importing pypardiso builds a solver
+    at import, and each solver it builds globs the environment's whole lib tree for mkl_rt
+    when the loader's path lacks it (0.19 s each, 0.6 s a process here). The wheel puts it in
+    the environment's lib directory, read here first; pypardiso's own search is the fallback
+    (another layout, Windows)."""
+    path = os.environ.get("PYPARDISO_MKL_RT") or find_library("mkl_rt")
+    if path is None:
+        import site
+        found = [p for root in (sys.prefix, site.USER_BASE)
+                 for p in sorted(Path(root, "lib").glob("libmkl_rt.so*"), key=lambda p:
+                                 len(p.name))]
+        path = str(found[0]) if found else None
+    if path is None:
+        from pypardiso import PyPardisoSolver
+        return PyPardisoSolver().libmkl
+    return ctypes.CDLL(path)
