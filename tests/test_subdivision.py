@@ -134,3 +134,24 @@ def test_a_friction_run_failing_at_the_default_step_completes_subdivided(tmp_pat
     rate = np.polyfit(t[linear], np.log(amplitude[linear]), 1)[0]
     assert lam[grow].real > 2500
     assert rate == pytest.approx(lam[grow].real, rel=0.06)
+
+
+@pytest.mark.parametrize("overrides, reason", [
+    (["solver.t_end=2e-5"], "the contact's penalty at omega_c dt = 0.7 (contact.*.k)"),
+    (["solver.t_end=2e-5", "solver.dt=5e-8"], "solver.dt"),
+    (["solver.t_end=2e-5", 'solver.scheme="exponential"', "solver.reduction.enabled=true"],
+     "0.9 of the evaluated corrector's bound on the contact remainder (contact.*.k)"),
+    (["solver.t_end=2e-5", 'solver.scheme="exponential"', "solver.reduction.enabled=true",
+      'solver.corrector="implicit"', "solver.reduction.fmax=2e5"],
+     "20 steps a period at solver.reduction.fmax")])
+def test_a_run_says_and_stores_what_set_its_step(tmp_path, capsys, overrides, reason):
+    """Central differences at the bar's contact penalty bound, the case's own dt, the
+    exponential scheme at its evaluated corrector's bound and at its accuracy step: the run's
+    line names what set the step, and the history keeps it (`transient info`)."""
+    path = tmp_path / "bar.h5"
+    assert main(["run", BAR, "-o", str(path)] + sets(*overrides)) == 0
+    line = [x for x in capsys.readouterr().out.splitlines() if " steps of " in x][0]
+    assert f" ({reason}) to t = " in line
+    assert summary(path)["meta"]["dt_reason"] == reason
+    assert main(["info", str(path)]) == 0
+    assert f"s: {reason}" in capsys.readouterr().out

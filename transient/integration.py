@@ -21,7 +21,7 @@ from .io.lock import writing
 from .io.resume import resumed
 from .io.series import layout, series
 from .march import march
-from .stages import choose_dt, prepare, stepper
+from .stages import choose_step, prepare, stepper
 
 
 @dataclass(frozen=True)
@@ -36,13 +36,21 @@ class RunResult:
     stages: dict
     timings: dict
     energy_drift: float
-    meta: dict = None         # what prepare reports: contact points of each pair, reduced dofs
+    meta: dict = None         # what prepare reports: contact points of each pair, reduced dofs,
+    #                           what set the step (dt_reason)
     subdivisions: list = ()   # {"t", "dt", "why"} of each halving of the step
+
+    @property
+    def dt_reason(self):
+        """What set the run's first step (stages.choose_step), '' for a history from before
+        the reason was stored."""
+        return (self.meta or {}).get("dt_reason", "")
 
     def summary(self):
         """What `transient run --json` prints."""
         return {"file": self.path, "status": self.status, "steps": self.steps,
-                "t_end": self.t_end, "dt": self.dt, "dt_critical": self.dt_critical,
+                "t_end": self.t_end, "dt": self.dt, "dt_reason": self.dt_reason,
+                "dt_critical": self.dt_critical,
                 "stages": self.stages, "timings": self.timings,
                 "energy_drift": self.energy_drift, "subdivisions": list(self.subdivisions)}
 
@@ -105,13 +113,13 @@ def _new(case, path, stop, built=None, on_setup=None, parts=None):
     if on_setup is not None:
         on_setup(setup)
     system, output = setup.system, case.output
-    dt = choose_dt(case, setup)
+    dt, why = choose_step(case, setup)
     scheme = stepper(case, system, dt)
     if system.reduced:
         scheme = replace(scheme, blocks=threaded_blocks(system.n_points))
     stages = {**setup.stages, **scheme.stages}
     plan = Plan.of(case.solver.t_end, dt, output.every)
-    meta = {**_case_meta(case), "version": __version__, "dt": dt,
+    meta = {**_case_meta(case), "version": __version__, "dt": dt, "dt_reason": why,
             "dt_critical": system.critical.dt, "scheme": case.solver.scheme,
             "reduced": system.reduced, "every": output.every, "stages": stages,
             **setup.meta, **scheme.meta}
@@ -121,7 +129,8 @@ def _new(case, path, stop, built=None, on_setup=None, parts=None):
                              geometry=setup.geometry, system=system)
     history.append(series(system, output, setup.rows0))
     return _Start(system, setup.state.copy(), 0, dt, output.every, scheme, history,
-                  Balance(setup.rows0.energy[0]), stages, {**setup.meta, **scheme.meta}, dt)
+                  Balance(setup.rows0.energy[0]), stages,
+                  {**setup.meta, **scheme.meta, "dt_reason": why}, dt)
 
 
 def _resume(case, path, stop):

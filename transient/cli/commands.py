@@ -230,8 +230,8 @@ def cmd_run(args):
         if result.subdivisions:
             step = (f"{2 * result.subdivisions[0]['dt']:.4g} s subdivided to {step} "
                     f"from t = {result.subdivisions[0]['t']:.6g} s")
-        print(f"{case.path}: {result.status}, {result.steps} steps of {step} "
-              f"(central differences' critical step {result.dt_critical:.4g} s) to "
+        why = f" ({result.dt_reason})" if result.dt_reason else ""
+        print(f"{case.path}: {result.status}, {result.steps} steps of {step}{why} to "
               f"t = {result.t_end:.6g} s")
         print("stages: " + ", ".join(f"{k} {v:.2f} s" for k, v in result.stages.items()))
         model = _model_line(result.meta or {})

@@ -34,7 +34,8 @@ def _steps(meta):
     """The step a run took and, where it was subdivided, when, to what and why."""
     if "dt" not in meta:
         return []
-    lines = [("step", f"{meta['dt']:.4g} s")]
+    why = f": {meta['dt_reason']}" if meta.get("dt_reason") else ""
+    lines = [("step", f"{meta['dt']:.4g} s{why}")]
     lines += [("", f"subdivided at t = {s['t']:.6g} s to {s['dt']:.4g} s: {s['why']}")
               for s in meta.get("subdivisions") or ()]
     return lines
