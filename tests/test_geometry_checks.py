@@ -242,10 +242,14 @@ def test_a_mesh_in_millimetres_read_as_metres_is_refused_with_the_hint(tmp_path,
         assert main(args + ["--set", "solver.t_end=1e-5"]) == 2
         err = capsys.readouterr().err.strip()
         assert err == (f"error: {path}: parts.plate.mesh.scale: the mesh of part 'plate' spans "
-                       "240 m at scale 1, more than any brake part (10 m): a file in "
-                       "millimetres? set parts.plate.mesh.scale = 1e-3")
+                       "240 m at scale 1, more than limits.part_span (10 m): a file in "
+                       "millimetres? set parts.plate.mesh.scale = 1e-3 (or raise "
+                       "limits.part_span for a part that large)")
     with pytest.raises(Reached):
         main(["modes", str(path), "--set", "parts.plate.mesh.scale=1e-3"])
+    # a part that large in metres: the bound raised, the mesh taken as it is
+    with pytest.raises(Reached):
+        main(["modes", str(path), "--set", "limits.part_span=300.0"])
 
 
 @pytest.mark.parametrize("case", sorted(p.name for p in CASES.glob("*.toml")))

@@ -213,6 +213,9 @@ LIMITS = Table("bounds on the work of a case, checked before it starts (raise th
                     "cells before any is meshed (0: the machine's physical memory)", 0.0, "GB",
                     minimum=0.0),
     "steps": Value("int", "time steps a run may make", 100_000_000, minimum=1),
+    "part_span": Value("float", "the largest span a file mesh read at scale 1 may have: "
+                       "beyond it its coordinates are taken for millimetres read as metres",
+                       10.0, "m", minimum=0.0),
 }, optional=True)
 
 INITIAL = Table("initial velocity of a part (impact)", {

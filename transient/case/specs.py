@@ -251,6 +251,7 @@ class SolverSpec:
 class LimitsSpec:
     memory: float            # [GB], 0: the machine's physical memory
     steps: int
+    part_span: float = 10.0  # [m]
 
     @property
     def memory_bytes(self):

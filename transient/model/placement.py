@@ -7,24 +7,23 @@ import numpy as np
 from ..errors import CaseError
 from ..mesh.mesh import unit
 
-# No brake part (a disc, a caliper, a wind turbine's yaw ring) spans this many metres, and a
-# mesh of a 10 mm clip read in millimetres as metres already does [m]
-LARGEST_PART = 10.0
-
-
 def check_scale(case, parts):
-    """A file mesh taken at scale 1 whose bounding box spans more than LARGEST_PART: its
+    """A file mesh taken at scale 1 whose bounding box spans more than limits.part_span (10 m
+    by default: no brake part, a disc, a caliper, a wind turbine's yaw ring, spans that many
+    metres, and a mesh of a 10 mm clip read in millimetres as metres already does): its
     coordinates are millimetres read as metres."""
+    largest = case.limits.part_span
     for name, part in parts.items():
         spec = case.parts[name].mesh
         if spec.kind != "file" or spec.params["scale"] != 1.0:
             continue
         span = float(np.ptp(part.mesh.points, axis=0).max())
-        if span > LARGEST_PART:
+        if span > largest:
             raise CaseError(case.path, f"parts.{name}.mesh.scale", f"the mesh of part '{name}' "
-                            f"spans {span:.4g} m at scale 1, more than any brake part "
-                            f"({LARGEST_PART:g} m): a file in millimetres? set "
-                            f"parts.{name}.mesh.scale = 1e-3")
+                            f"spans {span:.4g} m at scale 1, more than limits.part_span "
+                            f"({largest:g} m): a file in millimetres? set "
+                            f"parts.{name}.mesh.scale = 1e-3 (or raise limits.part_span for "
+                            "a part that large)")
 
 
 def cell_span(mesh):
