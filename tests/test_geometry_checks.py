@@ -265,3 +265,27 @@ def test_every_shipped_case_passes_the_checks_in_silence(case, capsys):
         check_gaps(loaded, model, name, interface, gaps)
         assert gaps.overclosed == 0.0 and abs(gaps.min) < 1.1e-5
     assert capsys.readouterr().err == ""
+
+
+def test_a_dry_run_checks_and_measures_then_stops(blocks, capsys, monkeypatch, tmp_path):
+    """`--dry-run` on run, modes and cea: the model and the pairs' fine rules built and
+    checked (a pad off the disc refused as the command would refuse it), the dofs by part,
+    the fine points and gaps, the memory estimate and a run's steps said; nothing factorized
+    (the factorization is never reached) and nothing written."""
+    monkeypatch.setattr(transient.shared, "factorization", _reached)
+    out = tmp_path / "never.h5"
+    for command in ("run", "modes", "cea"):
+        args = [command, str(blocks), "--dry-run"] + (["-o", str(out)] if command == "run"
+                                                      else [])
+        assert main(args) == 0
+        text = capsys.readouterr().out
+        assert f"{command} would take" in text and "contact c: " in text
+        assert "memory: about" in text and "nothing factorized or written" in text
+    assert not out.exists()
+    assert main(["run", str(blocks), "--dry-run", "--set", at(0.012)]) == 2
+    assert "the surfaces do not touch" in capsys.readouterr().err
+    case = load(blocks, ["solver.dt=1e-6", "solver.t_end=1.5e-5"])
+    d = transient.api.dry_run(case, "run")
+    assert d["steps"] == {"steps": 15, "exact": True}
+    assert sum(p["dofs"] for p in d["parts"].values()) == d["dofs"]
+    assert d["pairs"]["c"]["fine_points"] > 0 and d["memory"]["estimate_gb"] > 0

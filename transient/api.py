@@ -158,6 +158,33 @@ class NormalModes:
                 "timings": dict(self.timings)}
 
 
+def dry_run(case, command="run"):
+    """What a command would take on a case, checked and measured without doing it: the
+    model built (dofs by part), each contact pair's fine rule and initial gaps (checked as
+    the command would), the memory estimate against ``limits.memory`` and, for a run, its
+    steps. Nothing is factorized and nothing written.
+
+    Parameters
+    ----------
+    case : Case
+        From `load`.
+    command : str
+        "run", "modes" or "cea".
+
+    Returns
+    -------
+    dict
+        ``parts`` (dofs, free dofs, cells), ``pairs`` (fine points, ``gap0``), ``memory``
+        (``estimate_gb``, ``limit_gb``, ``largest_part``), for a run ``steps`` (``steps``,
+        ``exact``: False where it is a bound, None where the setup's critical step sets it).
+    """
+    from .dryrun import dry_run as measured
+    if command not in ("run", "modes", "cea"):
+        raise CaseError("command line", "command", f"expected run, modes or cea, got "
+                        f"'{command}'")
+    return measured(case, command)
+
+
 def modes(case, matrices=False):
     """Normal modes of a case, its contact pairs tied as ``solver.modes.tie`` says.
 

@@ -69,18 +69,25 @@ def check_memory(case, cells, keys):
     the model whole but factorizes one part at a time: its need is the model's and the
     largest part's setup."""
     have = case.limits.memory_bytes
-    reduction = case.solver.reduction
-    if reduction.enabled and reduction.method == "components":
-        largest = max(cells, key=lambda name: setup_bytes(cells[name]))
-        need = (MODEL_BYTES_PER_ENTRY * entries(sum(cells.values(), []))
-                + setup_bytes(cells[largest]))
-        named = [keys[largest]] if largest in keys else list(keys.values())
-    else:
-        need, named = setup_bytes(sum(cells.values(), [])), list(keys.values())
+    need, largest = memory_need(case, cells)
+    named = ([keys[largest]] if largest in keys else list(keys.values())) if largest else \
+        list(keys.values())
     if need > have and named:
         raise CaseError(case.path, named[0], f"the model would take about {need / 1e9:.3g} GB "
                         f"(set by {', '.join(named)}), more than limits.memory allows "
                         f"({have / 1e9:.3g} GB): coarsen the mesh, or raise limits.memory")
+
+
+def memory_need(case, cells):
+    """(bytes, part or None) the setup of a model of these cells (count, nodes) by part is
+    estimated to take: the whole setup's, or on the components path the model whole and its
+    largest part's setup, named."""
+    reduction = case.solver.reduction
+    if reduction.enabled and reduction.method == "components":
+        largest = max(cells, key=lambda name: setup_bytes(cells[name]))
+        return (MODEL_BYTES_PER_ENTRY * entries(sum(cells.values(), []))
+                + setup_bytes(cells[largest])), largest
+    return setup_bytes(sum(cells.values(), [])), None
 
 
 def entries(cells):

@@ -16,6 +16,8 @@ from .sweeping import cmd_sweep
 def cmd_modes(args):
     t0 = time.perf_counter()
     case = api.load(args.case, args.overrides)
+    if args.dry_run:
+        return _dry(case, "modes", args.json)
     result = api.modes(case)
     timings = {**result.timings, "total": time.perf_counter() - t0}
     tie, contact = result.tie, result.contact
@@ -66,6 +68,8 @@ def _interactive():
 def cmd_cea(args):
     t0 = time.perf_counter()
     case = api.load(args.case, args.overrides)
+    if args.dry_run:
+        return _dry(case, "cea", args.json)
     result = api.cea(case, **_parts(args))
     modes = result.modes
     total = time.perf_counter() - t0
@@ -220,6 +224,8 @@ def _gap_text(gap0):
 
 def cmd_run(args):
     case = api.load(args.case, args.overrides)
+    if args.dry_run:
+        return _dry(case, "run", args.json)
     quiet = args.quiet or args.json or not _interactive()
     result = api.run(case, args.output, resume=args.resume, progress=not quiet,
                      key="-o" if args.output else None, **_parts(args, quiet))
@@ -245,6 +251,31 @@ def cmd_run(args):
         if result.status.endswith("interrupted"):
             return 130
         return 143 if "terminated" in result.status else 3
+    return 0
+
+
+def _dry(case, command, as_json):
+    """--dry-run: what the command would take (api.dry_run), said, then exit 0."""
+    d = api.dry_run(case, command)
+    if as_json:
+        print(json.dumps(d))
+        return 0
+    print(f"{case.path}: {command} would take {d['dofs']} dofs ({d['free_dofs']} free)")
+    for name, p in d["parts"].items():
+        print(f"  part {name}: {p['dofs']} dofs ({p['free_dofs']} free), {p['cells']} cells")
+    for name, p in d["pairs"].items():
+        print(f"  contact {name}: {p['fine_points']} fine points" + _gap_text(p["gap0"]))
+    m = d["memory"]
+    by = f" (the model and its largest part, {m['largest_part']})" if m["largest_part"] else ""
+    print(f"  memory: about {m['estimate_gb']:.3g} GB{by}, limits.memory "
+          f"{m['limit_gb']:.3g} GB")
+    if "steps" in d:
+        s = d["steps"]
+        print("  steps: " + (f"{s['steps']}" if s["exact"] else
+                             f"at least {s['steps']} (the automatic step, at most 1/(20 "
+                             "solver.reduction.fmax))" if s["steps"] is not None else
+                             "set by the setup's critical step (central differences)"))
+    print("nothing factorized or written (--dry-run)")
     return 0
 
 

@@ -11,6 +11,13 @@ def _case_args(p):
                    "parts.upper.mesh.divisions=[3,3,3] (repeatable)")
 
 
+def _dry_args(p):
+    p.add_argument("--dry-run", action="store_true", help="build the model and the contact "
+                   "pairs' fine rules, check them, say the dofs by part, the contact points, "
+                   "the memory estimate (and a run's steps), then stop: nothing factorized "
+                   "or written")
+
+
 def _parts_args(p):
     """Where the components path (solver.reduction.method) reduces its parts."""
     p.add_argument("--workers", type=int, default=0, help="components path: reduce the parts "
@@ -30,10 +37,12 @@ def build_parser():
     p = sub.add_parser("modes", help="normal modes of the case's model")
     _case_args(p)
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    _dry_args(p)
     p = sub.add_parser("cea", help="complex eigenvalue analysis: the modes of the structure "
                        "linearized at steady sliding with friction, which of them grow")
     _case_args(p)
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    _dry_args(p)
     _parts_args(p)
     p = sub.add_parser("run", help="transient: preload, then time integration to solver.t_end, "
                        "streamed to an HDF5 history")
@@ -44,6 +53,7 @@ def build_parser():
                    "output file from its last checkpoint (after an abort, or to a later t_end)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
+    _dry_args(p)
     _parts_args(p)
     p = sub.add_parser("info", help="summary of an HDF5 history")
     p.add_argument("file", help="HDF5 file written by transient run")

@@ -1,0 +1,54 @@
+"""What a command would do, said before it does it (`--dry-run` on run, modes and cea): the
+case loaded and checked, the model built (its dofs by part), each contact pair's fine rule
+built and its initial gaps checked, and the bounds the work is held to (the memory estimate
+against limits.memory, the steps of a run). Nothing is factorized and nothing written: the
+checks a command makes before its costly stages, and their figures."""
+from .case.sizes import cells_by_part, memory_need
+from .contact.gaps import check_gaps, initial_gaps
+from .contact.pair import pair_interface
+from .dynamics.plan import Plan
+from .model import build_model
+from .model.placement import check_motions
+
+
+def dry_run(case, command):
+    """A dict of what `command` ("run", "modes" or "cea") would take on the case: parts
+    (dofs, free dofs, cells), pairs (fine points, initial gaps), memory (the estimate, the
+    limit and the part that sets it on the components path) and, for a run, its steps (exact
+    where the step is known before the setup, else a bound or None)."""
+    model = build_model(case)
+    free = ~model.fixed
+    cells = cells_by_part(model.parts)
+    parts = {name: {"dofs": int(len(model.part_dofs(name))),
+                     "free_dofs": int(free[model.part_dofs(name)].sum()),
+                     "cells": int(sum(n for n, _ in cells[name]))} for name in model.parts}
+    check_motions(case, model.parts)
+    pairs = {}
+    for name in case.contact:
+        interface = pair_interface(case, model, name)
+        gaps = initial_gaps(interface)
+        check_gaps(case, model, name, interface, gaps)
+        pairs[name] = {"fine_points": int(interface.fine.n_points), "gap0": gaps.meta()}
+    need, largest = memory_need(case, cells)
+    out = {"command": command, "case": str(case.path), "dofs": int(model.ndof),
+           "free_dofs": int(free.sum()), "parts": parts, "pairs": pairs,
+           "memory": {"estimate_gb": need / 1e9, "limit_gb": case.limits.memory_bytes / 1e9,
+                      "largest_part": largest}}
+    if command == "run":
+        out["steps"] = _steps(case)
+    return out
+
+
+def _steps(case):
+    """{"steps", "exact"} of a run: its plan's at the case's dt (the whole steps and a last
+    one shortened, dynamics.plan); at least its plan's at 20 steps a period of
+    solver.reduction.fmax for the schemes whose automatic step is that or less (exponential,
+    implicit); None where the setup's critical step sets it (central differences)."""
+    solver = case.solver
+    dt = solver.dt if solver.dt > 0 else (1.0 / (20.0 * solver.reduction.fmax)
+                                          if solver.scheme in ("exponential", "implicit")
+                                          else None)
+    if dt is None:
+        return {"steps": None, "exact": False}
+    plan = Plan.of(solver.t_end, dt, 1)
+    return {"steps": plan.steps + int(plan.partial), "exact": solver.dt > 0}
