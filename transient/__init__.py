@@ -1,8 +1,8 @@
 """transient: long transient vibrations of elastic solids in contact across non-conforming meshes.
 
-The public API (transient.api): `load`, `dry_run`, `prepare`, `run`, `modes`, `cea`, `mu_map`,
-`compat`, `compat_pairs`, `sweep`; a run's `history`, its `summary` and `export`; the studies
-`bench` and `compare_modes`.
+The public API (transient.api): `load`, `prepare`, `run`, `modes`, `cea` (and a dry run of the
+last three), `mu_map`, `compat`, `compat_pairs`, `sweep`; a run's `history`, its `summary` and
+`export`; the studies `bench` and `compare_modes`.
 Importing the package changes nothing in the process and loads none of the stages' modules;
 `configure()` makes the settings that speed it up (the command line calls it first).
 """

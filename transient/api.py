@@ -178,11 +178,11 @@ def dry_run(case, command="run"):
         (``estimate_gb``, ``limit_gb``, ``largest_part``), for a run ``steps`` (``steps``,
         ``exact``: False where it is a bound, None where the setup's critical step sets it).
     """
-    from .dryrun import dry_run as measured
+    from .dryrun import measure
     if command not in ("run", "modes", "cea"):
         raise CaseError("command line", "command", f"expected run, modes or cea, got "
                         f"'{command}'")
-    return measured(case, command)
+    return measure(case, command)
 
 
 def modes(case, matrices=False):

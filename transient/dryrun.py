@@ -11,7 +11,7 @@ from .model import build_model
 from .model.placement import check_motions
 
 
-def dry_run(case, command):
+def measure(case, command):
     """A dict of what `command` ("run", "modes" or "cea") would take on the case: parts
     (dofs, free dofs, cells), pairs (fine points, initial gaps), memory (the estimate, the
     limit and the part that sets it on the components path) and, for a run, its steps (exact
