@@ -113,13 +113,13 @@ def _new(case, path, stop, built=None, on_setup=None, parts=None):
     if on_setup is not None:
         on_setup(setup)
     system, output = setup.system, case.output
-    dt, why = choose_step(case, setup)
+    dt, reason = choose_step(case, setup)
     scheme = stepper(case, system, dt)
     if system.reduced:
         scheme = replace(scheme, blocks=threaded_blocks(system.n_points))
     stages = {**setup.stages, **scheme.stages}
     plan = Plan.of(case.solver.t_end, dt, output.every)
-    meta = {**_case_meta(case), "version": __version__, "dt": dt, "dt_reason": why,
+    meta = {**_case_meta(case), "version": __version__, "dt": dt, "dt_reason": reason,
             "dt_critical": system.critical.dt, "scheme": case.solver.scheme,
             "reduced": system.reduced, "every": output.every, "stages": stages,
             **setup.meta, **scheme.meta}
@@ -130,7 +130,7 @@ def _new(case, path, stop, built=None, on_setup=None, parts=None):
     history.append(series(system, output, setup.rows0))
     return _Start(system, setup.state.copy(), 0, dt, output.every, scheme, history,
                   Balance(setup.rows0.energy[0]), stages,
-                  {**setup.meta, **scheme.meta, "dt_reason": why}, dt)
+                  {**setup.meta, **scheme.meta, "dt_reason": reason}, dt)
 
 
 def _resume(case, path, stop):

@@ -281,11 +281,11 @@ def choose_dt(case, setup, stored=None):
 
 
 def choose_step(case, setup, stored=None):
-    """(dt, why): choose_dt's step and what set it, in words a run prints and stores (the
+    """(dt, reason): choose_dt's step and what set it, in words a run prints and stores (the
     case's solver.dt, the history's, or the bound the automatic step took)."""
     solver = case.solver
     dt = solver.dt if stored is None else stored
-    why = "solver.dt" if stored is None else "the step stored in the history, resumed"
+    reason = "solver.dt" if stored is None else "the step stored in the history, resumed"
     if solver.scheme in ("exponential", "implicit"):
         # unconditionally stable: the step is set by accuracy, 20 steps per period at fmax,
         # but for the exponential scheme's explicit correctors of a stiff contact remainder
@@ -295,11 +295,11 @@ def choose_step(case, setup, stored=None):
         if dt == 0.0:
             accuracy = 1.0 / (20.0 * solver.reduction.fmax)
             dt = min(accuracy, 0.9 * dt_max)
-            why = ("20 steps a period at solver.reduction.fmax" if dt == accuracy else
-                   f"0.9 of the {solver.corrector} corrector's bound on the friction's "
-                   "damping at steady sliding" if dt_max == critical.friction_dt else
-                   f"0.9 of the {solver.corrector} corrector's bound on the contact "
-                   "remainder (contact.*.k)")
+            reason = ("20 steps a period at solver.reduction.fmax" if dt == accuracy else
+                      f"0.9 of the {solver.corrector} corrector's bound on the friction's "
+                      "damping at steady sliding" if dt_max == critical.friction_dt else
+                      f"0.9 of the {solver.corrector} corrector's bound on the contact "
+                      "remainder (contact.*.k)")
         elif dt > dt_max and not solver.force_dt and dt > critical.friction_dt:
             raise CaseError(case.path, "solver.dt", f"{dt:.3e} s: the {solver.corrector} "
                             "corrector takes the friction explicitly, and its damping at "
@@ -318,7 +318,7 @@ def choose_step(case, setup, stored=None):
                             f'"implicit", a step up to {dt_max:.3e} s, or solver.force_dt = '
                             "true to run anyway")
         check_steps(case, dt)
-        return dt, why
+        return dt, reason
     critical = setup.system.critical
     if dt == 0.0:
         # stable, and within the range where an impact conserves energy
@@ -327,8 +327,8 @@ def choose_step(case, setup, stored=None):
                   f"{CONTACT_OMEGA_DT} (contact.*.k)": critical.contact_dt,
                   "0.9 of central differences' bound on the friction's damping at steady "
                   "sliding": 0.9 * critical.friction_dt}
-        why = min(bounds, key=bounds.get)
-        dt = bounds[why]
+        reason = min(bounds, key=bounds.get)
+        dt = bounds[reason]
         if not np.isfinite(dt):
             raise CaseError(case.path, "solver.dt", "no stiffness bounds the step: give dt")
     elif dt > critical.dt and not solver.force_dt:
@@ -348,7 +348,7 @@ def choose_step(case, setup, stored=None):
                         f"chatter: a step up to {critical.contact_dt:.3e} s, a lower "
                         f"contact.{pair}.k, or solver.force_dt = true to run anyway")
     check_steps(case, dt)
-    return dt, why
+    return dt, reason
 
 
 def stepper(case, system, dt, blocks=None):
