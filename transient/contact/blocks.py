@@ -15,7 +15,7 @@ class PairFactors:
     shapes cols[k] (slices), the pairs in the contact set's order. Supports L @ Y, L.T @ Y,
     L[keep] (sorted rows, or a slice) and toarray."""
 
-    __array_ufunc__ = None     # ndarray @ L defers to __rmatmul__, never an object array
+    __array_ufunc__ = None     # ndarray @ L is refused, never taken as an object array
 
     def __init__(self, blocks):
         self.blocks = [np.asarray(b) for b in blocks]

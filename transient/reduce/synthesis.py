@@ -34,12 +34,10 @@ class Synthesis:
         self.shape = (int(ndof), int(self.offsets[-1]))
         self.ndim = 2
         self.dtype = np.dtype(np.float64)
-        # each dof's part (-1: in none, a fixed dof) and its row in that part's basis
+        # each dof's part (-1: in none, a fixed dof): the congruence's blocks of H
         self.owner = np.full(ndof, -1)
-        self.local = np.zeros(ndof, dtype=int)
         for p, (d, _) in enumerate(self.parts):
             self.owner[d] = p
-            self.local[d] = np.arange(len(d))
 
     @property
     def nbytes(self):
