@@ -29,6 +29,7 @@ from .fields import field_map
 # the modules whose arithmetic makes a part's reduction: their source is in its key
 _SOURCES = ("reduce/parts.py", "reduce/basis.py", "reduce/fields.py", "solve/modes.py",
             "solve/lanczos.py", "solve/linsolve.py", "model/dofs.py")
+ROW_BLOCK = 8192     # rows of the basis formed at a time from the statics
 _FIELDS = ("T", "Kr", "mode_hz", "n_shapes", "n_static", "interface_mu", "interface_loads")
 
 
@@ -124,21 +125,32 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
         the loads without their modal part, so that a floating part's rigid motion (1/sigma,
         orders of magnitude above its elastic response) never enters the responses only to
         be subtracted (its eigenvalue, round-off of the largest, is not known to that
-        precision)."""
-        x = solve(np.asfortranarray(b - MPhi @ (Phi.T @ b)))
-        return x - Phi @ (MPhi.T @ x)
+        precision). b (n, k) Fortran-ordered is taken over: the projections are made in
+        place, so that no more than one n x k temporary stands beside it."""
+        b -= MPhi @ (Phi.T @ b)
+        x = solve(b)
+        del b
+        x -= Phi @ (MPhi.T @ x)
+        return x
     columns, n_shapes, mu = [], 0, np.zeros(0)
     if interface is not None:
-        KE = beyond(E.toarray())
+        KE = beyond(E.toarray(order="F"))
         shapes, mu = flexible_shapes(np.asarray(E.T @ KE), None, None, tol, KE.__matmul__,
                                      gram=G)
+        del KE                   # n x the loads: gone before the statics and the basis
         columns.append(shapes)
         n_shapes = shapes.shape[1]
     lap("interface")
     if loads.shape[1]:
-        columns.append(beyond(loads))
+        columns.append(beyond(np.asfortranarray(loads, dtype=float)))
     lap("statics")
-    T = _with_statics(Phi, np.hstack(columns) if columns else np.zeros((len(Phi), 0)), M)
+    # the factors past their last solve: given back before the basis is formed beside them
+    getattr(solve, "free", lambda: None)()
+    del solve, beyond
+    S = np.hstack(columns) if columns else np.zeros((len(Phi), 0))
+    columns.clear()
+    T = _with_statics(Phi, S, M)
+    del S
     Kr = T.T @ (K @ T)
     lap("orthonormalization")
     return PartBasis(name, T, 0.5 * (Kr + Kr.T), modes.frequencies, n_shapes,
@@ -160,17 +172,30 @@ def _with_statics(Phi, S, M):
     dropped, M-orthonormal."""
     if not S.shape[1]:
         return Phi
+    MPhi = M @ Phi
     for _ in range(2):
-        S = S - Phi @ ((M @ Phi).T @ S)
+        S -= Phi @ (MPhi.T @ S)       # in place: S is the caller's to give up
     G = S.T @ (M @ S)
     norms = np.sqrt(np.maximum(np.diag(G), 0.0))
     big = norms > 1e-12 * norms.max()
     if not big.any():          # no load on the part and no interface direction kept
         return Phi
-    S, G = S[:, big] / norms[big], G[np.ix_(big, big)] / np.outer(norms[big], norms[big])
+    if big.all():
+        S /= norms
+    else:
+        S = S[:, big] / norms[big]
+    G = G[np.ix_(big, big)] / np.outer(norms[big], norms[big])
     lam, V = np.linalg.eigh(0.5 * (G + G.T))
     keep = lam > 1e-12 * max(lam.max(), 1.0)
-    return np.hstack([Phi, S @ (V[:, keep] / np.sqrt(lam[keep]))])
+    W = V[:, keep] / np.sqrt(lam[keep])
+    # [Phi, S W] written a block of rows at a time: no n x r temporary beside S and T
+    m = Phi.shape[1]
+    T = np.empty((len(S), m + W.shape[1]))
+    T[:, :m] = Phi
+    for start in range(0, len(S), ROW_BLOCK):
+        rows = slice(start, start + ROW_BLOCK)
+        T[rows, m:] = S[rows] @ W
+    return T
 
 
 @dataclass(frozen=True)
