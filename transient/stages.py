@@ -95,7 +95,7 @@ def _band_keys(case, analysis):
 
 def _prepare(case, stages, built, want_unsampled=False, analysis=False, parts=None):
     solver = case.solver
-    components = solver.reduction.enabled and solver.reduction.method == "components"
+    components = solver.reduction.components
     if components and rebased(case):
         name = next(n for n, c in case.contact.items() if c.friction.basis_mu)
         raise CaseError(case.path, f"contact.{name}.friction.basis_mu", "not with "

@@ -160,8 +160,7 @@ def _prime(client, case_path, overrides, kind, cache):
     from ..stability.stage import analysed_case
     from ..stages import prepare_parts
     case = load(case_path, overrides)
-    reduction = case.solver.reduction
-    if not (reduction.enabled and reduction.method == "components"):
+    if not case.solver.reduction.components:
         return
     try:
         prepare_parts(analysed_case(case) if kind == "cea" else case,

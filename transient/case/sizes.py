@@ -70,8 +70,7 @@ def check_memory(case, cells, keys):
     largest part's setup."""
     have = case.limits.memory_bytes
     need, largest = memory_need(case, cells)
-    named = ([keys[largest]] if largest in keys else list(keys.values())) if largest else \
-        list(keys.values())
+    named = [keys[largest]] if largest in keys else list(keys.values())
     if need > have and named:
         raise CaseError(case.path, named[0], f"the model would take about {need / 1e9:.3g} GB "
                         f"(set by {', '.join(named)}), more than limits.memory allows "
@@ -82,8 +81,7 @@ def memory_need(case, cells):
     """(bytes, part or None) the setup of a model of these cells (count, nodes) by part is
     estimated to take: the whole setup's, or on the components path the model whole and its
     largest part's setup, named."""
-    reduction = case.solver.reduction
-    if reduction.enabled and reduction.method == "components":
+    if case.solver.reduction.components:
         largest = max(cells, key=lambda name: setup_bytes(cells[name]))
         return (MODEL_BYTES_PER_ENTRY * entries(sum(cells.values(), []))
                 + setup_bytes(cells[largest])), largest

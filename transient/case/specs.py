@@ -206,6 +206,12 @@ class ReductionSpec:
         CUTOFF_FACTOR times the band."""
         return self.cutoff or CUTOFF_FACTOR * self.fmax
 
+    @property
+    def components(self):
+        """Whether the model is reduced part by part (reduce.components): a reduced model
+        whose method is "components"."""
+        return self.enabled and self.method == "components"
+
 
 @dataclass(frozen=True)
 class NewtonSpec:

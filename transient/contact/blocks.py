@@ -28,10 +28,6 @@ class PairFactors:
         self.dtype = np.dtype(np.float64)
 
     @property
-    def nbytes(self):
-        return sum(b.nbytes for b in self.blocks)
-
-    @property
     def T(self):
         return Transposed(self)
 
@@ -68,6 +64,13 @@ class PairFactors:
         for rows, cols, L in self:
             out[rows, cols] = L
         return out
+
+
+def points_gram(L, d):
+    """L^T diag(d) L (r, r) of a pair's factor L (p, r) and weights d (p,) on its points: a
+    factored pair's contact stiffness or gram on its compatible shapes, C^T diag(d) C =
+    B (L^T diag(d) L) B^T, never a points x dofs product."""
+    return (L.T * d) @ L
 
 
 def pair_factors(L):

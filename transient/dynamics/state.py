@@ -13,9 +13,6 @@ from ..kernels.codes import ENERGY_TERMS
 from ..kernels.layout import (A_ROW, ACC_SLOTS, FORCES_ROW, Q_ROW, START_ROW, STATE_ROWS,
                               TIME_ROW, V_ROW)
 
-# a history of an earlier version holds 6 rows and 3 slots: padded with zeros when resumed,
-# as it has no friction
-
 
 class State:
     """The state of a system between chunks: displacement, velocity, acceleration and time,

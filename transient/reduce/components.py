@@ -18,6 +18,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..case.sizes import cells_by_part, part_bytes, peak_rss_gb
+from ..contact.blocks import points_gram
 from ..contact.contactset import first_tangent
 from ..dynamics.critical import critical_tangent
 from ..errors import CaseError
@@ -103,8 +104,7 @@ def _pair_grams(pairs, contacts, scale):
     offsets = np.concatenate([[0], np.cumsum([pair.factors[0].shape[1] for pair in pairs])])
     grams = []
     for pair, s in zip(pairs, contacts.slices.values()):
-        L = np.asarray(pair.factors[0])
-        grams.append((L.T * np.maximum(scale[s], 0.0)) @ L)
+        grams.append(points_gram(np.asarray(pair.factors[0]), np.maximum(scale[s], 0.0)))
     return offsets, grams
 
 

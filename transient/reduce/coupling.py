@@ -11,7 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import LinearOperator
 
-from ..contact.blocks import pair_factors
+from ..contact.blocks import pair_factors, points_gram
 
 NORMAL, ALONG, ACROSS = 0, 1, 2
 
@@ -98,7 +98,7 @@ def _left(L, Y):
 def _points_gram(L, d):
     """L^T diag(d) L (r_s, r_s) of a pair's factored rows, the weights d themselves where the
     rows are plain (L None)."""
-    return d if L is None else (L.T * d) @ L
+    return d if L is None else points_gram(L, d)
 
 
 def _through(G, Y):

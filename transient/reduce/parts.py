@@ -146,7 +146,7 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
     lap("statics")
     # the factors past their last solve: given back before the basis is formed beside them
     getattr(solve, "free", lambda: None)()
-    del solve, beyond
+    solve = beyond = None
     S = np.hstack(columns) if columns else np.zeros((len(Phi), 0))
     columns.clear()
     T = _with_statics(Phi, S, M)
@@ -349,8 +349,7 @@ def engine_for(case, workers=0, scheduler=None, cache=None, on_part=None, on_sta
     if not (workers or scheduler or cache):
         yield None if done is None and on_stage is None else Engine(done=done, stage=on_stage)
         return
-    reduction = case.solver.reduction
-    if not (reduction.enabled and reduction.method == "components"):
+    if not case.solver.reduction.components:
         option = "--workers" if workers else "--scheduler" if scheduler else "--cache"
         raise CaseError(WHERE, option, "reduces the parts of the components path: "
                         "set solver.reduction.enabled = true and solver.reduction.method = "

@@ -39,10 +39,6 @@ class Synthesis:
         for p, (d, _) in enumerate(self.parts):
             self.owner[d] = p
 
-    @property
-    def nbytes(self):
-        return sum(T.nbytes for _, T in self.parts)
-
     def toarray(self):
         """X dense (ndof, N): for a small model, or a test."""
         out = np.zeros(self.shape)

@@ -16,7 +16,7 @@ rotate; its rotation enters only through the sliding).
 import numpy as np
 import scipy.sparse as sp
 
-from ..contact.blocks import pair_factors
+from ..contact.blocks import pair_factors, points_gram
 
 
 def preload_pressure(system, state):
@@ -55,9 +55,9 @@ def _factored_terms(system, stiffness, along, across):
     for rows, cols, L in pair_factors(system.contacts.factors[0]):
         if not (np.any(stiffness[rows]) or np.any(along[rows]) or np.any(across[rows])):
             continue
-        Kf += Yt[cols].T @ (((L.T * stiffness[rows]) @ L) @ Y[cols])
-        Df += (Yt[cols].T @ (((L.T * along[rows]) @ L) @ Yt[cols])
-               + Yc[cols].T @ (((L.T * across[rows]) @ L) @ Yc[cols]))
+        Kf += Yt[cols].T @ (points_gram(L, stiffness[rows]) @ Y[cols])
+        Df += (Yt[cols].T @ (points_gram(L, along[rows]) @ Yt[cols])
+               + Yc[cols].T @ (points_gram(L, across[rows]) @ Yc[cols]))
     return Kf, Df
 
 
