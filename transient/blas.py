@@ -82,8 +82,8 @@ def mkl_runtime():
 
     Looked for where pypardiso looks, without its cost: importing pypardiso builds a solver
     at import, and each solver it builds globs the environment's whole lib tree for mkl_rt
-    when the loader's path lacks it (0.19 s each, 0.6 s a process here). The wheel puts it in
-    the environment's lib directory, read here first; pypardiso's own search is the fallback
+    when the loader's path lacks it, several times a process. The wheel puts it in the
+    environment's lib directory, read here first; pypardiso's own search is the fallback
     (another layout, Windows)."""
     path = os.environ.get("PYPARDISO_MKL_RT") or find_library("mkl_rt")
     if path is None:

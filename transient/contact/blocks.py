@@ -1,9 +1,9 @@
 """The left factor L of several pairs' factored rows (C = L B^T), held a pair at a time.
 
 Each pair's points see only its own compatible shapes: stacked, L is block diagonal, and held
-dense it is points x every pair's shapes, most of it zeros (a brake corner of eleven pairs:
-1.2 GB for 0.18 GB of blocks at 280k dofs, and every product with it reads them all). Held by
-pair, each product is one BLAS call on a pair's block.
+dense it is points x every pair's shapes, most of it zeros on a model of many pairs (a brake
+corner's), every product with it reading them all (docs/performance.md). Held by pair, each
+product is one BLAS call on a pair's block.
 """
 import numpy as np
 

@@ -166,7 +166,7 @@ def stack(pairs, ndof):
     C, factors = None, None
     if factored:
         # the rows are held as factors only: dense points x interface dofs otherwise
-        # one pair's held as they are: a copy of L was 0.81 GB at 1M dofs (64602 x 1560);
+        # one pair's held as they are: a copy of L would be among the setup's largest arrays;
         # several pairs' a pair at a time (contact.blocks), never block-diagonal dense
         factors = ((pairs[0].factors[0], sp.csr_matrix(pairs[0].factors[1])) if len(pairs) == 1
                    else (PairFactors([pair.factors[0] for pair in pairs]),
