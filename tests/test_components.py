@@ -350,7 +350,8 @@ def test_a_part_with_no_static_direction_keeps_its_modes():
     from transient.reduce.parts import _with_statics
     rng = np.random.default_rng(0)
     Phi = np.linalg.qr(rng.standard_normal((12, 3)))[0]
-    T = _with_statics(Phi, np.zeros((12, 2)), sp.identity(12, format="csr"))
+    X = np.asfortranarray(np.hstack([Phi, np.zeros((12, 2))]))
+    T = _with_statics(X, 3, sp.identity(12, format="csr"))
     assert np.array_equal(T, Phi)
 
 

@@ -29,7 +29,8 @@ from .fields import field_map
 # the modules whose arithmetic makes a part's reduction: their source is in its key
 _SOURCES = ("reduce/parts.py", "reduce/basis.py", "reduce/fields.py", "solve/modes.py",
             "solve/lanczos.py", "solve/linsolve.py", "model/dofs.py")
-ROW_BLOCK = 8192     # rows of the basis formed at a time from the statics
+ROW_BLOCK = 8192     # rows of the basis formed at a time in place
+SOLVE_BLOCK = 64     # columns solved (or multiplied by K, M) at a time into their place
 _FIELDS = ("T", "Kr", "mode_hz", "n_shapes", "n_static", "interface_mu", "interface_loads")
 
 
@@ -117,44 +118,71 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
     modes = normal_modes(K, M, None, count=40, fmax=fmax, shift=-shift_hz, solve=solve,
                          tol=MODES_TOL)
     lap("modes")
-    Phi = modes.shapes
+    # the basis' columns [Phi, interface shapes, statics] are formed in one column-major
+    # array, each stage in place over the columns it turns into the next: a large part holds
+    # one n x columns array, not the three copies its stages would make one from another
+    m, f, s = modes.shapes.shape[1], E.shape[1] if interface is not None else 0, loads.shape[1]
+    X = np.empty((K.shape[0], m + f + s), order="F")
+    X[:, :m] = modes.shapes
+    Phi, frequencies, modes = X[:, :m], modes.frequencies, None
     MPhi = M @ Phi
 
     def beyond(b):
-        """(K - sigma M)^-1 beyond the modes, P^T (K - sigma M)^-1 P with P = I - M Phi Phi^T:
-        the loads without their modal part, so that a floating part's rigid motion (1/sigma,
-        orders of magnitude above its elastic response) never enters the responses only to
-        be subtracted (its eigenvalue, round-off of the largest, is not known to that
-        precision). b (n, k) Fortran-ordered is taken over: the projections are made in
-        place, so that no more than one n x k temporary stands beside it."""
-        b -= MPhi @ (Phi.T @ b)
-        x = solve(b)
-        del b
-        x -= Phi @ (MPhi.T @ x)
-        return x
-    columns, n_shapes, mu = [], 0, np.zeros(0)
+        """(K - sigma M)^-1 beyond the modes, P^T (K - sigma M)^-1 P with P = I - M Phi Phi^T,
+        in place on b (n, k), a block of X's columns: the loads without their modal part, so
+        that a floating part's rigid motion (1/sigma, orders of magnitude above its elastic
+        response) never enters the responses only to be subtracted (its eigenvalue, round-off
+        of the largest, is not known to that precision)."""
+        _take_out(b, MPhi, Phi)
+        for start in range(0, b.shape[1], SOLVE_BLOCK):
+            block = b[:, start:start + SOLVE_BLOCK]
+            block[...] = solve(block)
+        _take_out(b, Phi, MPhi)
+    n_shapes, mu = 0, np.zeros(0)
     if interface is not None:
-        KE = beyond(E.toarray(order="F"))
-        shapes, mu = flexible_shapes(np.asarray(E.T @ KE), None, None, tol, KE.__matmul__,
-                                     gram=G)
-        del KE                   # n x the loads: gone before the statics and the basis
-        columns.append(shapes)
+        KE = X[:, m:m + f]
+        E.toarray(out=KE)
+        beyond(KE)
+
+        def shapes_in_place(Z):
+            """KE Z written over KE's first columns (Z has no more columns than KE)."""
+            for start in range(0, len(KE), ROW_BLOCK):
+                rows = slice(start, start + ROW_BLOCK)
+                KE[rows, :Z.shape[1]] = KE[rows] @ Z
+            return KE[:, :Z.shape[1]]
+        H = np.empty((f, f))
+        for start in range(0, f, SOLVE_BLOCK):    # SciPy's sparse product copies KE C-ordered
+            cols = slice(start, start + SOLVE_BLOCK)
+            H[:, cols] = E.T @ KE[:, cols]
+        shapes, mu = flexible_shapes(H, None, None, tol, shapes_in_place, gram=G)
         n_shapes = shapes.shape[1]
+        del KE, shapes
     lap("interface")
-    if loads.shape[1]:
-        columns.append(beyond(np.asfortranarray(loads, dtype=float)))
+    end = m + n_shapes + s
+    if s:
+        X[:, m + n_shapes:end] = loads
+        beyond(X[:, m + n_shapes:end])
     lap("statics")
     # the factors past their last solve: given back before the basis is formed beside them
     getattr(solve, "free", lambda: None)()
     solve = beyond = None
-    S = np.hstack(columns) if columns else np.zeros((len(Phi), 0))
-    columns.clear()
-    T = _with_statics(Phi, S, M)
-    del S
-    Kr = T.T @ (K @ T)
+    T = _with_statics(X[:, :end], m, M)
+    del X
+    Kr = np.empty((T.shape[1], T.shape[1]))
+    for start in range(0, T.shape[1], SOLVE_BLOCK):     # no n x r product of K beside T
+        cols = slice(start, start + SOLVE_BLOCK)
+        Kr[:, cols] = T.T @ (K @ T[:, cols])
     lap("orthonormalization")
-    return PartBasis(name, T, 0.5 * (Kr + Kr.T), modes.frequencies, n_shapes,
+    return PartBasis(name, T, 0.5 * (Kr + Kr.T), frequencies, n_shapes,
                      int(loads.shape[1]), seconds, mu, n_loads)
+
+
+def _take_out(b, A, B):
+    """b -= A (B^T b) in place, a block of b's rows at a time: no n x k temporary."""
+    coefficients = B.T @ b
+    for start in range(0, len(b), ROW_BLOCK):
+        rows = slice(start, start + ROW_BLOCK)
+        b[rows] -= A[rows] @ coefficients
 
 
 class PartError(RuntimeError):
@@ -166,16 +194,21 @@ class PartError(RuntimeError):
         return PartError, (self.part, str(self))
 
 
-def _with_statics(Phi, S, M):
-    """[Phi, S V]: the static responses S without what the modes hold (twice, for round-off:
-    on a floating part they are dominated by its rigid motion), their dependent directions
-    dropped, M-orthonormal."""
+def _with_statics(X, m, M):
+    """The basis [Phi, S W] in place of X = [Phi, S] (its first m columns the modes, the
+    rest S the static responses), returned as X's first columns: S without what the modes
+    hold (twice, for round-off: on a floating part they are dominated by its rigid motion),
+    its dependent directions dropped, M-orthonormal."""
+    Phi, S = X[:, :m], X[:, m:]
     if not S.shape[1]:
         return Phi
     MPhi = M @ Phi
     for _ in range(2):
-        S -= Phi @ (MPhi.T @ S)       # in place: S is the caller's to give up
-    G = S.T @ (M @ S)
+        _take_out(S, Phi, MPhi)
+    G = np.empty((S.shape[1], S.shape[1]))
+    for start in range(0, S.shape[1], SOLVE_BLOCK):      # no n x k product of M beside S
+        cols = slice(start, start + SOLVE_BLOCK)
+        G[:, cols] = S.T @ (M @ S[:, cols])
     norms = np.sqrt(np.maximum(np.diag(G), 0.0))
     big = norms > 1e-12 * norms.max()
     if not big.any():          # no load on the part and no interface direction kept
@@ -183,19 +216,18 @@ def _with_statics(Phi, S, M):
     if big.all():
         S /= norms
     else:
-        S = S[:, big] / norms[big]
+        for j in np.flatnonzero(big):
+            S[:, j] /= norms[j]
     G = G[np.ix_(big, big)] / np.outer(norms[big], norms[big])
     lam, V = np.linalg.eigh(0.5 * (G + G.T))
     keep = lam > 1e-12 * max(lam.max(), 1.0)
-    W = V[:, keep] / np.sqrt(lam[keep])
-    # [Phi, S W] written a block of rows at a time: no n x r temporary beside S and T
-    m = Phi.shape[1]
-    T = np.empty((len(S), m + W.shape[1]))
-    T[:, :m] = Phi
+    W = np.zeros((S.shape[1], int(keep.sum())))
+    W[big] = V[:, keep] / np.sqrt(lam[keep])
+    # S W over S's first columns a block of rows at a time (W has no more columns than S)
     for start in range(0, len(S), ROW_BLOCK):
         rows = slice(start, start + ROW_BLOCK)
-        T[rows, m:] = S[rows] @ W
-    return T
+        S[rows, :W.shape[1]] = S[rows] @ W
+    return X[:, :m + W.shape[1]]
 
 
 @dataclass(frozen=True)
