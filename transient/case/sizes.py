@@ -15,9 +15,12 @@ TETS_PER_HEX = 6          # the generators split each hex in six tets (Kuhn)
 # peaks per entry, from pad_disc to a 1M-dof tet10 brake (docs/performance.md, "Memory")
 BYTES_PER_ENTRY = 130
 # a part's reduction alone, on a worker of the components path (its interface fields, its
-# factorization, modes and statics): the largest measured per entry of a brake corner's parts,
-# a pad's many interface columns (docs/performance.md, "A part's reduction alone")
-PART_BYTES_PER_ENTRY = 200
+# factorization, modes and statics, its basis formed in place): a floor for the small parts
+# (a piston's or a pad's interface columns weigh more than its entries), and per entry above
+# the largest measured, which grows with the part (the factor's fill-in, the Lanczos' length:
+# docs/performance.md, "A part's reduction alone")
+PART_BYTES_FLOOR = 0.1e9
+PART_BYTES_PER_ENTRY = 110
 # the model alone (K and M assembled, and their COO triplets while they are): the components
 # path's process holds it whole beside one part's setup at a time (docs/performance.md)
 MODEL_BYTES_PER_ENTRY = 30
@@ -48,7 +51,7 @@ def setup_bytes(cells):
 def part_bytes(cells):
     """Estimated peak memory [bytes] of one part's reduction on a worker: cells (count, nodes)
     pairs of the part."""
-    return PART_BYTES_PER_ENTRY * entries(cells)
+    return PART_BYTES_FLOOR + PART_BYTES_PER_ENTRY * entries(cells)
 
 
 def parts_cells(parts):
@@ -80,11 +83,11 @@ def check_memory(case, cells, keys):
 def memory_need(case, cells):
     """(bytes, part or None) the setup of a model of these cells (count, nodes) by part is
     estimated to take: the whole setup's, or on the components path the model whole and its
-    largest part's setup, named."""
+    largest part's reduction (in this process as on a worker), named."""
     if case.solver.reduction.components:
-        largest = max(cells, key=lambda name: setup_bytes(cells[name]))
+        largest = max(cells, key=lambda name: entries(cells[name]))
         return (MODEL_BYTES_PER_ENTRY * entries(sum(cells.values(), []))
-                + setup_bytes(cells[largest])), largest
+                + part_bytes(cells[largest])), largest
     return setup_bytes(sum(cells.values(), [])), None
 
 
