@@ -171,7 +171,7 @@ def test_a_cached_part_is_read_back_and_only_a_changed_part_is_reduced_again(tmp
     """Through a cache folder each part's reduction is kept under the key of what it is made
     from: the same case again reads both parts back, bit for bit; a stiffer pad reduces the
     pad again and reads the disc (counted by the engine's done)."""
-    from transient.reduce.parts import Engine
+    from transient.reduce.engine import Engine
     made = []
     engine = Engine(cache=tmp_path / "parts", done=lambda task, part: made.append(
         (task.name, "cache" in part.seconds)))
@@ -252,7 +252,7 @@ def test_parts_on_a_cluster_equal_parts_here_and_a_killed_worker_is_made_up(tmp_
     pytest.importorskip("dask.distributed")
     import sys
     import cloudpickle
-    from transient.reduce.parts import Engine, on_cluster
+    from transient.reduce.engine import Engine, on_cluster
     from transient.reduce.components import components_basis
     from transient.cluster import client_for
     cloudpickle.register_pickle_by_value(sys.modules[__name__])

@@ -24,8 +24,9 @@ def test_the_command_line_computes_through_the_api():
     """cli/ takes its numbers from transient.api and its pictures from transient/plots: the
     stages, the history's readers and the studies stay behind the API (a notebook gets what
     the command prints). Besides, the errors, the settings, the check of an output file
-    before a long computation (io.lock) and the campaigns' bound on their values."""
-    allowed = {"api", "errors", "settings", "plots", "io.lock", "campaign.variants"}
+    before a long computation (io.lock), the campaigns' bound on their values and where the
+    setup's bars are drawn (progress.shown)."""
+    allowed = {"api", "errors", "settings", "plots", "io.lock", "campaign.variants", "progress"}
     found = set()
     for path in (PACKAGE / "cli").glob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):

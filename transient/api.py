@@ -86,7 +86,7 @@ def prepare(case, workers=0, scheduler=None, cache=None, on_part=None, on_stage=
         ``stages`` (seconds of each stage) and ``meta`` (what the stages report).
     """
     from .stages import prepare as prepare_stages
-    from .reduce.parts import engine_for
+    from .reduce.engine import engine_for
     with engine_for(case, workers, scheduler, cache, on_part, on_stage) as parts:
         return prepare_stages(case, parts=parts)
 
@@ -127,7 +127,7 @@ def run(case, path=None, resume=False, progress=False, key=None, workers=0, sche
     if path is None:
         path = case.directory / (case.output.file or Path(case.path).with_suffix(".h5").name)
         key = key or "output.file"
-    from .reduce.parts import engine_for
+    from .reduce.engine import engine_for
     with engine_for(case, workers, scheduler, cache, on_part, on_stage) as parts:
         return run_case(case, Path(path), resume=resume, progress=progress, key=key or "path",
                         parts=parts)
@@ -279,7 +279,7 @@ def cea(case, matrices=False, workers=0, scheduler=None, cache=None, on_part=Non
     from dataclasses import replace
     from .io import complex_modes
     from .stability.stage import analyse
-    from .reduce.parts import engine_for
+    from .reduce.engine import engine_for
     complex_modes.check(case)
     with engine_for(case, workers, scheduler, cache, on_part, on_stage) as parts:
         result = analyse(case, matrices=matrices, parts=parts)

@@ -83,7 +83,7 @@ def run(case, path, resume=False, progress=None, key="output.file", built=None,
     when built already (a campaign's variants share them: shared.Built). on_setup(setup):
     called with a new run's setup (with Setup.unsampled) before the integration: a campaign's
     variant analyses its modes there. note(line): how a subdivided step is told (stderr).
-    parts: where the components path reduces its parts (reduce.parts.Engine; None: here).
+    parts: where the components path reduces its parts (reduce.engine.Engine; None: here).
     """
     check_transient(case)
     t_start = time.perf_counter()

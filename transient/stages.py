@@ -62,7 +62,7 @@ def prepare(case, check=None, built=None, unsampled=False, analysis=False, parts
     candidates (Setup.unsampled), the cea's, from the same stages. analysis: the system is
     linearized, not integrated (the cea's): it gets no critical step and the Setup no rows0
     (the critical step's eigenvalues are dense work an analysis does not use).
-    parts: where the components path reduces its parts (reduce.parts.Engine; None: here),
+    parts: where the components path reduces its parts (reduce.engine.Engine; None: here),
     and its stage(name, seconds, peak GB) said as each stage ends."""
     with blas.one_thread(), heap.setup():
         stages = Stages(check, getattr(parts, "stage", None))
@@ -70,10 +70,10 @@ def prepare(case, check=None, built=None, unsampled=False, analysis=False, parts
 
 
 def prepare_parts(case, parts):
-    """The components path's parts of a case reduced through parts (a reduce.parts.Engine),
+    """The components path's parts of a case reduced through parts (a reduce.engine.Engine),
     nothing after them: a campaign does this for one variant before the others fan out, so
     that the parts they share are reduced once on the whole cluster and read back from its
-    cache (reduce.parts.cached) by every variant."""
+    cache (reduce.engine.cached) by every variant."""
     with blas.one_thread():
         model = build_model(case)
         pairs = build_contact(case, model) if case.contact else []

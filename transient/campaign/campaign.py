@@ -61,7 +61,7 @@ def sweep(case_path, variants, out, kind="run", overrides=(), workers=2, schedul
     """Run the variants; returns their rows (in variant order) and writes the campaign's
     files in out, which it holds meanwhile (command: what the lock says holds it).
     progress(done, total, failed) after each variant; announce(text) says where the dashboard
-    is; cache: the folder of the components path's parts (reduce.parts.cached), which the
+    is; cache: the folder of the components path's parts (reduce.engine.cached), which the
     variants share."""
     if kind not in KINDS:
         raise CaseError(WHERE, "--kind", f"expected one of {', '.join(KINDS)}, got '{kind}'")
@@ -156,7 +156,7 @@ def _prime(client, case_path, overrides, kind, cache):
     variant of the first round on its one thread, and read back by all. A variant refused
     here says why in its own row."""
     from ..case.loading import load
-    from ..reduce.parts import Engine
+    from ..reduce.engine import Engine
     from ..stability.stage import analysed_case
     from ..stages import prepare_parts
     case = load(case_path, overrides)

@@ -26,7 +26,7 @@ def run_variant(case_path, overrides, out, kind, built=None, resume=False, cache
     its kind. out: its history (run, both) or its complex modes (cea). built: the first
     stages' results it shares with others (shared.Built), or None to build them. resume:
     continue its history (its complex modes, if any, are complete already). cache: the
-    folder where the components path keeps its parts (reduce.parts.cached), or None."""
+    folder where the components path keeps its parts (reduce.engine.cached), or None."""
     configure()
     t0 = time.perf_counter()
     try:
@@ -34,7 +34,7 @@ def run_variant(case_path, overrides, out, kind, built=None, resume=False, cache
         case = load(case_path, overrides)
         parts = None
         if cache is not None:
-            from ..reduce.parts import Engine
+            from ..reduce.engine import Engine
             parts = Engine(cache=Path(cache))
         if resume:
             row = _run(case, out, None, resume=True)

@@ -4,7 +4,7 @@ import os
 import sys
 import time
 
-from .. import api
+from .. import api, progress
 from ..settings import configure
 from ..errors import CaseError, FactorizationError, stop_reason
 from .benching import cmd_bench
@@ -306,7 +306,9 @@ def main(argv=None):
     # the command line as given: a campaign's lock names it
     args.argv = list(sys.argv[1:] if argv is None else argv)
     try:
-        return COMMANDS[args.command](args)
+        # the setup's long inner work drawn as bars on a terminal, not into a JSON reader's
+        with progress.shown(_interactive() and not getattr(args, "json", False)):
+            return COMMANDS[args.command](args)
     except CaseError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -27,7 +27,8 @@ from .. import blas
 from ..solve.preload import Preload
 from .basis import Basis, flexible_shapes
 from .fields import part_rigid_motions, support_stiffness
-from .parts import Engine, PartError, PartInterface, PartTask
+from .engine import Engine
+from .parts import PartError, PartInterface, PartTask
 from .coupling import ALONG, PairRows
 from .sampling import ReducedPreloadError, reduced_preload
 from .synthesis import Synthesis
@@ -130,7 +131,7 @@ def law_tangent(pairs, contacts):
 
 def components_basis(case, model, M, pairs, contacts, patterns, constant, engine=None):
     """(Basis, Preload) of the components path: each part's PartBasis (engine: a
-    reduce.parts.Engine, where and through which cache; None: in this process), the preload
+    reduce.engine.Engine, where and through which cache; None: in this process), the preload
     by Newton in the coupled reduced coordinates, the basis diagonalized on K_lin there."""
     reduction = case.solver.reduction
     engine = engine or Engine()
@@ -173,9 +174,9 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
 
 
 def reduce_parts(case, model, M, pairs, contacts, patterns, constant, engine, say=None):
-    """(dofs, PartBasis) of each part, reduced through engine (a reduce.parts.Engine): the
+    """(dofs, PartBasis) of each part, reduced through engine (a reduce.engine.Engine): the
     components path's first stage, and all a campaign does before its variants fan out
-    (reduce.parts.cached then holds the parts they share)."""
+    (reduce.engine.cached then holds the parts they share)."""
     reduction, solver = case.solver.reduction, case.solver
     say = say or _stages(engine, time.perf_counter())
     check_parts(case, model, engine.budget())

@@ -1,26 +1,22 @@
-"""Where the parts of the components path are reduced: in this process one after the other,
-on a Dask cluster one task a part, and through a cache folder that keeps each part's
-reduction under the key of everything it is made from.
+"""One part of the components path reduced on its own: its interface fields, its factorization,
+modes and static responses, formed into its basis.
 
 A part's task (PartTask) holds its own matrices and interface loads; its key hashes them with
 the settings and the source of the code that reduces it, so that a campaign that changes the
 pad's lining reduces the pad again and reads the disc, the caliper and the bracket back, and
-a reduction made by other code is never read as this one's.
+a reduction made by other code is never read as this one's (reduce.engine keeps them).
 """
 import hashlib
-import os
 import time
-from contextlib import contextmanager
+from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
 
-from ..cluster import WHERE
-from ..errors import CaseError
 from ..model.dofs import shifted
-from .. import blas
+from .. import blas, progress
 from ..solve.linsolve import FactorizationError, factorize
 from ..solve.modes import normal_modes, shift_sigma
 from .basis import MODES_TOL, flexible_shapes
@@ -31,7 +27,6 @@ _SOURCES = ("reduce/parts.py", "reduce/basis.py", "reduce/fields.py", "solve/mod
             "solve/lanczos.py", "solve/linsolve.py", "model/dofs.py")
 ROW_BLOCK = 8192     # rows of the basis formed at a time in place
 SOLVE_BLOCK = 64     # columns solved (or multiplied by K, M) at a time into their place
-_FIELDS = ("T", "Kr", "mode_hz", "n_shapes", "n_static", "interface_mu", "interface_loads")
 
 
 @dataclass(frozen=True)
@@ -134,9 +129,11 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
         response) never enters the responses only to be subtracted (its eigenvalue, round-off
         of the largest, is not known to that precision)."""
         _take_out(b, MPhi, Phi)
-        for start in range(0, b.shape[1], SOLVE_BLOCK):
-            block = b[:, start:start + SOLVE_BLOCK]
-            block[...] = solve(block)
+        with closing(progress.work(f"{name}: responses", b.shape[1], "load")) as bar:
+            for start in range(0, b.shape[1], SOLVE_BLOCK):
+                block = b[:, start:start + SOLVE_BLOCK]
+                block[...] = solve(block)
+                bar.advance(min(start + SOLVE_BLOCK, b.shape[1]))
         _take_out(b, Phi, MPhi)
     n_shapes, mu = 0, np.zeros(0)
     if interface is not None:
@@ -266,32 +263,6 @@ class PartTask:
         return h.hexdigest()
 
 
-@dataclass(frozen=True)
-class Engine:
-    """How the components path reduces its parts: on a Dask client (None: in this process),
-    through a cache folder (None: none), done(task, PartBasis) as each part is reduced; and
-    stage(name, seconds, peak GB) as each stage of the setup ends (None: nothing said)."""
-    client: object = None
-    cache: object = None
-    done: object = None
-    stage: object = None
-
-    def budget(self):
-        """The smallest worker's memory limit [B] on the cluster (None: in this process, or
-        none set), which each part's reduction must fit."""
-        if self.client is None:
-            return None
-        limits = [w.get("memory_limit") or 0
-                  for w in self.client.scheduler_info()["workers"].values()]
-        return min(limits) if limits and min(limits) > 0 else None
-
-    def run(self, tasks):
-        runner = serial if self.client is None else on_cluster(self.client)
-        if self.cache is not None:
-            runner = cached(runner, self.cache)
-        return runner(tasks, self.done)
-
-
 _TEXTS = []
 
 
@@ -300,105 +271,3 @@ def _source_texts():
         root = Path(__file__).resolve().parent.parent
         _TEXTS.extend((root / name).read_bytes() for name in _SOURCES)
     return _TEXTS
-
-
-def serial(tasks, done=None):
-    """Each task in this process, in order; done(task, PartBasis) after each."""
-    out = []
-    for task in tasks:
-        out.append(task.run())
-        if done is not None:
-            done(task, out[-1])
-    return out
-
-
-def on_cluster(client):
-    """A runner of the tasks on a Dask client, one task a part, their results in order;
-    done(task, PartBasis) as each finishes. A task whose worker dies is run again on another
-    (the scheduler's), the same arithmetic on one thread."""
-    def run(tasks, done=None):
-        from dask.distributed import as_completed
-        futures = [client.submit(_run, task, key=f"part-{task.name}-{task.key()[:16]}",
-                                 pure=False) for task in tasks]
-        index = {f.key: i for i, f in enumerate(futures)}
-        out = [None] * len(tasks)
-        for future in as_completed(futures):
-            i = index[future.key]
-            out[i] = future.result()
-            if done is not None:
-                done(tasks[i], out[i])
-        return out
-    return run
-
-
-def _run(task):
-    import transient
-    transient.configure()
-    return task.run()
-
-
-def cached(runner, folder):
-    """runner through the folder: a task whose key is there is read back, the others run and
-    are written (whole, under a temporary name then renamed: a killed run leaves no part
-    file half written). Nothing else in the folder is read, changed or deleted."""
-    folder = Path(folder)
-
-    def run(tasks, done=None):
-        out, todo = [None] * len(tasks), []
-        for i, task in enumerate(tasks):
-            path = folder / f"part-{task.key()}.npz"
-            if path.is_file():
-                with np.load(path) as data:
-                    out[i] = PartBasis(task.name, data["T"], data["Kr"], data["mode_hz"],
-                                       int(data["n_shapes"]), int(data["n_static"]),
-                                       {"cache": 0.0}, data["interface_mu"],
-                                       int(data["interface_loads"]))
-                if done is not None:
-                    done(task, out[i])
-            else:
-                todo.append(i)
-        for i, p in zip(todo, runner([tasks[i] for i in todo], done)):
-            out[i] = p
-            folder.mkdir(parents=True, exist_ok=True)
-            path = folder / f"part-{tasks[i].key()}.npz"
-            part = folder / f".{path.name}.{os.getpid()}.{time.monotonic_ns()}.npz"
-            np.savez(part, **{name: getattr(p, name) for name in _FIELDS})
-            os.replace(part, path)
-        return out
-    return run
-
-
-@contextmanager
-def engine_for(case, workers=0, scheduler=None, cache=None, on_part=None, on_stage=None):
-    """The Engine of the components path for one call of the API (None: the parts in this
-    process, uncached, nothing said), its Dask client closed at the end; on_part(name,
-    seconds, cached) as each part is done, on_stage(name, seconds, peak GB) as each stage of
-    the setup ends. Asked of an assembled case, the options are refused: its basis is made
-    in this process, whole."""
-    done = None if on_part is None else (
-        lambda task, part: on_part(task.name, sum(part.seconds.values()),
-                                   "cache" in part.seconds))
-    if not (workers or scheduler or cache):
-        yield None if done is None and on_stage is None else Engine(done=done, stage=on_stage)
-        return
-    if not case.solver.reduction.components:
-        option = "--workers" if workers else "--scheduler" if scheduler else "--cache"
-        raise CaseError(WHERE, option, "reduces the parts of the components path: "
-                        "set solver.reduction.enabled = true and solver.reduction.method = "
-                        '"components"')
-    from ..cluster import check_cluster, client_for
-    if cache is not None:
-        cache = Path(cache)
-        if cache.exists() and not cache.is_dir():
-            raise CaseError("command line", "--cache", f"{cache} is not a folder")
-    client = cluster = None
-    if workers or scheduler:
-        check_cluster(scheduler, workers)
-        client, cluster = client_for(scheduler, workers)
-    try:
-        yield Engine(client, cache, done, on_stage)
-    finally:
-        if client is not None:
-            client.close()
-        if cluster is not None:
-            cluster.close()

@@ -25,8 +25,11 @@ each block is orthonormalized level by level (m_orthonormalize), and each residu
 against the thetas of its own scale (_reference); a basis that stops converging raises
 NotConverged instead of growing (normal_modes then runs ARPACK).
 """
+from contextlib import closing
+
 import numpy as np
 
+from .. import progress
 from ..kernels.sparse import csr_dot
 
 TOL = 1e-12
@@ -147,54 +150,58 @@ def block_lanczos(solve, M, sigma, lam_max=None, count=None, block=16, max_dim=N
     Qs, MQs = [], []                     # the basis by blocks, and M times it
     N, cols, steps = 0, [], 0            # columns, T's block columns, steps
     best, since = 0, 0                   # most pairs converged so far, steps since it grew
-    while True:
-        b = Qj.shape[1]
-        Qs.append(Qj)
-        MQs.append(MQj)
-        N += b
-        W = np.asarray(solve(np.asfortranarray(MQj)))
-        if W.ndim == 1:
-            W = W[:, None]
-        steps += 1
-        Wn, MWn, C, R = m_orthonormalize(W, M, Qs, MQs)
-        cols.append((C, R))
-        T = _assemble(cols)
-        theta, Y = np.linalg.eigh(0.5 * (T + T.T))
-        theta, Y = theta[::-1], Y[:, ::-1]
-        # residual of each Ritz pair: the coupling to the next block times y's last block
-        res = np.linalg.norm(R @ Y[-b:], axis=0)
-        done = res <= tol * _reference(theta)
-        # pairs converge in order from the largest theta (lambda nearest sigma): the first
-        # open one must come after every wanted one (and, with lam_max, one beyond them)
-        first_open = int(np.argmin(done)) if not done.all() else len(done)
-        if lam_max is not None:
-            need = int(np.sum(theta >= 1.0 / (lam_max - sigma))) + 1
-        else:
-            need = min(count, n)
-        closed = Wn.shape[1] == 0 or N == n      # an invariant subspace
-        if first_open >= need or closed:
-            k = len(theta) if closed else first_open
-            lam = sigma + 1.0 / theta[:k]
-            order = np.argsort(lam)
-            Y = Y[:, :k][:, order]
-            X, start = np.zeros((n, k)), 0
-            for Q in Qs:
-                X += Q @ Y[start:start + Q.shape[1]]
-                start += Q.shape[1]
-            return lam[order], X, steps
-        best, since = (first_open, 0) if first_open > best else (best, since + 1)
-        if since >= STALL and N >= 2 * need + 4 * block:
-            # the residuals sit on the solves' round-off: more vectors will not lower them
-            raise NotConverged(f"the modes stalled: {first_open} of {need} eigenpairs "
-                               f"converged, none more in the last {since} steps ({N} vectors)")
-        room = max_dim - N
-        if Wn.shape[1] > room and max_dim == n:
-            # the space is all but complete: what W adds beyond it is round-off
-            Wn, MWn, cols[-1] = Wn[:, :room], MWn[:, :room], (C, R[:room])
-        elif Wn.shape[1] > room:
-            raise NotConverged(f"the modes did not converge: {first_open} of {need} "
-                               f"eigenpairs in a basis of {N} vectors ({N * n * 16 / 1e9:.2g} GB)")
-        Qj, MQj = Wn, MWn
+    # the wanted count is known as the Ritz values converge: the bar's total follows it
+    with closing(progress.work("modes", None, "mode")) as bar:
+        while True:
+            b = Qj.shape[1]
+            Qs.append(Qj)
+            MQs.append(MQj)
+            N += b
+            W = np.asarray(solve(np.asfortranarray(MQj)))
+            if W.ndim == 1:
+                W = W[:, None]
+            steps += 1
+            Wn, MWn, C, R = m_orthonormalize(W, M, Qs, MQs)
+            cols.append((C, R))
+            T = _assemble(cols)
+            theta, Y = np.linalg.eigh(0.5 * (T + T.T))
+            theta, Y = theta[::-1], Y[:, ::-1]
+            # residual of each Ritz pair: the coupling to the next block times y's last block
+            res = np.linalg.norm(R @ Y[-b:], axis=0)
+            done = res <= tol * _reference(theta)
+            # pairs converge in order from the largest theta (lambda nearest sigma): the first
+            # open one must come after every wanted one (and, with lam_max, one beyond them)
+            first_open = int(np.argmin(done)) if not done.all() else len(done)
+            if lam_max is not None:
+                need = int(np.sum(theta >= 1.0 / (lam_max - sigma))) + 1
+            else:
+                need = min(count, n)
+            bar.advance(min(first_open, need), need)
+            closed = Wn.shape[1] == 0 or N == n      # an invariant subspace
+            if first_open >= need or closed:
+                k = len(theta) if closed else first_open
+                lam = sigma + 1.0 / theta[:k]
+                order = np.argsort(lam)
+                Y = Y[:, :k][:, order]
+                X, start = np.zeros((n, k)), 0
+                for Q in Qs:
+                    X += Q @ Y[start:start + Q.shape[1]]
+                    start += Q.shape[1]
+                return lam[order], X, steps
+            best, since = (first_open, 0) if first_open > best else (best, since + 1)
+            if since >= STALL and N >= 2 * need + 4 * block:
+                # the residuals sit on the solves' round-off: more vectors will not lower them
+                raise NotConverged(f"the modes stalled: {first_open} of {need} eigenpairs "
+                                   f"converged, none more in the last {since} steps ({N} vectors)")
+            room = max_dim - N
+            if Wn.shape[1] > room and max_dim == n:
+                # the space is all but complete: what W adds beyond it is round-off
+                Wn, MWn, cols[-1] = Wn[:, :room], MWn[:, :room], (C, R[:room])
+            elif Wn.shape[1] > room:
+                raise NotConverged(f"the modes did not converge: {first_open} of {need} "
+                                   f"eigenpairs in a basis of {N} vectors "
+                                   f"({N * n * 16 / 1e9:.2g} GB)")
+            Qj, MQj = Wn, MWn
 
 
 def _reference(theta, ratio=OUTLIER):

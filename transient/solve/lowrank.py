@@ -9,6 +9,7 @@ identity needs only A0 = K - sigma M factorized once, Z = A0^-1 C^T (m solves) a
 so a new tangent D costs an m x m factorization, and a solve one sparse solve plus O(n m).
 """
 import time
+from contextlib import closing
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,7 +19,7 @@ import scipy.sparse as sp
 from ..contact.regularize import factored_rows
 from ..kernels.sparse import csr_dot, csr_dot_pair
 from ..model.dofs import restrict, restricted, shifted
-from .. import blas
+from .. import blas, progress
 from .linsolve import factorize
 from .rowspace import factored_row_space, row_space
 
@@ -190,16 +191,19 @@ class ContactSolver:
         G = None if self.Z is not None else np.empty((rank, rank))
         loads, width = None, block_columns(n)
         into = np.empty((n, min(width, rank)), order="F") if self.Z is None else None
-        for start in range(0, rank, width):
-            block = slice(start, min(start + width, rank))
-            # one array of loads for every block, and the responses solved into Z's columns,
-            # or without Z into one block: n x BLOCK of fresh memory a block otherwise, twice
-            # (0.1 s on pad_disc; 25 blocks of 252 MB at 1M dofs)
-            loads = self._loads(block, loads)
-            if self.Z is not None:
-                self._solve_into(loads, self.Z[:, block])
-            else:
-                G[:, block] = self._rows_of(self._solve_into(loads, into[:, :loads.shape[1]]))
+        with closing(progress.work("responses", rank, "load")) as bar:
+            for start in range(0, rank, width):
+                block = slice(start, min(start + width, rank))
+                # one array of loads for every block, and the responses solved into Z's
+                # columns, or without Z into one block: n x BLOCK of fresh memory a block
+                # otherwise, twice (0.1 s on pad_disc; 25 blocks of 252 MB at 1M dofs)
+                loads = self._loads(block, loads)
+                if self.Z is not None:
+                    self._solve_into(loads, self.Z[:, block])
+                else:
+                    G[:, block] = self._rows_of(
+                        self._solve_into(loads, into[:, :loads.shape[1]]))
+                bar.advance(block.stop)
         # with Z held, G in one product (as before Z could be left out: the same sums)
         self.G = self._rows_of(self.Z) if self.Z is not None else G
         self.timings["responses"] = time.perf_counter() - t0

@@ -70,7 +70,7 @@ def analyse(case, check=None, built=None, matrices=False, parts=None):
     """Complex modes of a case at its steady sliding state (Analysis); built: its first
     stages' results when built already (shared.Built: a campaign's variants share them);
     matrices: keep the linearized (M, D, K) in the Analysis; parts: where the components
-    path reduces its parts (reduce.parts.Engine; None: here)."""
+    path reduces its parts (reduce.engine.Engine; None: here)."""
     from ..model import build_model
     from ..shared import Built
     from ..stages import prepare
