@@ -330,10 +330,17 @@ def write_vtu(path, mesh, point_data=None, cell_data=None):
         if any(len(b) != len(conn) for b, conn in zip(blocks, mesh.cells.values())):
             raise ValueError(f"cell data '{name}' does not have one row per cell")
         _add_new(cdata, name, blocks)
-    cells = [(t, conn[:, _MESHIO_VTK_WEDGE] if t == "wedge" else conn)
-             for t, conn in mesh.cells.items()]
-    out = meshio.Mesh(mesh.points, cells, point_data=pdata, cell_data=cdata)
+    out = meshio.Mesh(mesh.points, for_meshio_vtk(mesh.cells.items()), point_data=pdata,
+                      cell_data=cdata)
     meshio.write(path, out, file_format="vtu")
+
+
+def for_meshio_vtk(cells):
+    """[(cell type, conn)] of cells (type, conn) pairs, ready for meshio's VTU and VTK
+    writers: its reordering of linear wedges undone, so that VTK reads them in its own
+    order (_MESHIO_VTK_WEDGE)."""
+    return [(t, np.asarray(conn)[:, _MESHIO_VTK_WEDGE] if t == "wedge" else conn)
+            for t, conn in cells]
 
 
 def _indicator(n, ids):
