@@ -1,8 +1,8 @@
 """Reference elements: node coordinates, shape functions, faces and default quadrature.
 
-Node orderings are meshio's, which are VTK's and Abaqus' (and gmsh's but for the midside nodes
-meshio reorders), so meshes move between tools unchanged. The wedges' triangle 0-1-2 turns
-counterclockwise seen from the triangle 3-4-5, as in gmsh, Abaqus and meshio.
+Node orderings are VTK's (and so meshio's and Abaqus'), so meshes move between tools unchanged.
+The wedges' triangle 0-1-2 turns counterclockwise seen from the triangle 3-4-5, as in gmsh,
+Abaqus, meshio and VTK's cells (transient.mesh.meshfile on meshio's VTK files).
 Volume types: hexahedron (hex8), hexahedron20 (hex20), tetra (tet4), tetra10 (tet10), wedge
 (wedge6: a triangular prism), wedge15.
 Face types: quad (quad4), quad8, triangle (tri3), triangle6 (tri6).
