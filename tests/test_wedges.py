@@ -1,6 +1,7 @@
 """The wedges (triangular prisms), wedge6 and wedge15: their shape functions and faces, their
 rule, K and M against gmsh's own shape functions, the mass they integrate, a cantilever's
-frequencies, a mesh of tets and prisms from gmsh, and their VTU files as VTK reads them.
+frequencies, a pad in wedges on the pad_disc scene's disc, a mesh of tets and prisms from
+gmsh, and their VTU files as VTK reads them.
 
 scikit-fem 12 has a linear wedge but no quadratic one (tests/test_assembly_reference.py
 compares wedge6 with it); gmsh evaluates the shape functions of both its prisms (6 and 15
@@ -10,6 +11,7 @@ generators' geometry (tests/test_generators.py) and the transforms (tests/test_t
 run over every volume type, wedges included.
 """
 from math import factorial
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -237,6 +239,22 @@ def test_a_cantilever_in_wedges_has_the_frequencies_of_hex20_and_of_beam_theory(
     e1 = np.abs(cantilever_frequencies("wedge", (20, 2, 2)) / f20 - 1)[:5]
     e2 = np.abs(cantilever_frequencies("wedge", (40, 4, 4)) / f20 - 1)[:5]
     assert (e1 / e2 > 3.0).all() and e2.max() < 0.15
+
+
+@pytest.mark.slow
+def test_a_pad_in_wedge15_on_the_disc_has_the_modes_of_a_pad_in_hex20():
+    """The pad_disc scene, its pad's friction face triangles in contact with the disc's
+    quadrilaterals: the same divisions in hex20 and in wedge15 give the same modes but for
+    their discretization errors, small on the disc's modes, larger on the coarse pad's own."""
+    from small_cases import PAD_DISC
+
+    from transient import api
+    case = Path(__file__).resolve().parent.parent / "cases" / "pad_disc.toml"
+    f = {el: api.modes(api.load(case, PAD_DISC + [f'parts.pad.mesh.element="{el}"']))
+         .frequencies for el in ("hex20", "wedge15")}
+    assert len(f["wedge15"]) == len(f["hex20"]) > 20
+    np.testing.assert_allclose(f["wedge15"][:12], f["hex20"][:12], rtol=1e-3)
+    np.testing.assert_allclose(f["wedge15"], f["hex20"], rtol=0.02)
 
 
 def gmsh_mixed(path, order):
