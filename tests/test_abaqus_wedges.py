@@ -110,8 +110,19 @@ def test_faces_s1_to_s5_are_the_manual_s_faces_and_outward(tmp_path, order):
     assert abaqus_type == ("C3D6", "C3D15")[order - 1]
     labels = sorted(elements)
     text += "".join(f"*SURFACE, NAME=FACE{k}, TYPE=ELEMENT\nsolid, S{k}\n" for k in MANUAL)
+    text += "*SURFACE, NAME=WHOLE, TYPE=ELEMENT\nsolid\n"
     deck.write_text(text)
     mesh = read_mesh(deck)
+    # a line without a face: the elements' faces on the boundary, of both kinds
+    whole = mesh.face_sets[find_set(mesh.face_sets, "whole")]
+    assert sorted(whole) == sorted(set(ELEMENTS[("wedge", "wedge15")[order - 1]].face_types))
+    area = 0.0
+    for ftype, faces in whole.items():
+        p = mesh.points[faces[:, :ELEMENTS[ftype].n_corners]]
+        cross = sum(np.cross(p[:, i] - p[:, 0], p[:, i + 1] - p[:, 0])
+                    for i in range(1, p.shape[1] - 1))
+        area += 0.5 * np.linalg.norm(cross, axis=1).sum()
+    assert area == pytest.approx(2 * (0.03 * 0.02 + 0.05 * 0.01), rel=1e-12)
     coordinates = np.array([nodes[n] for n in sorted(nodes)])
     label_of = {tuple(p): n for n, p in zip(sorted(nodes), coordinates)}
     ctype = ("wedge", "wedge15")[order - 1]

@@ -37,14 +37,12 @@ class Element:
 
     @property
     def face_groups(self):
-        """Face type -> (face numbers (k,), their local node lists (k, nfn)), so that the
-        faces of one type are taken from a connectivity in one indexing."""
+        """Face type -> the local node lists (k, nfn) of the faces of that type, so that they
+        are taken from a connectivity in one indexing."""
         out = {}
-        for number, (ftype, face) in enumerate(zip(self.face_types, self.faces)):
-            numbers, local = out.setdefault(ftype, ([], []))
-            numbers.append(number)
-            local.append(face)
-        return {t: (np.array(n), np.array(f)) for t, (n, f) in out.items()}
+        for ftype, face in zip(self.face_types, self.faces):
+            out.setdefault(ftype, []).append(face)
+        return {t: np.array(f) for t, f in out.items()}
 
     def shape_functions(self, xi):
         """Values (n, nen) at reference points xi (n, dim)."""

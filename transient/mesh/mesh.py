@@ -43,7 +43,7 @@ def all_faces(mesh):
     """Every face of every cell: face type -> (faces (nf, nfn), cell type, cell index)."""
     out = {}
     for ctype, conn in mesh.cells.items():
-        for ftype, (_, local) in ELEMENTS[ctype].face_groups.items():
+        for ftype, local in ELEMENTS[ctype].face_groups.items():
             faces = conn[:, local].reshape(-1, local.shape[1])
             owner = np.repeat(np.arange(len(conn)), len(local))
             f, types, owners = out.setdefault(ftype, ([], [], []))

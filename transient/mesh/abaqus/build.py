@@ -216,7 +216,7 @@ class _Sets:
             for b in np.unique(m.block_of[elems]):
                 el = ELEMENTS[m.blocks[b].ctype]
                 conn = m.conn[b][m.row_of[elems[m.block_of[elems] == b]]]
-                for ftype, (_, local) in el.face_groups.items():
+                for ftype, local in el.face_groups.items():
                     faces = conn[:, local].reshape(-1, local.shape[1])
                     hit = self.boundary.match(faces, ftype)
                     self.add_faces(name, ftype, faces[hit >= 0])
