@@ -206,8 +206,9 @@ def test_input_files_cylindrical_nodes_node_surfaces_and_faces_on_the_boundary(t
 
 @pytest.mark.parametrize("text, words", [
     ("*Part, name=P\n*Node\n1, 0, 0, 0\n*End Part\n",
-     "no solid elements: expected C3D4, C3D10, C3D8 and C3D20, with any formulation letters "
-     "(C3D8R, C3D10M, C3D20R) (the deck defines parts but no *INSTANCE of them)"),
+     "no solid elements: expected C3D4, C3D10, C3D8, C3D20, C3D6 and C3D15, with any "
+     "formulation letters (C3D8R, C3D10M, C3D20R, C3D6H) (the deck defines parts but no "
+     "*INSTANCE of them)"),
     ("*Part, name=P\n*End Part\n*Assembly, name=A\n*Instance, name=I, part=Q\n*End Instance\n",
      "line 4: *Instance, name=I, part=Q: no part 'Q' (parts: P)"),
     ("*Part, name=P\n*End Instance\n", "line 2: *End Instance: out of place"),

@@ -179,7 +179,7 @@ SOLID = """*NODE
 @pytest.mark.parametrize("tail, line, words", [
     ("*ELEMENT, TYPE=C3D27\n2, 1, 2, 3, 4, 5, 6, 7, 8, 1, 2, 3, 4\n", 13,
      "*ELEMENT, TYPE=C3D27: element type C3D27 cannot be used: expected solids C3D4, C3D10"),
-    ("*ELEMENT, TYPE=C3D6\n2, 1, 2, 3, 5, 6, 7\n", 13, "element type C3D6 cannot be used"),
+    ("*ELEMENT, TYPE=C3D15V\n2, 1, 2, 3, 5, 6, 7\n", 13, "element type C3D15V cannot be used"),
     ("*SURFACE, NAME=Pad\nNOPE, S1\n", 14,
      "*SURFACE, NAME=Pad: element set 'NOPE' is not defined (element sets: TETS)"),
     ("*SURFACE, NAME=Pad\n1, S7\n", 14,
@@ -212,8 +212,9 @@ def test_a_deck_with_only_an_unknown_element_type_names_it(tmp_path, capsys):
     (err,) = capsys.readouterr().err.strip().splitlines()
     assert err == (f"error: {case}: parts.block.mesh.path: {deck}: line 4: *ELEMENT, "
                    "TYPE=USER8: element type USER8 cannot be used: expected solids C3D4, C3D10, "
-                   "C3D8 and C3D20, with any formulation letters (C3D8R, C3D10M, C3D20R) "
-                   "(shells, membranes, beams, springs and masses are left out with a note)")
+                   "C3D8, C3D20, C3D6 and C3D15, with any formulation letters (C3D8R, C3D10M, "
+                   "C3D20R, C3D6H) (shells, membranes, beams, springs and masses are left out "
+                   "with a note)")
 
 
 def test_shells_beams_springs_and_masses_are_left_out_with_one_note(tmp_path, capsys):

@@ -6,15 +6,19 @@ summation. The two are compared entry by entry through a dof permutation, never 
 
 Correspondence with scikit-fem 12:
 
-* reference cells: scikit-fem's hex is [0, 1]^3 (xi = 2 X - 1), its tet is the unit tet (xi = X);
+* reference cells: scikit-fem's hex is [0, 1]^3 (xi = 2 X - 1), its tet is the unit tet (xi = X),
+  its wedge the unit triangle times [0, 1] (xi, eta = X, Y and zeta = 2 Z - 1);
 * local nodes: our node at the reference point of scikit-fem's local dof s (``local_order``);
-  for the hex corners that is VTK [6, 2, 5, 7, 1, 3, 4, 0], for tets the identity;
+  for the hex corners that is VTK [6, 2, 5, 7, 1, 3, 4, 0], for tets and wedges the identity;
 * global dofs: ElementVector's local dof 3 s + c is component c of scalar dof s, and
   basis.element_dofs gives its global number (``dof_permutation``);
 * quadrature: intorder = our degree where scikit-fem's rule is the same point set (tensor Gauss
   with (degree + 2) // 2 points for the hex, tet degrees 1 and 2), otherwise our own rule is passed
   as quadrature= (tet degree 4), so the integrands are summed at identical points even on
   curved (non-polynomial) cells.
+
+scikit-fem 12 has no quadratic wedge: wedge15 is checked against gmsh's own shape functions in
+tests/test_wedges.py.
 """
 import dataclasses
 
@@ -23,8 +27,8 @@ import pytest
 
 skfem = pytest.importorskip("skfem")
 from skfem import (Basis, BilinearForm, ElementHex1, ElementHexS2, ElementTetP1,  # noqa: E402
-                   ElementTetP2, ElementVector, Functional, MeshHex1, MeshHex2, MeshTet1,
-                   MeshTet2)
+                   ElementTetP2, ElementVector, ElementWedge1, Functional, MeshHex1, MeshHex2,
+                   MeshTet1, MeshTet2, MeshWedge1)
 from skfem.helpers import dot  # noqa: E402
 from skfem.models.elasticity import lame_parameters, linear_elasticity  # noqa: E402
 from skfem.quadrature import get_quadrature  # noqa: E402
@@ -44,11 +48,14 @@ SKFEM = {
     "hexahedron20": (ElementHexS2, MeshHex1, MeshHex2),
     "tetra": (ElementTetP1, MeshTet1, None),
     "tetra10": (ElementTetP2, MeshTet1, MeshTet2),
+    "wedge": (ElementWedge1, MeshWedge1, None),
 }
 
 
 def to_ours(shape, X):
     """Our reference coordinates of scikit-fem reference points X (n, 3)."""
+    if shape == "wedge":
+        return np.column_stack([X[:, :2], 2.0 * X[:, 2] - 1.0])
     return 2.0 * X - 1.0 if shape == "hex" else X
 
 
@@ -56,6 +63,8 @@ def to_skfem(shape, xi, w):
     """Our rule (xi, w) in scikit-fem's reference cell and array layout."""
     if shape == "hex":
         return (0.5 * (xi + 1.0)).T, w / 8.0
+    if shape == "wedge":
+        return np.column_stack([xi[:, :2], 0.5 * (xi[:, 2] + 1.0)]).T, w / 2.0
     return xi.T, w
 
 
@@ -160,7 +169,7 @@ def relative(A, B):
     return abs(A - B).max() / abs(B).max()
 
 
-CASES = [(t, False) for t in VOLUME_TYPES] + [("hexahedron20", True), ("tetra10", True)]
+CASES = [(t, False) for t in SKFEM] + [("hexahedron20", True), ("tetra10", True)]
 
 
 @pytest.mark.parametrize("cell_type, curved", CASES,

@@ -6,6 +6,7 @@ import meshio
 import numpy as np
 import pytest
 import pyvista as pv
+import vtk
 
 from transient.case.loading import load
 from transient.cli import main
@@ -134,3 +135,28 @@ def test_nothing_to_export_is_one_line_error(tmp_path, capsys):
     assert "output.field = true" in err and "output.contact = true" in err
     assert main(["export", str(tmp_path / "missing.h5")]) == 2
     assert "file not found" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("fmt, element", [("vtu", "wedge6"), ("xdmf", "wedge6"),
+                                          ("vtu", "wedge15")])
+def test_wedges_export_as_cells_vtk_holds_valid(tmp_path, capsys, fmt, element):
+    """meshio's VTU writer turns linear wedges over (after VTK's old documentation); VTK's
+    cell validator and its signed volumes are the judges of what ParaView will show."""
+    path = tmp_path / "wedges.h5"
+    run(load(CASE, ["output.field=true", "solver.t_end=2e-6", "parts.bar.mesh.divisions=[10,1,1]",
+                    f'parts.bar.mesh.element="{element}"']), path)
+    out = tmp_path / fmt
+    assert main(["export", str(path), "--out", str(out), "--format", fmt]) == 0
+    capsys.readouterr()
+    if fmt == "vtu":
+        reader = pv.PVDReader(str(out / "field.pvd"))
+        reader.set_active_time_value(reader.time_values[-1])
+        grid = reader.read()[0]
+    else:
+        grid = pv.XdmfReader(str(out / "field.xdmf")).read()["TimeSeries_meshio"]
+    assert grid.n_cells == 20
+    validator = vtk.vtkCellValidator()
+    validator.SetInputData(grid)
+    validator.Update()
+    assert set(pv.wrap(validator.GetOutput())["ValidityState"]) == {0}
+    assert grid.compute_cell_sizes()["Volume"].min() > 0

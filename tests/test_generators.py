@@ -9,7 +9,7 @@ from transient.mesh.elements import ELEMENTS, VOLUME_TYPES
 from transient.mesh.generators import annular_disc, box, brake_pad, drilled_box
 from transient.mesh.mesh import all_faces, boundary_faces, face_key
 
-LINEAR = ("hexahedron", "tetra")
+LINEAR = ("hexahedron", "tetra", "wedge")
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -47,16 +47,17 @@ def face_quadrature(points, faces, ftype, degree=4):
 
 
 def face_set(mesh, name):
-    """Quadrature points, area vectors and total area [m^2] of a named face set."""
-    (ftype, faces), = mesh.face_sets[name].items()
-    at, normal = face_quadrature(mesh.points, faces, ftype)
+    """Quadrature points, area vectors and total area [m^2] of a named face set (of every
+    face type in it: a wedge's on z levels are triangles, the others quadrilaterals)."""
+    pieces = [face_quadrature(mesh.points, faces, ftype)
+              for ftype, faces in mesh.face_sets[name].items()]
+    at, normal = (np.vstack(p) for p in zip(*pieces))
     return at, normal, float(np.linalg.norm(normal, axis=1).sum())
 
 
 def boundary_area(mesh):
-    (ftype, faces), = boundary_faces(mesh).items()
-    _, normal = face_quadrature(mesh.points, faces, ftype)
-    return float(np.linalg.norm(normal, axis=1).sum())
+    return sum(float(np.linalg.norm(face_quadrature(mesh.points, faces, ftype)[1], axis=1).sum())
+               for ftype, faces in boundary_faces(mesh).items())
 
 
 def check_valid(mesh):
@@ -75,13 +76,14 @@ def check_valid(mesh):
 
 def check_sets(mesh):
     """Node sets are the nodes of the face sets; every face set lies on the boundary."""
-    (ftype, boundary), = boundary_faces(mesh).items()
-    keys = {tuple(k) for k in face_key(boundary, ELEMENTS[ftype].n_corners)}
+    keys = {ftype: {tuple(k) for k in face_key(boundary, ELEMENTS[ftype].n_corners)}
+            for ftype, boundary in boundary_faces(mesh).items()}
     for name, fs in mesh.face_sets.items():
-        faces = fs[ftype]
-        assert len(faces)
-        assert {tuple(k) for k in face_key(faces, ELEMENTS[ftype].n_corners)} <= keys
-        assert np.array_equal(mesh.node_sets[name], np.unique(faces))
+        assert fs and all(len(faces) for faces in fs.values())
+        for ftype, faces in fs.items():
+            assert {tuple(k) for k in face_key(faces, ELEMENTS[ftype].n_corners)} <= keys[ftype]
+        assert np.array_equal(mesh.node_sets[name],
+                              np.unique(np.concatenate([f.ravel() for f in fs.values()])))
 
 
 def check_plane(mesh, name, normal, area, rtol=1e-12):

@@ -188,9 +188,9 @@ def test_gmsh_tet10_numbering_and_unnamed_physical_groups(tmp_path):
     np.testing.assert_array_equal(mesh.cell_sets["1"]["tetra10"], [0, 1])
 
 
-def write_wedge(path):
-    points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1.0]])
-    meshio.write(path, meshio.Mesh(points, [("wedge", np.array([[0, 1, 2, 3, 4, 5]]))]))
+def write_pyramid(path):
+    points = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, 0.5, 1.0]])
+    meshio.write(path, meshio.Mesh(points, [("pyramid", np.array([[0, 1, 2, 3, 4]]))]))
 
 
 def write_garbage(path):
@@ -205,7 +205,7 @@ def write_triangles_only(path):
 @pytest.mark.parametrize("name, write, words", [
     ("missing.msh", None, "no such file"),
     ("garbage.msh", write_garbage, "cannot read"),
-    ("wedge.vtu", write_wedge, "wedge"),
+    ("pyramid.vtu", write_pyramid, "unsupported cell type 'pyramid'"),
     ("triangles.vtu", write_triangles_only, "no volume cells"),
 ])
 def test_errors(tmp_path, name, write, words):

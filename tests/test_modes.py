@@ -51,7 +51,8 @@ def block_operators(mesh):
 
 
 @pytest.mark.parametrize("element, divisions", [("hexahedron20", (20, 2, 2)),
-                                                 ("tetra10", (20, 2, 2))])
+                                                 ("tetra10", (20, 2, 2)),
+                                                 ("wedge15", (20, 2, 2))])
 @pytest.mark.slow
 def test_cantilever_bending_frequencies_match_timoshenko(element, divisions):
     L, h = 1.0, 0.1     # L / h = 10: shear and rotary inertia matter (a few %)
@@ -71,7 +72,8 @@ def test_cantilever_bending_frequencies_match_timoshenko(element, divisions):
     np.testing.assert_allclose(f[[2, 3]], beam[1], rtol=0.01)
 
 
-@pytest.mark.parametrize("element", ["hexahedron", "hexahedron20", "tetra", "tetra10"])
+@pytest.mark.parametrize("element", ["hexahedron", "hexahedron20", "tetra", "tetra10", "wedge",
+                                     "wedge15"])
 def test_free_block_has_exactly_six_rigid_modes(element):
     mesh = box((0.3, 0.2, 0.1), (3, 2, 2), element=element)
     ops = block_operators(mesh)

@@ -13,7 +13,7 @@ def vector3(doc, unit="m", default=REQUIRED):
 
 
 ELEMENT = Value("choice", "element type of the generated mesh", "hex8",
-                choices=("hex8", "hex20", "tet4", "tet10"))
+                choices=("hex8", "hex20", "tet4", "tet10", "wedge6", "wedge15"))
 
 MESH = Variant("mesh of the part: a generator or a file", {
     "box": {

@@ -8,8 +8,9 @@ import resource
 
 from ..errors import CaseError
 
-NODES = {"hex8": 8, "hex20": 20, "tet4": 4, "tet10": 10}
-TETS_PER_HEX = 6          # the generators split each hex in six tets (Kuhn)
+NODES = {"hex8": 8, "hex20": 20, "tet4": 4, "tet10": 10, "wedge6": 6, "wedge15": 15}
+# the generators split each hex in six tets (Kuhn) or in two prisms
+CELLS_PER_HEX = {"tet4": 6, "tet10": 6, "wedge6": 2, "wedge15": 2}
 # bytes per entry of the element matrices (COO rows, columns, values; K and M), times the
 # setup's multiple of them (factorization, basis, contact): the largest of the setups' measured
 # peaks per entry, from pad_disc to a 1M-dof tet10 brake (docs/performance.md, "Memory")
@@ -40,7 +41,7 @@ def generated_cells(mesh):
     d = [int(x) for x in p["divisions"]]
     cells = math.prod(d[:3]) if mesh.kind != "brake_pad" else d[0] * d[1] * (d[2] + d[3])
     element = p["element"]
-    return cells * (TETS_PER_HEX if element.startswith("tet") else 1), NODES[element]
+    return cells * CELLS_PER_HEX.get(element, 1), NODES[element]
 
 
 def setup_bytes(cells):

@@ -17,6 +17,7 @@ import h5py
 import meshio
 import numpy as np
 
+from ..mesh.meshfile import for_meshio_vtk
 from .stored import open_history
 
 FORMATS = ("xdmf", "vtu")
@@ -183,7 +184,8 @@ def _write_pvd_series(stem, series, f, rows, time):
     entries = []
     for k, row in enumerate(rows):
         path = stem / f"{stem.name}_{k:06d}.vtu"
-        mesh = meshio.Mesh(series.points, series.cells, point_data=series.data(f, row))
+        mesh = meshio.Mesh(series.points, for_meshio_vtk(series.cells),
+                           point_data=series.data(f, row))
         meshio.write(path, mesh, file_format="vtu")
         entries.append((float(time[row]), f"{stem.name}/{path.name}"))
     pvd = stem.with_name(stem.name + ".pvd")

@@ -39,7 +39,7 @@ def box(size, divisions, origin=(0.0, 0.0, 0.0), element="hexahedron"):
     size : (3,) edge lengths [m].
     divisions : (nx, ny, nz) cells per direction.
     origin : (3,) lowest corner [m].
-    element : 'hexahedron', 'hexahedron20', 'tetra' or 'tetra10'.
+    element : 'hexahedron', 'hexahedron20', 'tetra', 'tetra10', 'wedge' or 'wedge15'.
 
     Returns
     -------
@@ -76,7 +76,7 @@ def drilled_box(size, divisions, hole_center, hole_radius, origin=(0.0, 0.0, 0.0
     hole_center : (x, y) hole axis [m].
     hole_radius : hole radius [m].
     origin : (3,) lowest corner [m].
-    element : 'hexahedron', 'hexahedron20', 'tetra' or 'tetra10'.
+    element : 'hexahedron', 'hexahedron20', 'tetra', 'tetra10', 'wedge' or 'wedge15'.
     ogrid_cells : k, half-width of the O-grid square in background cells; by default the
         smallest k with k * min(dx, dy) >= 1.5 * hole_radius.
     filled : mesh the hole too: a plain block with the drilled block's plan.
@@ -117,7 +117,7 @@ def annular_disc(inner_radius, outer_radius, thickness, divisions, center=(0.0, 
     thickness : axial thickness [m].
     divisions : (nr, ntheta, nz) cells per direction, ntheta >= 3.
     center : (3,) centre of the bottom face [m].
-    element : 'hexahedron', 'hexahedron20', 'tetra' or 'tetra10'.
+    element : 'hexahedron', 'hexahedron20', 'tetra', 'tetra10', 'wedge' or 'wedge15'.
 
     Returns
     -------
@@ -152,7 +152,7 @@ def brake_pad(inner_radius, outer_radius, angle, lining_thickness, backplate_thi
     z0 : height of the friction surface [m].
     center : (x, y) axis of the sector [m].
     center_angle : polar angle of the sector's middle about center [deg].
-    element : 'hexahedron', 'hexahedron20', 'tetra' or 'tetra10'.
+    element : 'hexahedron', 'hexahedron20', 'tetra', 'tetra10', 'wedge' or 'wedge15'.
 
     Returns
     -------

@@ -43,14 +43,13 @@ def all_faces(mesh):
     """Every face of every cell: face type -> (faces (nf, nfn), cell type, cell index)."""
     out = {}
     for ctype, conn in mesh.cells.items():
-        el = ELEMENTS[ctype]
-        local = np.array(el.faces)
-        faces = conn[:, local].reshape(-1, local.shape[1])
-        owner = np.repeat(np.arange(len(conn)), len(local))
-        f, types, owners = out.setdefault(el.face_type, ([], [], []))
-        f.append(faces)
-        types += [ctype] * len(faces)
-        owners.append(owner)
+        for ftype, local in ELEMENTS[ctype].face_groups.items():
+            faces = conn[:, local].reshape(-1, local.shape[1])
+            owner = np.repeat(np.arange(len(conn)), len(local))
+            f, types, owners = out.setdefault(ftype, ([], [], []))
+            f.append(faces)
+            types += [ctype] * len(faces)
+            owners.append(owner)
     return {ft: (np.vstack(f), np.array(t), np.concatenate(o)) for ft, (f, t, o) in out.items()}
 
 

@@ -23,6 +23,24 @@ from .mesh import Mesh, face_nodes, orient_faces
 
 SET_PREFIX = "set:"
 _JACOBIAN_CHUNK = 8192   # cells per vectorized batch: bounds memory to a few tens of MB
+# meshio 5 turns a linear wedge's triangles over between its order (gmsh's) and VTK's as VTK's
+# documentation long described it (triangle 0-1-2 facing out); VTK itself takes gmsh's order
+# (its cell validator passes it and flags meshio's as inverted), so for VTK files the turn is
+# undone, reading and writing. VTK's quadratic wedge is left in gmsh's order by meshio.
+_MESHIO_VTK_WEDGE = np.array([0, 2, 1, 3, 5, 4])
+_VTK_SUFFIXES = (".vtu", ".vtk")
+
+
+def _meshio_knows_wedge15():
+    """meshio 5.3 maps gmsh's prism15 and VTK's quadratic wedge to 'wedge15' but leaves it
+    out of its table of cell dimensions, so that it can neither read nor write one (meshio
+    issues 1247, 1505); the missing entry is added, and a meshio that has it is left as it is."""
+    table = getattr(getattr(meshio, "_mesh", None), "topological_dimension", None)
+    if isinstance(table, dict):
+        table.setdefault("wedge15", 3)
+
+
+_meshio_knows_wedge15()
 
 
 def read_mesh(path):
@@ -57,6 +75,10 @@ def read_mesh(path):
             print(f"note: {path}: {note}", file=sys.stderr)
         return mesh
     raw, said = _meshio_read(path)
+    if path.suffix.lower() in _VTK_SUFFIXES:
+        for block in raw.cells:
+            if block.type == "wedge" and np.ndim(block.data) == 2 and block.data.shape[1] == 6:
+                block.data = np.asarray(block.data)[:, _MESHIO_VTK_WEDGE]
     # what meshio said is held until the mesh is taken: a refused one gets one error line,
     # which carries it (a truncated file often explains the refusal)
     try:
@@ -286,7 +308,7 @@ def write_vtu(path, mesh, point_data=None, cell_data=None):
     Parameters
     ----------
     path : str or Path
-        Output file, usually ending in .vtu.
+        Output file, usually ending in .vtu (each cell in VTK's own node order).
     mesh : Mesh
     point_data : dict, optional
         name -> (n_nodes,) or (n_nodes, k) array, e.g. displacement [m].
@@ -308,8 +330,17 @@ def write_vtu(path, mesh, point_data=None, cell_data=None):
         if any(len(b) != len(conn) for b, conn in zip(blocks, mesh.cells.values())):
             raise ValueError(f"cell data '{name}' does not have one row per cell")
         _add_new(cdata, name, blocks)
-    out = meshio.Mesh(mesh.points, list(mesh.cells.items()), point_data=pdata, cell_data=cdata)
+    out = meshio.Mesh(mesh.points, for_meshio_vtk(mesh.cells.items()), point_data=pdata,
+                      cell_data=cdata)
     meshio.write(path, out, file_format="vtu")
+
+
+def for_meshio_vtk(cells):
+    """[(cell type, conn)] of cells (type, conn) pairs, ready for meshio's VTU and VTK
+    writers: its reordering of linear wedges undone, so that VTK reads them in its own
+    order (_MESHIO_VTK_WEDGE)."""
+    return [(t, np.asarray(conn)[:, _MESHIO_VTK_WEDGE] if t == "wedge" else conn)
+            for t, conn in cells]
 
 
 def _indicator(n, ids):

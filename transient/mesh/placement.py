@@ -15,7 +15,7 @@ from .mesh import Mesh, unit
 # A corner order of the other orientation per reference shape: each swaps the reference axes
 # xi and eta, which reverses the sign of det J and keeps the element's topology.
 _SWAPPED_CORNERS = {"tet": (0, 2, 1, 3), "hex": (0, 3, 2, 1, 4, 7, 6, 5),
-                    "tri": (0, 2, 1), "quad": (0, 3, 2, 1)}
+                    "wedge": (0, 2, 1, 3, 5, 4), "tri": (0, 2, 1), "quad": (0, 3, 2, 1)}
 
 
 def reversed_order(ctype):

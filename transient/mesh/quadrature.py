@@ -1,9 +1,11 @@
 """Quadrature rules on the reference cells.
 
 Reference cells: the segment [-1, 1], the square [-1, 1]^2, the cube [-1, 1]^3, the unit triangle
-{x, y >= 0, x + y <= 1} and the unit tetrahedron {x, y, z >= 0, x + y + z <= 1}.
+{x, y >= 0, x + y <= 1}, the unit tetrahedron {x, y, z >= 0, x + y + z <= 1} and the wedge, that
+triangle times [-1, 1] in z.
 Every rule is returned as (points (n, dim), weights (n,)); a rule of degree p integrates every
-polynomial of total degree <= p exactly.
+polynomial of total degree <= p exactly (on the square, cube and wedge: of degree <= p in each
+direction, the wedge's triangle counting as one).
 """
 from functools import lru_cache
 
@@ -117,8 +119,21 @@ def _refine_weights(points, weights, dim):
     return points, weights * (measure / weights.sum())
 
 
+def wedge(degree):
+    """The triangle's rule of the given degree times Gauss-Legendre along z, exact to the same
+    degree (weights sum to 1). The triangle rules to degree 5 are symmetric in x and y, so a
+    wedge turned inside out by a mirror (which swaps x and y) is integrated at the same points."""
+    tp, tw = triangle(degree)
+    zp, zw = gauss_line(max(1, (degree + 2) // 2))
+    points = np.column_stack([np.repeat(tp, len(zp), axis=0), np.tile(zp, len(tp))])
+    return points, np.repeat(tw, len(zp)) * np.tile(zw, len(tp))
+
+
 def rule(shape, degree):
-    """Rule of at least the given degree on a reference shape ('hex', 'quad', 'tet', 'tri')."""
+    """Rule of at least the given degree on a reference shape ('hex', 'quad', 'tet', 'tri',
+    'wedge')."""
+    if shape == "wedge":
+        return wedge(degree)
     if shape == "hex":
         return gauss_tensor(max(1, (degree + 2) // 2), 3)
     if shape == "quad":

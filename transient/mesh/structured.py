@@ -8,6 +8,10 @@ into hexahedra stored as 'corners in index order': corners[e, a, b, c] is the no
 * tetra / tetra10: 6 tetrahedra per hex (Kuhn split along the index-space diagonal), each made
   positive afterwards. Neighbouring hexes traverse every shared face in the same index directions,
   so the face diagonals of the split match and the tetrahedral mesh is conforming;
+* wedge / wedge15: 2 prisms per hex, its plan quad split along the diagonal (0, 0)-(1, 1) and
+  swept along z, reflected through c where the index frame is left-handed. The diagonals lie
+  inside the quads and the prisms' triangles are those of the layer above and below, so the
+  prism mesh is conforming; its faces on z levels are triangles, the others quadrilaterals;
 * quadratic midside nodes are unique per edge (keyed by sorted corner ids) and placed by mapping
   the parametric midpoint of the edge, taken from one cell's own corner parameters, to space.
 
@@ -20,7 +24,7 @@ from itertools import permutations
 
 import numpy as np
 
-from .elements import ELEMENTS
+from .elements import ELEMENTS, FACE_TYPE_OF
 from .mesh import Mesh, face_nodes
 
 # Flat index a*4 + b*2 + c of the corners in VTK hexahedron order, and the same reflected in c
@@ -31,6 +35,15 @@ _HEX_VTK_REFLECTED = np.array([1, 5, 7, 3, 0, 4, 6, 2])
 _HEX_FACE = {(2, 0): 0, (2, 1): 1, (1, 0): 2, (0, 1): 3, (1, 1): 4, (0, 0): 5}
 
 _PERMUTATIONS = tuple(permutations(range(3)))
+
+# Flat corner indices of the two prisms of a hex: bottom triangle (c = 0) then top, the plan
+# quad's triangles (0, 0), (1, 0), (1, 1) and (0, 0), (1, 1), (0, 1), both counterclockwise in
+# index space; and the same reflected through c.
+_PRISMS = np.array([[0, 4, 6, 1, 5, 7], [0, 6, 2, 1, 7, 3]])
+_PRISMS_REFLECTED = _PRISMS[:, [3, 4, 5, 0, 1, 2]]
+# (prism of the hex, its face in elements._WEDGE_FACES) of the hex's lateral face (axis, side);
+# the faces on z levels are faces 0 (c = 0) and 1 (c = 1) of both prisms.
+_PRISM_FACE = {(0, 0): (1, 4), (0, 1): (0, 3), (1, 0): (0, 2), (1, 1): (1, 3)}
 
 
 def _kuhn_tets():
@@ -200,17 +213,57 @@ def _tet_cells(hexes, points, element, mapping):
     return conn, points, faces
 
 
+def _wedge_cells(hexes, points, element, mapping):
+    """Prisms (2 per hex, hex e -> prisms 2e, 2e + 1); faces of the named boundary pieces."""
+    local = np.broadcast_to(_PRISMS, (len(hexes.corners), 2, 6)).reshape(-1, 6)
+    ids = hexes.corners.reshape(-1, 8)[np.repeat(np.arange(len(hexes.corners)), 2)]
+    x = points[np.take_along_axis(ids, local, axis=1)]
+    centre = ELEMENTS["wedge"].shape_derivatives(np.array([[1 / 3, 1 / 3, 0.0]]))[0]
+    # the sign alone, which slogdet gives where det overflows
+    flip = np.linalg.slogdet(np.einsum("eak,ad->ekd", x, centre))[0] < 0
+    local = np.where(flip[:, None], np.tile(_PRISMS_REFLECTED, (len(hexes.corners), 1)), local)
+    conn = np.take_along_axis(ids, local, axis=1)
+    if element == "wedge15":
+        par = hexes.corner_params.reshape(-1, 8, 3)[np.repeat(np.arange(len(hexes.corners)), 2)]
+        params = np.take_along_axis(par, local[:, :, None], axis=1)
+        conn, points = _add_midsides(conn, params, ELEMENTS[element].edges, points, mapping)
+    local_faces = ELEMENTS[element].faces
+    faces = {}
+    for name, pieces in hexes.faces.items():
+        for cells, axis, side in pieces:
+            if axis == 2:
+                prisms = (2 * cells[:, None] + np.arange(2)).ravel()
+                # reflection through c swaps the bottom and top triangles
+                number = np.where(flip[prisms], 1 - side, side)
+                for k in (0, 1):
+                    mine = prisms[number == k]
+                    faces.setdefault(name, []).append(conn[mine][:, list(local_faces[k])])
+            else:
+                which, k = _PRISM_FACE[axis, side]
+                faces.setdefault(name, []).append(
+                    conn[2 * cells + which][:, list(local_faces[k])])
+    return conn, points, faces
+
+
 def _build_mesh(hexes, element, mapping, cell_groups):
     """Mesh of the given element type; cell_groups: name -> hex indices."""
     points = mapping(hexes.params)
     if element in ("hexahedron", "hexahedron20"):
         conn, points, faces = _hex_cells(hexes, points, element, mapping)
         per_hex = 1
+    elif element in ("wedge", "wedge15"):
+        conn, points, faces = _wedge_cells(hexes, points, element, mapping)
+        per_hex = 2
     else:
         conn, points, faces = _tet_cells(hexes, points, element, mapping)
         per_hex = 6
-    ftype = ELEMENTS[element].face_type
-    face_sets = {name: {ftype: np.vstack(parts)} for name, parts in faces.items()}
+    face_sets = {}
+    for name, parts in faces.items():
+        by_type = face_sets.setdefault(name, {})
+        for part in parts:
+            by_type.setdefault(FACE_TYPE_OF[part.shape[1]], []).append(part)
+    face_sets = {name: {t: np.vstack(p) for t, p in by_type.items() if sum(map(len, p))}
+                 for name, by_type in face_sets.items()}
     node_sets = {name: face_nodes(fs) for name, fs in face_sets.items()}
     cell_sets = {name: {element: (per_hex * cells[:, None] + np.arange(per_hex)).ravel()}
                  for name, cells in cell_groups.items()}

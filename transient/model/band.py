@@ -6,8 +6,8 @@ import numpy as np
 from ..errors import CaseError
 
 # the consistent mass's highest frequency is at most sqrt(27) times the lumped one on hex8
-# (M_c >= M_l / 27), and was 0.8-1.7 times the lumped Gershgorin bound on hex8, hex20, tet4
-# and tet10 bars
+# (M_c >= M_l / 27), and was 0.75-1.7 times the lumped Gershgorin bound on hex8, hex20, tet4,
+# tet10, wedge6 and wedge15 bars
 MARGIN = 6.0
 ROWS = 100_000          # rows of K per pass: |K| is never copied whole
 

@@ -216,9 +216,10 @@ class _Sets:
             for b in np.unique(m.block_of[elems]):
                 el = ELEMENTS[m.blocks[b].ctype]
                 conn = m.conn[b][m.row_of[elems[m.block_of[elems] == b]]]
-                faces = conn[:, np.array(el.faces)].reshape(-1, len(el.faces[0]))
-                hit = self.boundary.match(faces, el.face_type)
-                self.add_faces(name, el.face_type, faces[hit >= 0])
+                for ftype, local in el.face_groups.items():
+                    faces = conn[:, local].reshape(-1, local.shape[1])
+                    hit = self.boundary.match(faces, ftype)
+                    self.add_faces(name, ftype, faces[hit >= 0])
         for elems in surface.two_d:
             for ftype, (ids, idx) in self.two_d.items():
                 mask = np.isin(ids, elems)

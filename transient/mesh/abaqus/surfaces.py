@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..elements import ELEMENTS
+from ..elements import FACE_TYPE_OF
 from .types import FACE, FACES, SOLID
 
 _FACE_ID = re.compile(r"^S(\d+)$")
@@ -70,7 +70,7 @@ def _solid_faces(out, model, b, rows, side, elems, keyword, r):
     if not 1 <= k <= len(faces):
         raise keyword.error(f"face {side} of {blk.abaqus_type} element {blk.labels[rows[0]]}: "
                             f"expected S1 to S{len(faces)} (the element's faces)", r)
-    ftype = ELEMENTS[blk.ctype].face_type
     local = np.array(faces[k - 1])
+    ftype = FACE_TYPE_OF[len(local)]
     out.faces.setdefault(ftype, []).append(model.conn[b][rows][:, local])
 
