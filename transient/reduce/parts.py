@@ -18,15 +18,15 @@ import scipy.sparse as sp
 from ..model.dofs import shifted
 from .. import blas, progress
 from ..solve.linsolve import FactorizationError, factorize
+from ..solve.lowrank import block_columns
 from ..solve.modes import normal_modes, shift_sigma
 from .basis import MODES_TOL, flexible_shapes
 from .fields import field_map
 
 # the modules whose arithmetic makes a part's reduction: their source is in its key
 _SOURCES = ("reduce/parts.py", "reduce/basis.py", "reduce/fields.py", "solve/modes.py",
-            "solve/lanczos.py", "solve/linsolve.py", "model/dofs.py")
+            "solve/lanczos.py", "solve/linsolve.py", "solve/lowrank.py", "model/dofs.py")
 ROW_BLOCK = 8192     # rows of the basis formed at a time in place
-SOLVE_BLOCK = 64     # columns solved (or multiplied by K, M) at a time into their place
 
 
 @dataclass(frozen=True)
@@ -118,6 +118,7 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
     # one n x columns array, not the three copies its stages would make one from another
     m, f, s = modes.shapes.shape[1], E.shape[1] if interface is not None else 0, loads.shape[1]
     X = np.empty((K.shape[0], m + f + s), order="F")
+    width = block_columns(len(X))   # columns solved, or multiplied by K or M, at a time
     X[:, :m] = modes.shapes
     Phi, frequencies, modes = X[:, :m], modes.frequencies, None
     MPhi = M @ Phi
@@ -130,10 +131,10 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
         of the largest, is not known to that precision)."""
         _take_out(b, MPhi, Phi)
         with closing(progress.work(f"{name}: responses", b.shape[1], "load")) as bar:
-            for start in range(0, b.shape[1], SOLVE_BLOCK):
-                block = b[:, start:start + SOLVE_BLOCK]
+            for start in range(0, b.shape[1], width):
+                block = b[:, start:start + width]
                 block[...] = solve(block)
-                bar.advance(min(start + SOLVE_BLOCK, b.shape[1]))
+                bar.advance(min(start + width, b.shape[1]))
         _take_out(b, Phi, MPhi)
     n_shapes, mu = 0, np.zeros(0)
     if interface is not None:
@@ -148,8 +149,8 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
                 KE[rows, :Z.shape[1]] = KE[rows] @ Z
             return KE[:, :Z.shape[1]]
         H = np.empty((f, f))
-        for start in range(0, f, SOLVE_BLOCK):    # SciPy's sparse product copies KE C-ordered
-            cols = slice(start, start + SOLVE_BLOCK)
+        for start in range(0, f, width):    # SciPy's sparse product copies KE C-ordered
+            cols = slice(start, start + width)
             H[:, cols] = E.T @ KE[:, cols]
         shapes, mu = flexible_shapes(H, None, None, tol, shapes_in_place, gram=G)
         n_shapes = shapes.shape[1]
@@ -166,8 +167,8 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
     T = _with_statics(X[:, :end], m, M)
     del X
     Kr = np.empty((T.shape[1], T.shape[1]))
-    for start in range(0, T.shape[1], SOLVE_BLOCK):     # no n x r product of K beside T
-        cols = slice(start, start + SOLVE_BLOCK)
+    for start in range(0, T.shape[1], width):     # no n x r product of K beside T
+        cols = slice(start, start + width)
         Kr[:, cols] = T.T @ (K @ T[:, cols])
     lap("orthonormalization")
     return PartBasis(name, T, 0.5 * (Kr + Kr.T), frequencies, n_shapes,
@@ -203,8 +204,9 @@ def _with_statics(X, m, M):
     for _ in range(2):
         _take_out(S, Phi, MPhi)
     G = np.empty((S.shape[1], S.shape[1]))
-    for start in range(0, S.shape[1], SOLVE_BLOCK):      # no n x k product of M beside S
-        cols = slice(start, start + SOLVE_BLOCK)
+    width = block_columns(len(S))
+    for start in range(0, S.shape[1], width):      # no n x k product of M beside S
+        cols = slice(start, start + width)
         G[:, cols] = S.T @ (M @ S[:, cols])
     norms = np.sqrt(np.maximum(np.diag(G), 0.0))
     big = norms > 1e-12 * norms.max()
