@@ -10,10 +10,10 @@ import pytest
 
 import transient
 from transient.cli import main
-from transient.stability.branches import (MAC_LINK, Step, mac_matrix, shapes_record, track)
+from transient.stability.branches import MAC_LINK, Step, mac_matrix, shapes_record, track
 from transient.stability.modes import complex_modes
 
-from test_cea_mode_coupling import (A_XX, D_YY, MASS, lambda_growing_undamped, modes,
+from test_cea_mode_coupling import (A_XX, D_YY, MASS, delta, lambda_growing_undamped, modes,
                                     mu_c_equal, mu_c_undamped, omegas_undamped)
 
 # mu_c(0) = 0.6032 lies between two values of this grid (0.6 and 0.625)
@@ -80,14 +80,20 @@ def test_with_equal_damping_the_branch_turns_unstable_at_the_damped_threshold(c,
     assert found.count == 2 and point["becomes"] == "unstable"
     assert point["partner"] == 1 - point["branch"]
     assert abs(point["mu"] - mu_c_equal(c)) <= within * STEP
+    # the branch: unstable exactly above mu_c(c), the growing root wherever they have met
     x, lam, bad = found.line(point["branch"])
-    assert np.array_equal(bad, x > mu_c_equal(c)) and np.all(lam[x > mu_c_undamped()].real
-                                                              > -c / (2 * MASS))
+    assert np.array_equal(bad, x > mu_c_equal(c))
+    gamma = c / MASS
+    for mu, value in zip(x[x > mu_c_undamped()], lam[x > mu_c_undamped()]):
+        s = (-(A_XX + D_YY) + 1j * np.sqrt(-delta(mu))) / (2 * MASS)
+        expect = -gamma / 2 + np.sqrt(gamma ** 2 / 4 + s)
+        assert abs(value - expect) <= 1e-10 * abs(expect)
 
 
 def three_dof(p):
-    """(M, D, K) of three dofs whose modes are the fixed shapes PHI with frequencies that cross as p grows: mode 0 rises
-    through mode 1, which falls; mode 2 stays above. Modal damping ratios 1%, 2%, 1%."""
+    """(M, D, K) of three dofs whose modes are the fixed shapes PHI with frequencies that
+    cross as p grows: mode 0 rises through mode 1, which falls; mode 2 stays above. Modal
+    damping ratios 1%, 2%, 1%."""
     omega = np.array([9.7 + 0.8 * p, 10.1 - 0.2 * p, 20.0])
     zeta = np.array([0.01, 0.02, 0.01])
     M = np.diag(MASSES)

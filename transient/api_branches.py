@@ -40,11 +40,11 @@ def branches(mus, analyses, parameter="mu"):
     """
     from .stability.branches import step_of, track
     if len(mus) != len(analyses):
-        raise CaseError("transient.branches", "mus", f"expected one value per analysis ({len(analyses)}), got "
-                        f"{len(mus)}")
+        raise CaseError("transient.branches", "mus", f"expected one value per analysis "
+                        f"({len(analyses)}), got {len(mus)}")
     if len({a.model.ndof for a in analyses}) > 1:
-        raise CaseError("transient.branches", "analyses", "expected the analyses of one model (their shapes are "
-                        "compared on its dofs)")
+        raise CaseError("transient.branches", "analyses", "expected the analyses of one "
+                        "model (their shapes are compared on its dofs)")
     return track(parameter, [step_of(mu, a) for mu, a in zip(mus, analyses)])
 
 

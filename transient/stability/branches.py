@@ -81,8 +81,9 @@ class Branches:
     ``values`` (K,) the parameter's values, ascending; ``steps`` the modes at each; ``branch``
     the branch id of each mode at each value (``branch[k][j]``: mode j at value k), ids from 0
     in order of appearance; ``mac`` each mode's MAC with the mode it continues at the previous
-    value (a degenerate pair's: the span's; NaN where a branch starts, or without shapes); ``linked_by`` ``"shapes"`` or
-    ``"eigenvalues"`` (some value had no shapes, or shapes on other dofs); ``coupling`` one
+    value (a degenerate pair's: the span's; NaN where a branch starts, or without shapes);
+    ``linked_by`` ``"shapes"`` or ``"eigenvalues"`` (some value had no shapes, or shapes on
+    other dofs); ``coupling`` one
     dict per point where a branch turns unstable or stable again (``branch``, ``partner``:
     the branch it couples with, or None; the parameter's value and ``frequency_hz`` there;
     ``becomes``: ``"unstable"`` or ``"stable"``); ``unstable_modes()`` the table of the
