@@ -178,6 +178,21 @@ def test_reduced_complex_modes_match_the_full_model_mode_by_mode():
     pairs = pair_modes(full.modes, parts.modes, fmax)
     assert sum(p.unstable for p in pairs) >= 6
     assert [p for p in pairs if not p.within()] == []
+    # the shapes a mu map links its values by (stability.branches): X (A z) at a sample of
+    # the model's dofs, from each kind of basis (the full model's injection, the assembled
+    # path's, the parts' synthesis), and alike across them for a mode the analyses share
+    from transient.stability.branches import mac_matrix, observed
+    unstable = np.flatnonzero(full.modes.unstable & (full.modes.frequency_hz <= fmax))
+    for analysis in (full, reduced, parts):
+        dofs, shapes = observed(analysis)
+        j = np.flatnonzero(analysis.modes.unstable)[:3]
+        assert np.allclose(shapes[:, j], np.stack([analysis.displacement(k)[dofs] for k in j],
+                                                  axis=1), rtol=0, atol=1e-12)
+        if analysis is not full:
+            nearest = [int(np.argmin(np.abs(analysis.modes.eigenvalues - lam)))
+                       for lam in full.modes.eigenvalues[unstable]]
+            mac = mac_matrix(observed(full)[1][:, unstable], shapes[:, nearest])
+            assert np.diag(mac).min() > 0.9
 
 
 @pytest.mark.parametrize("reduced", [True, False])

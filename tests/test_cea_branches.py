@@ -187,6 +187,22 @@ def test_a_degenerate_pair_continues_whatever_shapes_the_solver_gave_it():
     assert np.allclose(found.mac[1], 1.0)
 
 
+def test_a_mode_that_resembles_none_before_starts_a_branch():
+    """The upper mode leaves the band and another of an unrelated shape (MAC 0 with it)
+    enters near its frequency: the one-to-one assignment pairs them, but below MAC_LINK the
+    pair is cut, one branch ends and a third starts. The lower mode goes on."""
+    e = np.eye(3)
+    lower = (e[0] + 0.1 * e[1])[:, None]
+    found = track("mu", [
+        Step(0.0, np.array([10j, 20j]), np.zeros(2, bool), 0.0,
+             np.hstack([lower, e[:, [1]]]), np.arange(3)),
+        Step(0.1, np.array([10.1j, 20.2j]), np.zeros(2, bool), 0.0,
+             np.hstack([lower, e[:, [2]]]), np.arange(3))])
+    assert found.count == 3 and found.branch[1].tolist() == [0, 2]
+    assert found.mac[1][0] == pytest.approx(1.0) and np.isnan(found.mac[1][1])
+    assert [len(found.line(b)[0]) for b in range(3)] == [2, 1, 1]
+
+
 def test_the_unstable_modes_and_the_coupling_point_as_tables_and_csv(tmp_path):
     """One row per value above mu_c, the growing branch's, with the closed form's frequency,
     real part and damping ratio; none below. The coupling CSV: its one point."""

@@ -290,9 +290,9 @@ def observed(analysis, dofs=None):
     X, A = analysis.basis
     pick = sp.csr_matrix((np.ones(len(dofs)), (np.arange(len(dofs)), dofs)),
                          shape=(len(dofs), X.shape[0]))
-    rows = pick @ X
-    rows = rows.toarray() if sp.issparse(rows) else np.asarray(rows)
-    return dofs, rows @ (A @ analysis.modes.vectors)
+    # X's rows kept sparse where X is (the full model's injection of its free dofs: dense,
+    # they would be the size of the model times the sample)
+    return dofs, np.asarray((pick @ X) @ (A @ analysis.modes.vectors))
 
 
 def step_of(value, analysis):
