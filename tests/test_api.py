@@ -145,15 +145,25 @@ def test_cea_equals_the_commands_json(small_pad, capsys):
 
 def test_a_mu_map_equals_the_cea_of_each_variant():
     """mu_map shares the model, the contact and the factorization among its values: each
-    analysis equals `cea` of the case at that mu, bit for bit."""
+    analysis equals `cea` of the case at that mu, bit for bit (the values a NumPy array's).
+    Its branches: each mode at 0.2 linked to one at 0.4, the unstable ones tabled."""
     case = transient.load(PAD, SMALL)
-    found = transient.mu_map(case, [0.2, 0.4])
+    found = transient.mu_map(case, np.array([0.2, 0.4]))
     assert len(found) == 2
     for mu, analysis in zip([0.2, 0.4], found):
         alone = transient.cea(transient.load(PAD, SMALL + [f"contact.pad_disc.friction.mu={mu}"]))
         assert np.array_equal(analysis.modes.eigenvalues, alone.modes.eigenvalues)
+    branches = transient.branches([0.4, 0.2], found[::-1])
+    assert branches.linked_by == "shapes" and list(branches.values) == [0.2, 0.4]
+    assert branches.count == len(found[0].modes.eigenvalues) == len(found[1].modes.eigenvalues)
+    assert np.nanmin(branches.mac[1]) > 0.5
+    assert [(r["mu"], r["frequency_hz"]) for r in branches.unstable_modes()] == [
+        (mu, f) for mu, a in zip([0.2, 0.4], found)
+        for f in a.modes.frequency_hz[a.modes.unstable]]
     with pytest.raises(CaseError, match="mus"):
         transient.mu_map(case, [-0.1])
+    with pytest.raises(CaseError, match="mus"):
+        transient.branches([0.2], found)
 
 
 @pytest.mark.slow

@@ -178,6 +178,21 @@ def test_reduced_complex_modes_match_the_full_model_mode_by_mode():
     pairs = pair_modes(full.modes, parts.modes, fmax)
     assert sum(p.unstable for p in pairs) >= 6
     assert [p for p in pairs if not p.within()] == []
+    # the shapes a mu map links its values by (stability.branches): X (A z) at a sample of
+    # the model's dofs, from each kind of basis (the full model's injection, the assembled
+    # path's, the parts' synthesis), and alike across them for a mode the analyses share
+    from transient.stability.branches import mac_matrix, observed
+    unstable = np.flatnonzero(full.modes.unstable & (full.modes.frequency_hz <= fmax))
+    for analysis in (full, reduced, parts):
+        dofs, shapes = observed(analysis)
+        j = np.flatnonzero(analysis.modes.unstable)[:3]
+        assert np.allclose(shapes[:, j], np.stack([analysis.displacement(k)[dofs] for k in j],
+                                                  axis=1), rtol=0, atol=1e-12)
+        if analysis is not full:
+            nearest = [int(np.argmin(np.abs(analysis.modes.eigenvalues - lam)))
+                       for lam in full.modes.eigenvalues[unstable]]
+            mac = mac_matrix(observed(full)[1][:, unstable], shapes[:, nearest])
+            assert np.diag(mac).min() > 0.9
 
 
 @pytest.mark.parametrize("reduced", [True, False])
@@ -276,7 +291,10 @@ def test_nodal_diameters_on_scattered_nodes_count_the_orders_they_sample():
 @pytest.mark.parametrize("basis", [[], ["contact.pad_disc.friction.basis_mu=0.3"]])
 def test_plot_cea_draws_the_diagram_the_unstable_shapes_and_the_mu_map(tmp_path, capsys,
                                                                       basis):
-    """(With a basis_mu, the values of mu share one basis.)"""
+    """(With a basis_mu, the values of mu share one basis.) The map's tables beside it: no
+    unstable mode without friction, the flutter pair's growing member (11-12.5 kHz) at 0.4,
+    as at the case's own mu."""
+    import csv
     from PIL import Image
     args = ["plot", "cea", str(PAD), "--out", str(tmp_path), "--mu", "0:0.4:2"]
     args += [a for o in SMALL + ["contact.pad_disc.friction.mu=0.4"] + basis
@@ -284,12 +302,19 @@ def test_plot_cea_draws_the_diagram_the_unstable_shapes_and_the_mu_map(tmp_path,
     assert main(args) == 0
     paths = [Path(p) for p in capsys.readouterr().out.split()]
     names = [p.name for p in paths]
-    assert names[0] == "pad_disc_stability.png" and names[-1] == "pad_disc_mu_map.png"
+    assert names[0] == "pad_disc_stability.png" and names[-3:] == [
+        "pad_disc_mu_map.png", "pad_disc_mu_map_unstable.csv", "pad_disc_mu_map_coupling.csv"]
     assert len([n for n in names if n.startswith("pad_disc_mode_")]) >= 2
-    for p in paths:
+    for p in paths[:-2]:
         with Image.open(p) as image:
             pixels = np.asarray(image.convert("L"))
         assert pixels.std() > 5, p           # something is drawn, not a blank canvas
+    with open(paths[-2], newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert {float(r["mu"]) for r in rows} == {0.4}
+    own = [n for n in names if n.startswith("pad_disc_mode_")]
+    assert len(rows) == len(own) and any(11e3 < float(r["frequency_hz"]) < 12.5e3
+                                         and float(r["real"]) > 500 for r in rows)
 
 
 @pytest.mark.parametrize("mu, reason", [("0:1", "START:STOP:COUNT"), ("0:0.6:0", "COUNT"),

@@ -1,5 +1,6 @@
 """`transient sweep`: the variants of its parameters, a campaign on a LocalCluster of two
 workers equal bit for bit to the same variants run one by one, resume, and refusals."""
+import csv
 import json
 import os
 import subprocess
@@ -10,6 +11,7 @@ import h5py
 import numpy as np
 import pytest
 
+import transient
 from transient.cli import main
 from transient.errors import CaseError
 from transient.io.history import summary
@@ -254,10 +256,20 @@ def test_a_cea_sweep_and_its_stability_map(campaign, cea_campaign, tmp_path, cap
     rows = [rows[0], rows[2]]                           # mu 0 and 0.4
     assert [r["unstable"] for r in rows][0] == 0 and rows[1]["unstable"] >= 1
     assert 11e3 < rows[1]["frequency_hz"] < 12.5e3 and rows[1]["max_real"] > 500
-    modes = json.loads((out / rows[1]["output"]).read_text())["modes"]
+    stored = json.loads((out / rows[1]["output"]).read_text())
+    modes = stored["modes"]
     assert len(modes) > 10 and sum(m["unstable"] for m in modes) == rows[1]["unstable"]
+    # the shapes the map links the variants by: a few hundred nodes' three dofs
+    assert stored["shapes"]["shape"] == [len(stored["shapes"]["dofs"]), len(modes)]
     assert main(["plot", "sweep", str(out), "-o", str(tmp_path / "map.png")]) == 0
     assert (tmp_path / "map.png").stat().st_size > 10_000
+    key = "contact.pad_disc.friction.mu"
+    with open(tmp_path / "map_unstable.csv", newline="") as f:
+        table = list(csv.DictReader(f))
+    assert [float(r[key]) for r in table] == [r[key] for r in cea_campaign[1]
+                                              for _ in range(r["unstable"])]
+    (found,) = transient.sweep_branches(out).values()
+    assert found.linked_by == "shapes" and list(found.values) == [0.0, 0.2, 0.4]
     # both kinds from one setup: the complex modes of the run's stages before its sampling
     # are the cea's, and the history the run's alone, bit for bit
     both = _mu_sweep(tmp_path / "both", "both", capsys)

@@ -4,7 +4,8 @@ command line calls before it prints. A thin layer over the stages: each function
 
 Here: `transient.load`, `prepare`, `run`, `modes`, `cea`, `mu_map` and `sweep`; on an interface,
 `compat` and `compat_pairs` (api_interface); on a run's history, `history`, `summary` and
-`export` (api_results); studies of a case, `bench` and `compare_modes` (api_studies).
+`export` (api_results); studies of a case, `bench` and `compare_modes` (api_studies); complex
+modes over a parameter, `branches` and `sweep_branches` (api_branches).
 
 The stages' modules (Numba, SciPy) are imported by the functions that need them, so that
 `import transient` stays light and a case's bad input is refused before they load.
@@ -12,6 +13,7 @@ The stages' modules (Numba, SciPy) are imported by the functions that need them,
 from dataclasses import dataclass
 from pathlib import Path
 
+from .api_branches import branches, sweep_branches
 from .api_interface import InterfaceCompatibility, compat, compat_pairs, pair_name
 from .api_results import export, history, summary
 from .api_studies import Bench, bench, compare_modes
@@ -22,7 +24,7 @@ from .errors import CaseError
 
 __all__ = ["load", "prepare", "run", "modes", "cea", "mu_map", "compat", "compat_pairs",
            "sweep", "history", "summary", "export", "bench", "compare_modes", "NormalModes",
-           "InterfaceCompatibility", "Campaign", "Bench"]
+           "InterfaceCompatibility", "Campaign", "Bench", "branches", "sweep_branches"]
 
 
 def load(path, overrides=()):
@@ -316,9 +318,10 @@ def mu_map(case, mus, pair=None):
     name = pair_name(case, pair)
     if not len(mus) or min(mus) < 0:
         raise CaseError(case.path, "mus", "expected friction coefficients >= 0")
-    # every variant is checked at load before the first analysis
-    variants = [_load(case.path, list(case.overrides) + [f"contact.{name}.friction.mu={mu!r}"])
-                for mu in mus]
+    # every variant is checked at load before the first analysis (float: NumPy 2's repr of
+    # its own floats, np.float64(0.2), is no TOML literal)
+    variants = [_load(case.path, list(case.overrides)
+                      + [f"contact.{name}.friction.mu={float(mu)!r}"]) for mu in mus]
     built = basis = key = None
     if case.solver.reduction.enabled:
         analysed = analysed_case(case)

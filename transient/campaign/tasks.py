@@ -122,10 +122,14 @@ def _modes_written(analysis, case, path):
     if path.exists() and path.stat().st_size and modes_file(path) is None:
         raise CaseError(path, "--out", "exists and is not complex modes written by transient "
                         "sweep: not overwritten")
+    from ..stability.branches import observed, shapes_record
     modes = analysis.modes.table()
+    # the shapes at a few hundred nodes: what `plot sweep` links the variants' modes by
     text = json.dumps({"written_by": MARK, "version": __version__, "status": "complete",
                        "case": case.text, "case_path": str(Path(case.path).resolve()),
                        "overrides": list(case.overrides), "modes": modes,
+                       "growth_rate_threshold": analysis.modes.threshold,
+                       "shapes": shapes_record(*observed(analysis)),
                        "ndof": analysis.ndof, "reduced": analysis.reduced})
     write_whole(path, text)
     return cea_summary(modes)

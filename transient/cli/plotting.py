@@ -130,7 +130,8 @@ def _finite(text):
 
 
 def _plot_cea(args):
-    from ..plots.cea import mode_figure, mu_map_figure, stability_figure
+    from ..plots.branches import branches_figure
+    from ..plots.cea import mode_figure, stability_figure
     from ..plots.render import RenderingUnavailable
     case = api.load(args.case, args.overrides)
     names = list(case.contact)
@@ -170,8 +171,11 @@ def _plot_cea(args):
         return 1
     if mus:
         path = out / f"{stem}_mu_map.png"
-        mu_map_figure(mus, analyses, path, f"{stem}: complex modes against mu ({pair})")
-        paths.append(path)
+        found = api.branches(mus, analyses)
+        branches_figure(found, path, f"{stem}: complex modes against mu ({pair})",
+                        "friction coefficient mu")
+        paths += [path] + found.write(out / f"{stem}_mu_map_unstable.csv",
+                                      out / f"{stem}_mu_map_coupling.csv")
     print("\n".join(str(p) for p in paths))
     return 0
 

@@ -1,10 +1,9 @@
-"""Pictures of a complex eigenvalue analysis: the stability diagram, the shapes of the unstable
-modes on the pad and disc, and the map of the modes against the friction coefficient."""
+"""Pictures of a complex eigenvalue analysis: the stability diagram and the shapes of the
+unstable modes on the pad and disc (the map of the modes against the friction coefficient:
+plots.branches)."""
 import numpy as np
 
 from .render import offscreen
-
-MAP_CMAP = "coolwarm"
 
 
 def stability_figure(analysis, path, title):
@@ -26,40 +25,6 @@ def stability_figure(analysis, path, title):
     axes[0].set_ylabel("frequency [kHz]")
     axes[0].legend(loc="lower right")
     fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-
-
-def mu_map_figure(mus, analyses, path, title):
-    """The classic squeal map: frequency against mu, coloured by the real part; unstable modes
-    outlined."""
-    map_figure(mus, [a.modes for a in analyses], path, title, "friction coefficient mu")
-
-
-def map_figure(values, modes, path, title, xlabel):
-    """Frequency against a parameter's values, coloured by the real part, unstable modes
-    outlined: modes[i] (frequency_hz, real, unstable arrays) at values[i]."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.colors import TwoSlopeNorm
-    mu = np.concatenate([np.full(len(m.real), x) for x, m in zip(values, modes)])
-    f, real, bad = (np.concatenate([np.asarray(getattr(m, k)) for m in modes])
-                    for k in ("frequency_hz", "real", "unstable"))
-    # a flutter pair shares its frequency: the growing member is drawn last, on top
-    order = np.argsort(real, kind="stable")
-    top = max(np.abs(real).max(), 1e-300)
-    norm = TwoSlopeNorm(vmin=-top, vcenter=0.0, vmax=top)
-    fig, ax = plt.subplots(figsize=(7, 6))
-    ax.scatter(mu[order], f[order] / 1e3, c=real[order], cmap=MAP_CMAP, norm=norm, s=18,
-               edgecolors=np.where(bad[order], "black", "none"), linewidths=0.8)
-    sm = plt.cm.ScalarMappable(norm=norm, cmap=MAP_CMAP)
-    fig.colorbar(sm, ax=ax, label="real part [1/s] (outlined: unstable)")
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel("frequency [kHz]")
-    ax.set_title(title)
-    ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

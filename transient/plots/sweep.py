@@ -1,4 +1,5 @@
-"""Pictures of a sweep (transient sweep's DIR): the stability map of a cea sweep, a run
+"""Pictures of a sweep (transient sweep's DIR): the stability map of a cea sweep (its complex
+modes linked into branches, with the tables of its unstable modes and coupling points), a run
 sweep's summaries against a parameter, both for a sweep of both kinds.
 
 The other parameters of a grid split the variants into groups: one map per group (cea), one
@@ -6,7 +7,6 @@ line per group (run).
 """
 import json
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 
@@ -44,10 +44,7 @@ def sweep_figures(directory, x=None, png=None):
     returns their paths."""
     directory = Path(directory)
     kind, parameters, rows = read_sweep(directory)
-    x = x or parameters[0]
-    if x not in parameters:
-        raise CaseError(directory / "sweep.json", "--x", f"not a parameter of the sweep "
-                        f"(its parameters: {', '.join(parameters)})")
+    x = _checked_x(directory, parameters, x)
     parts = groups(rows, parameters, x)
     if not parts:
         raise CaseError(directory / "sweep.json", "", "no complete variant to draw")
@@ -60,22 +57,59 @@ def sweep_figures(directory, x=None, png=None):
     return _summaries(parts, x, base)
 
 
+def _checked_x(directory, parameters, x):
+    """x, or the sweep's first parameter; CaseError if not one of them."""
+    x = x or parameters[0]
+    if x not in parameters:
+        raise CaseError(directory / "sweep.json", "--x", f"not a parameter of the sweep "
+                        f"(its parameters: {', '.join(parameters)})")
+    return x
+
+
 def _maps(directory, parts, x, base):
-    """One stability map per group of the other parameters' values."""
-    from .cea import map_figure
+    """One map of the branches per group of the other parameters' values, with its tables of
+    unstable modes and coupling points beside it (base's name, suffixed)."""
+    from .branches import branches_figure
     paths = []
     for k, (label, members) in enumerate(parts.items()):
-        modes = []
-        for row in members:
-            table = json.loads((directory / row.get("modes_output", row["output"]))
-                               .read_text())["modes"]
-            modes.append(SimpleNamespace(**{key: np.array([m[key] for m in table])
-                                            for key in ("frequency_hz", "real", "unstable")}))
+        found = track_rows(directory, members, x)
         path = base if len(parts) == 1 else base.with_name(f"{base.stem}_{k}{base.suffix}")
-        map_figure([r[x] for r in members], modes, path,
-                   "complex modes" + (f" ({label})" if label else ""), x)
-        paths.append(path)
+        branches_figure(found, path, "complex modes" + (f" ({label})" if label else ""), x)
+        paths += [path] + found.write(path.with_name(f"{path.stem}_unstable.csv"),
+                                      path.with_name(f"{path.stem}_coupling.csv"))
     return paths
+
+
+def track_rows(directory, members, x):
+    """The Branches (stability.branches) of a group's variants against the parameter x: each
+    variant's complex modes read back from its modes file, linked by their stored shapes, or by
+    the eigenvalue alone where a file holds none (written before they were stored)."""
+    from ..stability.branches import Step, read_shapes, track
+    steps = []
+    for row in members:
+        if not isinstance(row[x], (int, float)):
+            raise CaseError(directory / "sweep.json", "--x", f"branches are drawn against a "
+                            f"parameter of numbers, got {row[x]!r}")
+        stored = json.loads((directory / row.get("modes_output", row["output"])).read_text())
+        table = stored["modes"]
+        dofs, shapes = (read_shapes(stored["shapes"]) if "shapes" in stored else (None, None))
+        lam = np.array([m["real"] + 2j * np.pi * m["frequency_hz"] for m in table], complex)
+        steps.append(Step(float(row[x]), lam, np.array([m["unstable"] for m in table], bool),
+                          float(stored.get("growth_rate_threshold", 0.0)), shapes, dofs))
+    return track(x, steps)
+
+
+def branch_groups(directory, x=None):
+    """{label of the other parameters' values: Branches} of a cea sweep's folder, as
+    `plot sweep` draws them."""
+    directory = Path(directory)
+    kind, parameters, rows = read_sweep(directory)
+    if kind == "run":
+        raise CaseError(directory / "sweep.json", "", "a run sweep holds no complex modes: "
+                        "expected a sweep of kind cea or both")
+    x = _checked_x(directory, parameters, x)
+    return {label: track_rows(directory, members, x)
+            for label, members in groups(rows, parameters, x).items()}
 
 
 def _summaries(parts, x, base):
