@@ -103,13 +103,31 @@ def triangle(degree):
     return _collapsed(degree, 2)
 
 
+def _walkington14():
+    """The 14-point rule of degree 5 on the tetrahedron (Walkington; Keast's family), symmetric
+    under every permutation of the vertices with positive weights: two orbits of 4 points
+    (a, a, a, 1 - 3a) and one of 6 (b, b, 1/2 - b, 1/2 - b) in barycentric coordinates. A
+    conical product is not symmetric: a mirrored curved tet10 was integrated at other points
+    than its original, and its mass differed by the rule's own error."""
+    bary = []
+    for a in (0.0927352503108912, 0.3108859192633006):
+        bary += [[a, a, a, 1 - 3 * a][i:] + [a, a, a, 1 - 3 * a][:i] for i in range(4)]
+    b, c = 0.0455037041256496, 0.5 - 0.0455037041256496
+    bary += [[b, b, c, c], [b, c, b, c], [b, c, c, b], [c, b, b, c], [c, b, c, b], [c, c, b, b]]
+    weights = [0.01224884051939366] * 4 + [0.01878132095300264] * 4 + [0.007091003462846911] * 6
+    return _refine_weights(np.array(bary)[:, :3], np.array(weights), 3)
+
+
 @lru_cache(maxsize=None)
 def tetrahedron(degree):
-    """Rule of the given degree on the unit tetrahedron (weights sum to 1/6)."""
+    """Rule of the given degree on the unit tetrahedron (weights sum to 1/6), symmetric to
+    degree 5 (a tet10's mass is degree 4)."""
     if degree < 1:
         degree = 1
     if degree in _TET:
         return _TET[degree]
+    if degree <= 5:
+        return _walkington14()
     return _collapsed(degree, 3)
 
 
