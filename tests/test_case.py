@@ -162,3 +162,16 @@ def test_modes_export_to_vtu(tmp_path, capsys):
     assert len(mesh.points) == 6 * 2 * 2
     shapes = [k for k in mesh.point_data if k.startswith("mode_")]
     assert len(shapes) == 4 and mesh.point_data[shapes[0]].shape == (24, 3)
+
+
+def test_a_schema_key_without_a_spec_field_is_refused_not_dropped(tmp_path, monkeypatch):
+    """case/specs.py builds each spec from its validated table: a key the schema declares but
+    the dataclass lacks (a setting no stage would read) stops the first load, by name."""
+    import dataclasses
+    from transient.case import specs
+    fewer = dataclasses.make_dataclass(
+        "LimitsSpec", [(f.name, f.type) for f in dataclasses.fields(specs.LimitsSpec)
+                       if f.name != "steps"])
+    monkeypatch.setattr(specs, "LimitsSpec", fewer)
+    with pytest.raises(TypeError, match="LimitsSpec has no field for the case key.s. steps"):
+        load(write(tmp_path))

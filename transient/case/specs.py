@@ -288,10 +288,17 @@ def _plain(value):
 
 
 def _make(cls, table, **given):
+    """cls from a validated table (every key case/schema.py declares there, defaults filled)
+    and the nested specs given. A key the dataclass lacks is a schema key no stage would
+    ever read: an error here, at the first load, not a setting silently ignored."""
     names = {f.name for f in fields(cls)}
     values = {("lam" if k == "lambda" else k): _plain(v) for k, v in table.items()}
     values.update(given)
-    return cls(**{k: v for k, v in values.items() if k in names})
+    lost = sorted(set(values) - names)
+    if lost:
+        raise TypeError(f"{cls.__name__} has no field for the case key(s) {', '.join(lost)} "
+                        "that case/schema.py declares")
+    return cls(**values)
 
 
 def _variant(cls, table):
