@@ -35,7 +35,8 @@ class MaterialSpec:
 def _material(table):
     """The MaterialSpec of a validated material table."""
     common = ("rho", "E", "nu", "elasticity", "orientation", "loss_factor")
-    return _make(MaterialSpec, table, orientation=_make(OrientationSpec, table["orientation"]),
+    return _make(MaterialSpec, {k: v for k, v in table.items() if k in common},
+                 orientation=_make(OrientationSpec, table["orientation"]),
                  constants=tuple((k, v) for k, v in table.items() if k not in common))
 
 
