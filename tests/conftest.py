@@ -5,6 +5,8 @@ import os
 # line that says such a wait (transient.jit) would land on a stderr that tests hold to one line
 # 'error: ...' or to nothing. tests/test_jit.py sets it back to test that line.
 os.environ.setdefault("TRANSIENT_LOCK_NOTICE_S", "inf")
+# the suite's setups are not this machine's record of its setups (transient.setuptimes)
+os.environ.setdefault("TRANSIENT_SETUP_LOG", "off")
 
 # the suite runs as the command line does, with the settings that speed it up (an import
 # alone makes none: tests/test_configure.py)

@@ -3,7 +3,8 @@ case loaded and checked, the model built (its dofs by part), each contact pair's
 built and its initial gaps checked, and the bounds the work is held to (the memory estimate
 against limits.memory, the steps of a run). Nothing is factorized and nothing written: the
 checks a command makes before its costly stages, and their figures."""
-from .case.sizes import cells_by_part, memory_need
+from . import setuptimes
+from .case.sizes import cells_by_part, entries, memory_need
 from .contact.gaps import check_gaps, initial_gaps
 from .contact.pair import pair_interface
 from .dynamics.plan import Plan
@@ -14,8 +15,10 @@ from .model.placement import check_motions
 def measure(case, command):
     """A dict of what `command` ("run", "modes" or "cea") would take on the case: parts
     (dofs, free dofs, cells), pairs (fine points, initial gaps), memory (the estimate, the
-    limit and the part that sets it on the components path) and, for a run, its steps (exact
-    where the step is known before the setup, else a bound or None)."""
+    limit and the part that sets it on the components path), for a run its steps (exact
+    where the step is known before the setup, else a bound or None) and, for a run or a cea,
+    its setup's seconds as estimated from the setups timed on this machine
+    (setuptimes.estimate: low, high, from how many; None before any)."""
     model = build_model(case)
     free = ~model.fixed
     cells = cells_by_part(model.parts)
@@ -36,6 +39,10 @@ def measure(case, command):
                       "largest_part": largest}}
     if command == "run":
         out["steps"] = _steps(case)
+    if command in ("run", "cea"):
+        # from the setups this machine has timed (setuptimes): None before any of this kind
+        out["setup_seconds"] = setuptimes.estimate(setuptimes.kind(case, command == "cea"),
+                                                   entries(sum(cells.values(), [])))
     return out
 
 

@@ -275,8 +275,18 @@ def _dry(case, command, as_json):
                              f"at least {s['steps']} (the automatic step, at most 1/(20 "
                              "solver.reduction.fmax))" if s["steps"] is not None else
                              "set by the setup's critical step (central differences)"))
+    if "setup_seconds" in d:
+        t = d["setup_seconds"]
+        print("  setup: " + (f"about {_duration(t['low'])} to {_duration(t['high'])} (from "
+                             f"{t['setups']} setup(s) of its kind timed on this machine)" if t
+                             else "no estimate: no setup of its kind timed on this machine "
+                             "yet"))
     print("nothing factorized or written (--dry-run)")
     return 0
+
+
+def _duration(seconds):
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.1f} min"
 
 
 def _peak_line(meta):
