@@ -33,13 +33,12 @@ from skfem.helpers import dot  # noqa: E402
 from skfem.models.elasticity import lame_parameters, linear_elasticity  # noqa: E402
 from skfem.quadrature import get_quadrature  # noqa: E402
 
-from transient.mesh import generators  # noqa: E402
 from transient.model.assembly import CellBlock, assemble  # noqa: E402
 from transient.mesh.elements import ELEMENTS, VOLUME_TYPES  # noqa: E402
 
+from distorted import distorted_box  # noqa: E402
+
 E, NU, RHO = 2.1e11, 0.3, 7850.0
-SIZE = np.array([1.0, 0.8, 0.6])
-DIVISIONS = (3, 3, 3)
 TOL = 1e-10
 
 # our type -> (scikit-fem scalar element, linear geometry mesh, quadratic geometry mesh)
@@ -66,28 +65,6 @@ def to_skfem(shape, xi, w):
     if shape == "wedge":
         return np.column_stack([xi[:, :2], 0.5 * (xi[:, 2] + 1.0)]).T, w / 2.0
     return xi.T, w
-
-
-def distorted_box(cell_type, curved=False, seed=0, divisions=DIVISIONS):
-    """Box with every corner node moved by up to 20 % of the cell size per axis.
-
-    Midside nodes go to the midpoints of the straight perturbed edges, or with curved=True are
-    then moved by up to 6 % of the cell size (curved edges and faces).
-    """
-    mesh = generators.box(SIZE, divisions, element=cell_type)
-    el = ELEMENTS[cell_type]
-    conn = mesh.cells[cell_type]
-    h = SIZE / np.array(divisions)
-    rng = np.random.default_rng(seed)
-    points = mesh.points.copy()
-    corners = np.unique(conn[:, :el.n_corners])
-    points[corners] += rng.uniform(-0.2, 0.2, (len(corners), 3)) * h
-    for k, (a, b) in enumerate(el.edges):
-        points[conn[:, el.n_corners + k]] = 0.5 * (points[conn[:, a]] + points[conn[:, b]])
-    if curved:
-        mids = np.unique(conn[:, el.n_corners:])
-        points[mids] += rng.uniform(-0.06, 0.06, (len(mids), 3)) * h
-    return points, conn
 
 
 def local_order(cell_type, sk_element):

@@ -24,6 +24,8 @@ from transient.mesh.meshfile import jacobian_check, read_mesh, write_vtu
 from transient.mesh.quadrature import rule
 from transient.model.assembly import CellBlock, assemble, lame
 
+from distorted import distorted_box
+
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 WEDGES = ("wedge", "wedge15")
 
@@ -148,24 +150,6 @@ def reference_operators(points, conn, ctype):
     return K, M
 
 
-def distorted(ctype, curved, divisions=(2, 2, 2), size=(0.3, 0.2, 0.1), seed=3):
-    """A box of wedges, every corner moved by up to 20 % of a cell, midside nodes at their
-    edges' midpoints or, curved, moved again by up to 6 %."""
-    mesh = generators.box(size, divisions, element=ctype)
-    el, conn = ELEMENTS[ctype], mesh.cells[ctype]
-    h = np.asarray(size) / divisions
-    rng = np.random.default_rng(seed)
-    points = mesh.points.copy()
-    corners = np.unique(conn[:, :el.n_corners])
-    points[corners] += rng.uniform(-0.2, 0.2, (len(corners), 3)) * h
-    for k, (a, b) in enumerate(el.edges):
-        points[conn[:, el.n_corners + k]] = 0.5 * (points[conn[:, a]] + points[conn[:, b]])
-    if curved:
-        mids = np.unique(conn[:, el.n_corners:])
-        points[mids] += rng.uniform(-0.06, 0.06, (len(mids), 3)) * h
-    return points, conn
-
-
 def ours(points, conn, ctype):
     ne = len(conn)
     return assemble(points, [CellBlock(ctype, conn, np.full(ne, E), np.full(ne, NU),
@@ -175,7 +159,8 @@ def ours(points, conn, ctype):
 @pytest.mark.parametrize("ctype, curved", [("wedge", False), ("wedge15", False),
                                            ("wedge15", True)])
 def test_k_and_m_match_a_numpy_assembly_on_gmsh_s_shape_functions(ctype, curved):
-    points, conn = distorted(ctype, curved)
+    points, conn = distorted_box(ctype, curved, seed=3, divisions=(2, 2, 2),
+                                 size=(0.3, 0.2, 0.1))
     ops = ours(points, conn, ctype)
     assert min(d.min() for d in ops.min_det) > 0
     K, M = reference_operators(points, conn, ctype)
