@@ -1,16 +1,11 @@
-"""tools/bench_kernel.py at a tiny size: what both modes report, and the exponential scheme's
+"""benchmarks/bench_kernel.py at a tiny size: what both modes report, and the exponential scheme's
 error shrinking with its step (no timing is asserted)."""
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-TOOL = Path(__file__).resolve().parent.parent / "tools" / "bench_kernel.py"
-spec = importlib.util.spec_from_file_location("bench_kernel", TOOL)
-bench = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(bench)
+import bench_kernel as bench  # benchmarks/, studies/, tools/: pytest's pythonpath (setup.cfg)
 
 
 def test_roofline_rows_are_positive_times(capsys):

@@ -1,8 +1,6 @@
-"""tools/bench_squeal.py on a short squeal of the small pad and disc: what it reads of the
+"""benchmarks/bench_squeal.py on a short squeal of the small pad and disc: what it reads of the
 history and the roofline it times on the run's own rows."""
-import importlib.util
 import json
-from pathlib import Path
 
 import h5py
 import pytest
@@ -11,10 +9,7 @@ from transient.integration import run
 
 from test_cea import small
 
-TOOL = Path(__file__).resolve().parent.parent / "tools" / "bench_squeal.py"
-spec = importlib.util.spec_from_file_location("bench_squeal", TOOL)
-bench = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(bench)
+import bench_squeal as bench  # benchmarks/, studies/, tools/: pytest's pythonpath (setup.cfg)
 
 
 @pytest.mark.slow

@@ -1,4 +1,4 @@
-"""Damaged histories found by fuzzing (tools/fuzz_cases.py), each refused by the reader that
+"""Damaged histories found by fuzzing (tests/fuzz_cases.py), each refused by the reader that
 owns the file layout: one line naming the file and the dataset or attribute (exit 2, no
 traceback, no warning), in info, plot, export and run --resume alike."""
 import shutil

@@ -1,20 +1,15 @@
-"""tools/fuzz_cases.py: its TOML writer and its outcome classes, then a fixed seed of mutants
+"""tests/fuzz_cases.py: its TOML writer and its outcome classes, then a fixed seed of mutants
 through the command line, each of which must exit 0, 2 or 3 and none end in a FAILURE (a
 traceback, a warning, an error message that is not one line 'error: ...', a crash, the memory
 bound, a timeout). No outcome depends on the machine's speed: the Ctrl-C mutations (where
 SIGINT lands is a matter of timing) are left out, and the timeout only guards against a hung
 mutant (the slowest take a few seconds)."""
-import importlib.util
 import math
 import tomllib
-from pathlib import Path
 
 import pytest
 
-TOOL = Path(__file__).resolve().parent.parent / "tools" / "fuzz_cases.py"
-spec = importlib.util.spec_from_file_location("fuzz_cases", TOOL)
-fuzz = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(fuzz)
+import fuzz_cases as fuzz  # a sibling in tests/
 
 SEED = 2026
 MUTANTS = 400

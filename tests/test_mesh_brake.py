@@ -2,9 +2,7 @@
 would be. Every set the case names is in the files, the cells are tet10 and not inverted, the
 dofs are near the target, and the parts weigh what their volumes and materials say (so the
 pad's lining got the lining's material and the mesh follows the curved faces)."""
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,10 +15,7 @@ from transient.model.model import build_model, part_mesh
 
 gmsh = pytest.importorskip("gmsh")
 
-TOOL = Path(__file__).resolve().parent.parent / "tools" / "mesh_brake.py"
-spec = importlib.util.spec_from_file_location("mesh_brake", TOOL)
-mesh_brake = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(mesh_brake)
+import mesh_brake  # tools/: pytest's pythonpath (setup.cfg)
 
 # 30k dofs: meshed in about a second, the model assembled in a few
 TARGET = 30000

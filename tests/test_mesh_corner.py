@@ -4,7 +4,6 @@ geometry puts it (each tied pair's two faces on one plane), every cell is a tet1
 positive volume (the mirrored outer pad's too), the parts' volumes are the geometry's written
 from its dimensions, and the same arguments give the same files."""
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,8 +16,6 @@ from transient.model.model import part_mesh
 
 gmsh = pytest.importorskip("gmsh")
 
-TOOLS = Path(__file__).resolve().parent.parent / "tools"
-
 # h = 20 mm, the coarsest --dofs picks (the disc's thickness): the caliper's bores turned
 # cells inside out there before their walls had a size of their own
 ARGUMENTS = ["--size", "0.02"]
@@ -26,12 +23,7 @@ ARGUMENTS = ["--size", "0.02"]
 
 @pytest.fixture(scope="module")
 def mesh_corner():
-    import sys
-    sys.path.insert(0, str(TOOLS))
-    try:
-        import mesh_corner
-    finally:
-        sys.path.remove(str(TOOLS))
+    import mesh_corner      # tools/: setup.cfg's pythonpath
     return mesh_corner
 
 

@@ -32,10 +32,10 @@ def total_mass(model):
 def test_every_case_is_tested():
     # bar_impact.toml: tests/test_transient.py::test_bar_on_a_rigid_wall (contact duration 2 L / c)
     # pad_disc_long.toml: test_pad_disc_schemes_agree_below_5khz (its scheme settings) and
-    # tools/bench_long.py (the whole second)
+    # benchmarks/bench_long.py (the whole second)
     # two_bars.toml: tests/test_transient.py::test_two_identical_bars_exchange_velocities
     # pad_disc_squeal.toml: test_pad_disc_squeal_grows_as_its_complex_modes (the growth; its
-    # second of squeal: tools/bench_squeal.py and docs/performance.md)
+    # second of squeal: benchmarks/bench_squeal.py and docs/performance.md)
     assert sorted(p.name for p in CASES.glob("*.toml")) == [
         "bar_impact.toml", "brake_corner.toml", "drilled_cube.toml", "pad_disc.toml",
         "pad_disc_long.toml", "pad_disc_squeal.toml", "pad_disc_tet10.toml", "slotted_pad.toml",
@@ -50,7 +50,7 @@ def test_pad_disc_tet10_locks_tied_exactly_with_the_rich_rule_only():
     3.0%; 10.9% as well over the MAC partners alike, MAC >= 0.5); tied by springs at the
     exponential law's tangent at 1 MPa (k = lambda p = 5e11), by 0.36% at most: the nearly
     compatible shapes stay soft under any stiffness short of some 1e21 Pa/m
-    (tools/study_locking.py)."""
+    (studies/study_locking.py)."""
     path = CASES / "pad_disc_tet10.toml"
     rich = ["contact.pad_disc.rule=fine", "contact.pad_disc.regularized=false"]
     exact = compare(load(path), load(path, rich), "disc_rim", "pad_back", 0.01)

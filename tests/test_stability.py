@@ -1,6 +1,5 @@
-"""tools/study_stability.py: its classification of a run's outcome, and the outcomes of its
+"""studies/study_stability.py: its classification of a run's outcome, and the outcomes of its
 --quick subset pinned (every scenario stable, refused or aborted, never FAILED)."""
-import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -8,10 +7,7 @@ import pytest
 
 from transient.io.history import History
 
-TOOL = Path(__file__).resolve().parent.parent / "tools" / "study_stability.py"
-spec = importlib.util.spec_from_file_location("study_stability", TOOL)
-study = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(study)
+import study_stability as study  # benchmarks/, studies/, tools/: pytest's pythonpath (setup.cfg)
 
 # what the --quick scenarios do today; a set where either outcome is acceptable (an abort on
 # the energy balance or the critical step that a better integrator may turn into a stable run)

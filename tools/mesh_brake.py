@@ -88,8 +88,8 @@ def tool_module(name):
 
 
 def fuzz_dumps():
-    """The TOML writer of tools/fuzz_cases.py (stdlib only)."""
-    return tool_module("fuzz_cases").dumps
+    """The TOML writer the tools share (tools/toml_writer.py, stdlib only)."""
+    return tool_module("toml_writer").dumps
 
 
 geometry = tool_module("brake_geometry")

@@ -8,7 +8,7 @@ from dataclasses import dataclass, fields
 SHIFT_HZ = 1.0     # -(2 pi SHIFT_HZ)^2 shifts K so that floating parts stay solvable
 # The reduced basis' normal modes reach CUTOFF_FACTOR times the band (reduction.fmax) by
 # default: the friction couples each mode of the band with the modes above it, and the
-# coupled modes' real parts converge only once those are held (tools/study_cea_band.py)
+# coupled modes' real parts converge only once those are held (studies/study_cea_band.py)
 CUTOFF_FACTOR = 2.0
 
 

@@ -14,7 +14,7 @@ nodal field, observed by the very rows that observe the normal one. d = C1 u1_t 
 displacement of surface 1 relative to surface 2 along t. A regularized rule observes it through
 the same (1-eps)-compatible projection: the friction traction is mu times the normal one, the
 same traction field, so its work is observed by the same operator (and a factored rule, C = L
-B^T, shares L: only B changes). Measured (tools/study_friction_projection.py, mu = 0.4), the
+B^T, shares L: only B changes). Measured (studies/study_friction_projection.py, mu = 0.4), the
 unstable modes with the tangential field projected or observed raw, against the fine rule
 unregularized: pad_disc, 7 modes within 1.2e-6 in frequency either way; the drilled cube on a
 belt (eps auto, 25 of 817 shapes kept), 2 modes within 1.6e-4, real parts within 2.0%

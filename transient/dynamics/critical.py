@@ -16,7 +16,7 @@ from ..kernels.codes import ATAN, EXPONENTIAL, FRICTIONLESS
 
 # An explicit impact keeps its energy (drift within 1% of the peak) while the penalties alone
 # on the lumped mass oscillate at omega_c dt <= 0.7, though central differences stay stable
-# to omega_max dt = 2: tools/study_contact_step.py, 90 bars (steel and aluminium, 16 to 100
+# to omega_max dt = 2: studies/study_contact_step.py, 90 bars (steel and aluminium, 16 to 100
 # elements, k from 2e13 to 2e15 Pa/m, 3 phases of the first contact) gave a worst drift of
 # 3.4e-3 up to omega_c dt = 0.7, 7.1e-3 to 0.75, 2.0e-2 to 0.8, 0.23 to 1.2 and 0.8-0.94
 # above 1.4 (each chatter of the end face gains energy there).

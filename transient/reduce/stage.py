@@ -190,7 +190,7 @@ class FrictionLoads:
       phi: the traction its velocity turns across the sliding and changes along it (the
       friction damping's columns). At a slow sliding m / V is a stiff damper across it, and
       the interface's motion across the sliding that it drives is a direction no mode or
-      normal contact shape holds (tools/study_cea_band.py --spans)."""
+      normal contact shape holds (studies/study_cea_band.py --spans)."""
 
     def __init__(self, contacts, preload, free, band_hz):
         f = contacts.friction

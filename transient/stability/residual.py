@@ -9,7 +9,7 @@ r = (K_lin + i H + K_f) x + lambda (M T diag(d) z + D_f x) + lambda^2 M x vanish
 of the full model; the Galerkin projection leaves it orthogonal to the basis. Its size relative
 to the inertia forces, rho = |r|_{M^-1} / (|lambda|^2 |x|_M) (lumped mass norms on the free
 dofs), is what the modes beyond the basis' cutoff and the directions it lacks leave out: it
-falls as the cutoff grows (tools/study_cea_band.py measures it with the real parts' errors
+falls as the cutoff grows (studies/study_cea_band.py measures it with the real parts' errors
 against the full model).
 """
 import numpy as np

@@ -3,7 +3,7 @@
 A hex20 block clamped at one end, about --dofs dofs, --modes modes. Each backend runs in its own
 child process so that peak memory (ru_maxrss) is its own.
 
-    python tools/bench_modes.py --dofs 100000 --modes 50 [--backends pardiso,superlu] [--json]
+    python benchmarks/bench_modes.py --dofs 100000 --modes 50 [--backends pardiso,superlu] [--json]
 """
 import argparse
 import json

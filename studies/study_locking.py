@@ -3,7 +3,7 @@ contact rule raises the tied modes above the (1-eps) regularized centre rule, by
 stiffness, on the tet10 meshes made each on its own (cases/pad_disc_tet10.toml) and on the
 structured hex20 ones (cases/pad_disc.toml).
 
-    python tools/study_locking.py [--case tet10|hex20|both] [--modes 50] [--k K ...]
+    python studies/study_locking.py [--case tet10|hex20|both] [--modes 50] [--k K ...]
                                   [--sizes 0.004 0.008] [--mesh-dir DIR] [--json PATH]
 
 1. The interface's compatibility (singular values of the gap energy on the fine rule): its

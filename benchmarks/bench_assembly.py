@@ -16,7 +16,7 @@ Each assembler runs in its own child process (``--only ours|skfem|vector``) so t
 Both use the 3x3x3 Gauss rule (our degree 5, scikit-fem intorder=5) and the same trilinear
 geometry (midside nodes at the midpoints of straight edges).
 
-Usage: python tools/bench_assembly.py [--dofs 300000] [--json] [--no-vector] [--repeat 3]
+Usage: python benchmarks/bench_assembly.py [--dofs 300000] [--json] [--no-vector] [--repeat 3]
 (timings are the fastest of --repeat assemblies; peaks are of one assembly)
 """
 import os

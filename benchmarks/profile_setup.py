@@ -5,7 +5,7 @@ NUMBA_NUM_THREADS for the rest. The package imported is the one on PYTHONPATH, s
 can be profiled in turn (run from outside both). solver.t_end is 1e-3 unless --set says
 otherwise: the setup does not depend on it, and the load's work bound does.
 
-    python tools/profile_setup.py [CASE] [--set key=value ...] [--functions block_lanczos,...]
+    python benchmarks/profile_setup.py [CASE] [--set key=value ...] [--functions block_lanczos,...]
 """
 import argparse
 import cProfile

@@ -5,7 +5,7 @@ part's element-matrix entries (the unit case/sizes.py bounds a part by). With --
 same pickles also reduced by the package at DIR (a `git worktree` of another commit) in turn,
 A B A B, so that a change of the machine's load shows in both.
 
-    python tools/bench_parts.py CASE [--mu 0.4] [--parts disc,pad_in] [--base DIR]
+    python benchmarks/bench_parts.py CASE [--mu 0.4] [--parts disc,pad_in] [--base DIR]
                                 [--set key=value ...] [--markdown FILE] [--json FILE]
 """
 import argparse
@@ -16,7 +16,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from tables import publish  # noqa: E402  (a sibling in tools/)
+from tables import publish  # noqa: E402  (a sibling in benchmarks/)
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -11,7 +11,7 @@ own basis, the default method: the conservative baseline, since a variant alone 
 makes the reference's preload and basis besides its own preload). --no-two skips the two
 separate sweeps.
 
-    python tools/bench_sweep.py [--case cases/pad_disc.toml] [--count 20] [--t-end 1e-3]
+    python benchmarks/bench_sweep.py [--case cases/pad_disc.toml] [--count 20] [--t-end 1e-3]
         [--workers 2] [--basis-mu X] [--plain-alone] [--no-two] [--out /tmp/bench_sweep]
         [--json]
 

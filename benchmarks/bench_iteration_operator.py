@@ -10,7 +10,7 @@ This script measures, on a case's full model at its solver.dt: SuperLU's explici
 (time, nonzeros) and one solve through them in Numba, PARDISO's factorization and one
 single right-hand-side solve from Python.
 
-    python tools/bench_iteration_operator.py CASE [--set key=value ...] [--repeat 20]
+    python benchmarks/bench_iteration_operator.py CASE [--set key=value ...] [--repeat 20]
 """
 import argparse
 import sys

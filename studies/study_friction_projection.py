@@ -10,7 +10,7 @@ of pad_disc with friction for three observations of the friction, against the fi
 For each, the frequencies and real parts of the unstable modes below fmax against the fine
 rule's (the nearest eigenvalue), and how many are unstable.
 
-    python tools/study_friction_projection.py [CASE] [--mu 0.4] [--set key=value ...] [--json]
+    python studies/study_friction_projection.py [CASE] [--mu 0.4] [--set key=value ...] [--json]
 """
 import argparse
 import json

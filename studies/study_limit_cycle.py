@@ -55,7 +55,7 @@ window's RMS, or a warning line says so; its trend over the window is printed to
 - kernel: us/step of each run (timings/kernel over its steps; the median per thread count that
   dynamics.chunks.ThreadChoice keeps), slowed by anything else on the machine.
 
-    python tools/study_limit_cycle.py [CASE] [--t-end 0.106] [--dt 3.125e-6 1.5625e-6]
+    python studies/study_limit_cycle.py [CASE] [--t-end 0.106] [--dt 3.125e-6 1.5625e-6]
         [--cycle-from 0.1] [--sub 0.002] [--sensor pad_back] [--drift-tolerance X]
         [--out /tmp/limit_cycle] [--set key=value ...] [--cycles] [--json]
 """

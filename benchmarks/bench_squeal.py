@@ -16,7 +16,7 @@ kernel adds the modal propagation, the energies and the output rows.
 sensors' RMS and dominant frequency over each window of --windows in both, and their changes.
 --history H: times the roofline on an existing history instead of running the case.
 
-    python tools/bench_squeal.py [CASE] [--set KEY=VALUE ...] [--repeat 300] [--compare 0.5]
+    python benchmarks/bench_squeal.py [CASE] [--set KEY=VALUE ...] [--repeat 300] [--compare 0.5]
         [--windows 0.1:0.2,0.2:0.5] [--keep DIR] [--history H] [--json]
 """
 import argparse

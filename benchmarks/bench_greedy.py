@@ -5,7 +5,7 @@ decaying over --decay decades; best of --repeat after a warm-up call (compilatio
 Numba threads. scipy.linalg.qr(R.T, pivoting=True, mode='r') runs in the same process (BLAS
 threads as configured). On the Gaussian matrix the pivot order must equal LAPACK's.
 
-    python tools/bench_greedy.py [--n 10000 --r 500 --m 500 --threads 1,2 --repeat 3] [--json]
+    python benchmarks/bench_greedy.py [--n 10000 --r 500 --m 500 --threads 1,2 --repeat 3] [--json]
 """
 import argparse
 import json

@@ -5,7 +5,7 @@ alternate `--repeat` times so that a change of the machine's load shows in both.
 stages (setup, the complex modes themselves) come from its JSON. The issue's targets: the CEA
 of pad_disc (setup included) within 1.5x of `transient modes`, the complex modes under 1 s.
 
-    python tools/bench_cea.py [CASE] [--mu 0.4] [--repeat 2] [--set key=value ...] [--json]
+    python benchmarks/bench_cea.py [CASE] [--mu 0.4] [--repeat 2] [--set key=value ...] [--json]
 """
 import argparse
 import json
@@ -30,7 +30,7 @@ def timed(command, case, overrides):
     if done.returncode != 0:
         sys.exit(f"transient {command} failed ({done.returncode}): {done.stderr.strip()}")
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    # the system's CPU seconds are mostly page faults (tools/bench_long.py: run_timed)
+    # the system's CPU seconds are mostly page faults (benchmarks/bench_long.py: run_timed)
     cpu = {"user_s": after.ru_utime - before.ru_utime,
            "system_s": after.ru_stime - before.ru_stime}
     return wall, dict(json.loads(done.stdout), cpu=cpu)

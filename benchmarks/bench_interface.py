@@ -12,7 +12,7 @@ A tiny interface of each element type is built first, so that numba compilation 
 On a machine loaded by other processes, multithreaded OpenBLAS can stall in the eigensolver (seen:
 0.12 s becoming 8 s for N1 + N2 = 1194); OPENBLAS_NUM_THREADS=1 gives steady figures.
 
-    python tools/bench_interface.py [--pairs 1e3,1e4,1e5] [--case cases/pad_disc.toml]
+    python benchmarks/bench_interface.py [--pairs 1e3,1e4,1e5] [--case cases/pad_disc.toml]
         [--set parts.pad.mesh.divisions=[9,22,2,1] ...] [--json]
 """
 import argparse

@@ -8,7 +8,7 @@ against assembled (frequency, and real part against 2% of its own size or 5 1/s:
 allowance). With --run T, each method's `transient run` to T (the case's own friction): its
 sensors' RMS about their mean, components against assembled.
 
-    python tools/bench_components.py [CASE] [--mu 0.4] [--repeat 1] [--run T]
+    python benchmarks/bench_components.py [CASE] [--mu 0.4] [--repeat 1] [--run T]
                                      [--set key=value ...] [--markdown FILE] [--json FILE]
 """
 import argparse
@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tables import publish  # noqa: E402  (a sibling in tools/)
+from tables import publish  # noqa: E402  (a sibling in benchmarks/)
 
 ROOT = Path(__file__).resolve().parent.parent
 METHODS = ("assembled", "components")

@@ -1,9 +1,9 @@
 """What the basis' cutoff costs a run: `transient run` with the normal modes to factor x fmax
 (solver.reduction.cutoff), the factors taken in turn (A B A B: the machine's drift falls on
 both), the reduced dofs, the sampled points, the setup and the kernel's microseconds a step
-read from each history. The gain is the CEA's across its band (tools/study_cea_band.py).
+read from each history. The gain is the CEA's across its band (studies/study_cea_band.py).
 
-    python tools/bench_cutoff.py [CASE] [--factors 1,2] [--repeats 2] [--set key=value ...]
+    python benchmarks/bench_cutoff.py [CASE] [--factors 1,2] [--repeats 2] [--set key=value ...]
                                  [--markdown FILE] [--json FILE]
 """
 import argparse

@@ -29,7 +29,7 @@ scheme on the full bar and the reduced pad. Case variants go to a temporary dire
 --quick runs a few scenarios per axis (tests/test_stability.py pins their outcomes). The exit
 code is 1 when any outcome is FAILED.
 
-    python tools/study_stability.py [--quick] [--only TEXT] [--keep DIR] [--json]
+    python studies/study_stability.py [--quick] [--only TEXT] [--keep DIR] [--json]
 """
 import argparse
 import json

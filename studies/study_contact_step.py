@@ -12,7 +12,7 @@ over element sizes, penalties k, steps dt (fractions of the critical step) and w
 which the first contact step lands), and prints the worst energy drift per omega_c dt bin,
 the figure behind `dynamics.critical.CONTACT_OMEGA_DT`.
 
-    python tools/study_contact_step.py [--quick] [--json]
+    python studies/study_contact_step.py [--quick] [--json]
 """
 import argparse
 import json

@@ -3,7 +3,7 @@ then PARDISO's symbolic analysis (its ordering, phase 11) of K - sigma M on the 
 reports the factors' nonzeros and memory and the factorization's flops, without allocating the
 factors. --factor also factorizes it and times the factorization and one solve.
 
-    python tools/bench_factor.py CASE [--set key=value ...] [--factor] [--json]
+    python benchmarks/bench_factor.py CASE [--set key=value ...] [--factor] [--json]
 
 The model stage's peak resident memory is printed beside it: together they say whether the
 setup's first two stages fit the machine (the reduction then adds a few n x (modes + static

@@ -8,7 +8,7 @@ the fine points) with nearest and nnls weights, and exact weights when the inter
 enough. The model is built once; only the pair changes. setup_s is the contact stage (the pair:
 interface, compatibility, regularization, selection; and its stiffness), modes_s the eigensolver.
 
-    python tools/study_coarse.py [--case cases/pad_disc.toml] [--pair pad_disc]
+    python studies/study_coarse.py [--case cases/pad_disc.toml] [--pair pad_disc]
         [--points 0,900] [--modes 30] [--set KEY=VALUE ...] [--out DIR] [--json]
 
 On a shared machine run with OPENBLAS_NUM_THREADS=1 NUMBA_NUM_THREADS=1: spinning BLAS and

@@ -1,7 +1,7 @@
 """Drilled cube, static: each contact rule's fine-side interface displacement against the
 conforming reference (upper cube meshed with the lower cube's plan).
 
-    python tools/study_drilled_cube.py [--set KEY=VALUE ...] [--json]
+    python studies/study_drilled_cube.py [--set KEY=VALUE ...] [--json]
 """
 import argparse
 import json

@@ -3,7 +3,7 @@ complex modes of the full model (shift-invert Arnoldi) against the reduced model
 normal modes to several cutoffs (solver.reduction.cutoff = factor x fmax), mode by mode
 (transient.stability.compare: each real part against its own size, 5 1/s floor).
 
-    python tools/study_cea_band.py CASE --mu 0.3,0.5 [--factors 1,1.5,2] [--set KEY=VALUE ...]
+    python studies/study_cea_band.py CASE --mu 0.3,0.5 [--factors 1,1.5,2] [--set KEY=VALUE ...]
                                   [--reduced-set KEY=VALUE ...] [--out DIR] [--spans]
                                   [--markdown FILE]
 
@@ -25,7 +25,8 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg as sla
 
-from tables import publish  # noqa: E402  (a sibling in tools/)
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+from tables import publish  # noqa: E402  (benchmarks/tables.py)
 from transient.case.loading import load
 from transient.stability.compare import pair_modes
 from transient.stability.linearize import linearized

@@ -12,7 +12,7 @@ Each is timed from a child process (start-up included), in that order; the cache
 empty. Each variant's unstable modes are compared between the assembled path and the
 components sweep, where both have it.
 
-    python tools/bench_parts_campaign.py [CASE] [--moduli 3e9:8e9:10] [--material lining]
+    python benchmarks/bench_parts_campaign.py [CASE] [--moduli 3e9:8e9:10] [--material lining]
                                          [--mu 0.4] [--workers 2] [--assembled K]
                                          [--assembled-sweep] [--set key=value ...]
                                          [--markdown FILE]

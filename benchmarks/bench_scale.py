@@ -1,12 +1,12 @@
 """How the setup scales with the mesh: cases/pad_disc.toml with both meshes refined by a factor
 in each direction (the contact interface refined with them), each run a child process
-(`transient run`, as tools/bench_long.py runs it) to a short t_end, smallest first.
+(`transient run`, as benchmarks/bench_long.py runs it) to a short t_end, smallest first.
 
 For each size: dofs, setup seconds and its stages, peak RSS, reduced dofs and contact points;
 then the exponents of setup time and peak memory against dofs, fitted over the range (the
 issue's targets: memory no faster than n^1.1, setup no faster than n^1.3, over 4x in dofs).
 
-    python tools/bench_scale.py [--dofs-factors 1,2,4] [--t-end 1e-3] [--set KEY=VALUE] [--json]
+    python benchmarks/bench_scale.py [--dofs-factors 1,2,4] [--t-end 1e-3] [--set KEY=VALUE] [--json]
 
 A dofs factor f refines each division count by f^(1/3) (rounded; the thickness counts too), so
 the dofs grow by about f.
@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tools"))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 from bench_long import run  # noqa: E402
 
 DISC = [12, 144, 2]          # cases/pad_disc.toml's divisions

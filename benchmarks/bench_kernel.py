@@ -34,8 +34,8 @@ OpenBLAS stalls in small LAPACK calls (seen: scipy's expm of the 4 x 4 exponenti
 OPENBLAS_NUM_THREADS=1 gives steady figures there, and runs solve_ivp's BLAS on one thread as the
 kernels are.
 
-    python tools/bench_kernel.py roofline [--sizes 100x300,300x1000] [--repeat 3] [--json]
-    OPENBLAS_NUM_THREADS=1 python tools/bench_kernel.py accuracy [--t-end 0.02 --dt-out 1e-4]
+    python benchmarks/bench_kernel.py roofline [--sizes 100x300,300x1000] [--repeat 3] [--json]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_kernel.py accuracy [--t-end 0.02 --dt-out 1e-4]
         [--json] [--png FILE]
 """
 import argparse

@@ -6,7 +6,7 @@ imports as a user sees them, and ru_maxrss is its own peak. The history's stages
 say where the time went. A first run that compiles the Numba kernels is not representative:
 --warm runs the case once for a few steps before.
 
-    python tools/bench_long.py [CASE] [--warm] [--set key=value ...] [--json]
+    python benchmarks/bench_long.py [CASE] [--warm] [--set key=value ...] [--json]
 """
 import argparse
 import json
