@@ -1,6 +1,6 @@
-"""The bars of a setup's long inner work (issue 47): the Lanczos' modes and the responses to the
-contact's directions, drawn by the command line on a terminal, never by the library on its own
-nor into a JSON reader's output."""
+"""A setup's progress (issue 47): each stage said as it starts, and bars over its long inner work
+(the Lanczos' modes and the responses to the contact's directions), drawn by the command line on
+a terminal, never by the library on its own nor into a JSON reader's output."""
 from pathlib import Path
 
 import pytest
@@ -17,7 +17,7 @@ FRICTION = PAD_DISC + ["contact.pad_disc.friction.mu=0.4"]
 
 
 def _drawn(err):
-    return {what for what in ("modes:", "responses:") if what in err}
+    return {what for what in ("modes:", "responses:", "stage contact ...") if what in err}
 
 
 def test_the_library_draws_its_bars_only_where_asked(capsys):
@@ -26,7 +26,7 @@ def test_the_library_draws_its_bars_only_where_asked(capsys):
     assert _drawn(capsys.readouterr().err) == set()
     with progress.shown():
         transient.cea(case)
-    assert _drawn(capsys.readouterr().err) == {"modes:", "responses:"}
+    assert _drawn(capsys.readouterr().err) == {"modes:", "responses:", "stage contact ..."}
 
 
 @pytest.mark.parametrize("json", [False, True])
@@ -34,4 +34,8 @@ def test_the_command_line_draws_them_on_a_terminal_not_for_json(json, capsys, mo
     monkeypatch.setattr(commands, "_interactive", lambda: True)
     args = ["cea", PAD] + [a for o in FRICTION for a in ("--set", o)]
     assert commands.main(args + (["--json"] if json else [])) == 0
-    assert _drawn(capsys.readouterr().err) == (set() if json else {"modes:", "responses:"})
+    err = capsys.readouterr().err
+    assert _drawn(err) == (set() if json else {"modes:", "responses:", "stage contact ..."})
+    if not json:
+        # each stage said as it starts, then as it ends
+        assert err.index("stage contact ...") < err.index("stage contact:")

@@ -19,6 +19,13 @@ def shown(on=True):
         _SHOWN.reset(token)
 
 
+def started(what):
+    """A line on standard error as a long stage starts, within shown() only: the line its end
+    prints (its seconds and peak memory) says when it is done."""
+    if _SHOWN.get():
+        print(f"{what} ...", file=sys.stderr, flush=True)
+
+
 def work(what, total, unit):
     """A bar over `total` units of a stage's inner work, or one that shows nothing outside
     shown(): advance(to, total) moves it to `to` of a total that may grow (the Lanczos' wanted

@@ -2,6 +2,7 @@
 shared ones a campaign builds once (shared.build_shared)."""
 import time
 
+from . import progress
 from .case.sizes import peak_rss_gb
 
 
@@ -24,6 +25,7 @@ class Stages(dict):
 
     def timed(self, name, fn, *args):
         self.check()
+        progress.started(f"stage {name}")
         t0 = time.perf_counter()
         out = fn(*args)
         self[name] = time.perf_counter() - t0
