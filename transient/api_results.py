@@ -131,8 +131,9 @@ def modal_growth(path, cea=None, window=None, tolerance=None):
     ModalGrowth
         Per mode of the run's linearization in the band (imaginary part >= 0, by
         frequency): ``eigenvalues`` [1/s], ``frequency_hz``, ``cea`` (the CEA's eigenvalue
-        paired one to one by the nearest), ``growth`` [1/s] and its ``stderr``, ``rms``,
-        ``windows`` [s], ``excited``, ``difference`` (relative to the CEA's real part) and
+        paired one to one by the nearest), ``growth`` [1/s] and its window's
+        ``resolution`` [1/s] (the slowest rate it tells from neutral), ``rms``, ``windows``
+        [s], ``excited``, ``resolved``, ``difference`` (relative to the CEA's real part) and
         the ``amplitudes`` |a_k(t)| [sqrt(kg) m] at ``time`` [s]; ``table()`` gives one dict
         per mode.
 
@@ -149,6 +150,8 @@ def modal_growth(path, cea=None, window=None, tolerance=None):
         raise CaseError(path, "window", f"expected (t0, t1) with t0 < t1, got {window}")
     if cea is None:
         from .stability.stage import analyse
-        cea = analyse(stored.case())
-    modes = getattr(cea, "modes", cea)
-    return history_growth(stored, modes, window, LOG_RMS if tolerance is None else tolerance)
+
+        def cea(case):
+            return analyse(case).modes
+    return history_growth(stored, cea if callable(cea) else getattr(cea, "modes", cea), window,
+                          LOG_RMS if tolerance is None else tolerance)

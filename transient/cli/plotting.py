@@ -103,14 +103,17 @@ def _plot_modal_growth(args):
     print(f"modes of the run's linearization to the band's top, fitted from "
           f"{result.free_from:.6g} s over the linear phase to {result.linear_end:.6g} s "
           f"(rows every {result.stride:.4g} s)")
+    print("CEA: its real part; run: the run's own linearization's; fit: the projection's growth, "
+          "resolution: the slowest rate its window tells from neutral")
     print(f"{'f [Hz]':>10} {'CEA [1/s]':>11} {'run [1/s]':>11} {'fit [1/s]':>11} "
-          f"{'+-':>7} {'diff':>8} {'window [ms]':>15} {'rms':>7}")
+          f"{'resol.':>7} {'diff':>8} {'window [ms]':>15} {'rms':>7}")
     for row in growth_rows(result):
         cea = "-" if row["cea_real"] is None else f"{row['cea_real']:.5g}"
         if row["excited"]:
             diff = "-" if row["difference"] is None else f"{100 * row['difference']:+.2f}%"
-            fit = (f"{row['growth']:11.5g} {row['stderr']:7.2g} {diff:>8} "
-                   f"{1e3 * row['t0']:7.3f}-{1e3 * row['t1']:<7.3f} {row['rms']:7.2g}")
+            fit = (f"{row['growth']:11.5g} {row['resolution']:7.2g} {diff:>8} "
+                   f"{1e3 * row['t0']:7.3f}-{1e3 * row['t1']:<7.3f} {row['rms']:7.2g}"
+                   + ("" if row["resolved"] else "  unresolved"))
         else:
             fit = f"{'not excited above the floor':>11}"
         print(f"{row['frequency_hz']:10.1f} {cea:>11} {row['run_real']:11.5g} {fit}")

@@ -7,8 +7,8 @@ import numpy as np
 # the stable modes drawn beside the unstable ones: the strongest at the free motion's start
 STABLE_SHOWN = 6
 
-COLUMNS = ("frequency_hz", "cea_real", "run_real", "growth", "stderr", "difference", "t0", "t1",
-           "rms", "amplitude_min", "amplitude_max", "excited")
+COLUMNS = ("frequency_hz", "cea_real", "run_real", "growth", "resolution", "difference", "t0",
+           "t1", "rms", "amplitude_min", "amplitude_max", "excited", "resolved")
 
 
 def growth_rows(result):

@@ -79,7 +79,7 @@ class ModalGrowth:
     eigenvalues: np.ndarray   # (k,) lambda of the run's linearization at its preload [1/s]
     amplitudes: np.ndarray    # (k, r) |a_k(t)| [sqrt(kg) m]
     growth: np.ndarray        # (k,) fitted growth rate [1/s], nan where not fitted
-    stderr: np.ndarray        # (k,) its standard error [1/s] (independent residuals)
+    resolution: np.ndarray    # (k,) [1/s] the slowest rate the window tells from neutral
     rms: np.ndarray           # (k,) RMS deviation of log a_k from its line in the window
     windows: np.ndarray       # (k, 2) [s] the rows fitted, nan where not fitted
     cea: np.ndarray           # (k,) the CEA's eigenvalue paired with each, nan without one
@@ -97,6 +97,12 @@ class ModalGrowth:
         return np.isfinite(self.growth)
 
     @property
+    def resolved(self):
+        """Whether each fitted mode's rate stands above its window's resolution."""
+        with np.errstate(invalid="ignore"):
+            return self.excited & (np.abs(self.growth) > self.resolution)
+
+    @property
     def difference(self):
         """(projected growth - CEA real part) / |CEA real part|: nan where either is missing
         or the CEA's mode is neutral (its real part within the round-off the CEA allows it,
@@ -108,8 +114,8 @@ class ModalGrowth:
 
     def table(self):
         """One dict per mode: frequency [Hz], the CEA's real part, the run's linearization's,
-        the projected growth and its standard error [1/s], their relative difference, the
-        fit's window [s] and RMS deviation, the amplitude's range over the window."""
+        the projected growth and its window's resolution [1/s], their relative difference,
+        the fit's window [s] and RMS deviation, the amplitude's range over the window."""
         rows = []
         for k, lam in enumerate(self.eigenvalues):
             t0, t1 = self.windows[k]
@@ -119,13 +125,14 @@ class ModalGrowth:
                          "cea_real": _number(self.cea[k].real),
                          "run_real": float(lam.real),
                          "growth": _number(self.growth[k]),
-                         "stderr": _number(self.stderr[k]),
+                         "resolution": _number(self.resolution[k]),
                          "difference": _number(self.difference[k]),
                          "window_s": [_number(t0), _number(t1)],
                          "rms": _number(self.rms[k]),
                          "amplitude": [_number(amp.min()) if amp.size else None,
                                        _number(amp.max()) if amp.size else None],
-                         "excited": bool(self.excited[k])})
+                         "excited": bool(self.excited[k]),
+                         "resolved": bool(self.resolved[k])})
         return rows
 
 
@@ -186,11 +193,11 @@ def modal_growth(system, preload, time, rows, fmax, free_from, cea=None, window=
     t, lam = time[first:last], lam[shown]
     amp = np.abs(a)
     end = len(t) if window is not None else linear_end(amp)
-    growth, stderr, rms, windows = fit_modes(t[:end], a[:, :end], lam,
+    growth, resolution, rms, windows = fit_modes(t[:end], a[:, :end], lam,
                                              tolerance if window is None else np.inf)
     paired = (pair_modes(lam, cea.eigenvalues) if cea is not None
               else np.full(len(lam), np.nan + 0j))
-    return ModalGrowth(t, lam, amp, growth, stderr, rms, windows, paired, float(free_from),
+    return ModalGrowth(t, lam, amp, growth, resolution, rms, windows, paired, float(free_from),
                        float(t[end - 1]) if end else float(t0), h)
 
 
@@ -255,15 +262,19 @@ def linear_end(amp):
 
 
 def fit_modes(t, a, lam, tolerance):
-    """(growth, stderr, rms, windows) of amplitudes a (k, r) at times t: for each mode, the
-    least-squares line of log a_k (log amplitude and phase about Im lambda_k t) from the
+    """(growth, resolution, rms, windows) of amplitudes a (k, r) at times t: for each mode,
+    the least-squares line of log a_k (log amplitude and phase about Im lambda_k t) from the
     first row over the most rows whose RMS deviation is within tolerance, its window at least
-    MIN_PERIODS periods long; nan where there is none."""
+    MIN_PERIODS periods long; nan where there is none.
+
+    The resolution is the rate whose own line over the window, |sigma| T / (2 sqrt 3) about
+    its mean, is as large as the log amplitude's RMS deviation from the fit: a slower rate is
+    buried in what the fit leaves, and its sign is not an answer."""
     k, r = a.shape
-    growth, stderr, rms = (np.full(k, np.nan) for _ in range(3))
+    growth, resolution, rms = (np.full(k, np.nan) for _ in range(3))
     windows = np.full((k, 2), np.nan)
     if r < 3:
-        return growth, stderr, rms, windows
+        return growth, resolution, rms, windows
     with np.errstate(divide="ignore", invalid="ignore"):
         y = np.log(a * np.exp(-1j * lam.imag[:, None] * (t - t[0])))
     y = y.real + 1j * np.unwrap(y.imag, axis=1)
@@ -285,10 +296,10 @@ def fit_modes(t, a, lam, tolerance):
         slope = float(tc @ (yw - yw.mean()) / (tc @ tc))
         res = yw - yw.mean() - slope * tc
         growth[m] = slope
-        stderr[m] = np.sqrt(res @ res / max(e - 2, 1) / (tc @ tc))
+        resolution[m] = 2 * np.sqrt(3.0) * np.sqrt(res @ res / e) / (tw[-1] - tw[0])
         rms[m] = dev[m, e - 1]
         windows[m] = t[0], t[e - 1]
-    return growth, stderr, rms, windows
+    return growth, resolution, rms, windows
 
 
 def _rss(y, s, count, St, var_t):
@@ -330,7 +341,8 @@ def loads_end(case, dt, t_last):
 def history_growth(stored, modes=None, window=None, tolerance=LOG_RMS):
     """modal_growth of a history (io.stored.Stored), its rows checked: the state stored, a
     reduced system, rows evenly spaced and often enough for the band, loads that stop
-    changing; modes: the CEA's ComplexModes to pair with (None: no pairing)."""
+    changing. modes: the CEA's ComplexModes to pair with, or a callable that makes them of
+    the history's case once the checks pass (None: no pairing)."""
     from ..io.systems import read_system
     from .stage import fmax_of
     stored = stored.uniform()
@@ -366,6 +378,8 @@ def history_growth(stored, modes=None, window=None, tolerance=LOG_RMS):
         if not system.reduced:
             raise stored.error("solver.reduction.enabled", "a full model's run: the "
                                "projection takes the dense complex modes of a reduced one")
+        if callable(modes):
+            modes = modes(case)
         series = f["field/q"]
         return modal_growth(system, series[0], time, lambda i, j: series[i:j], fmax,
                             free_from, modes, window, tolerance)
