@@ -116,7 +116,8 @@ def _plot_modal_growth(args):
                    + ("" if row["resolved"] else "  unresolved"))
         else:
             fit = f"{'not excited above the floor':>11}"
-        print(f"{row['frequency_hz']:10.1f} {cea:>11} {row['run_real']:11.5g} {fit}")
+        print(f"{row['frequency_hz']:10.1f} {cea:>11} {row['run_real']:11.5g} {fit}"
+              + ("  (CEA: unstable)" if row["cea_unstable"] else ""))
     try:
         write_growth_csv(result, table)
     except OSError as exc:

@@ -7,7 +7,7 @@ import numpy as np
 # the stable modes drawn beside the unstable ones: the strongest at the free motion's start
 STABLE_SHOWN = 6
 
-COLUMNS = ("frequency_hz", "cea_real", "run_real", "growth", "resolution", "difference", "t0",
+COLUMNS = ("frequency_hz", "cea_real", "cea_unstable", "run_real", "growth", "resolution", "difference", "t0",
            "t1", "rms", "amplitude_min", "amplitude_max", "excited", "resolved")
 
 
@@ -33,8 +33,12 @@ def write_growth_csv(result, path):
 
 def shown_modes(result):
     """Indices of the modes drawn: the unstable ones (by the CEA, or by the run's own
-    linearization), then the STABLE_SHOWN stable ones fitted with the largest amplitude."""
-    unstable = (np.nan_to_num(result.cea.real, nan=-np.inf) > 0) | (result.eigenvalues.real > 0)
+    linearization where no CEA mode is paired, by the CEA's test), then the STABLE_SHOWN
+    stable ones fitted with the largest amplitude."""
+    from ..stability.modes import UNSTABLE_RTOL
+    lam = result.eigenvalues
+    own = (lam.real > UNSTABLE_RTOL * np.abs(lam)) & ~np.isfinite(result.cea)
+    unstable = result.cea_unstable | own
     start = result.amplitudes[:, 0] if result.amplitudes.shape[1] else np.zeros(len(unstable))
     stable = np.flatnonzero(~unstable & result.excited)
     stable = stable[np.argsort(-start[stable])][:STABLE_SHOWN]

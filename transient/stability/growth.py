@@ -83,6 +83,7 @@ class ModalGrowth:
     rms: np.ndarray           # (k,) RMS deviation of log a_k from its line in the window
     windows: np.ndarray       # (k, 2) [s] the rows fitted, nan where not fitted
     cea: np.ndarray           # (k,) the CEA's eigenvalue paired with each, nan without one
+    cea_unstable: np.ndarray  # (k,) whether that CEA mode is unstable (by its own test)
     free_from: float          # [s] the free motion's start: the loads' last change
     linear_end: float         # [s] the linear phase's end
     stride: float             # [s] between rows
@@ -123,6 +124,7 @@ class ModalGrowth:
             amp = self.amplitudes[k, inside] if inside.any() else self.amplitudes[k, :0]
             rows.append({"frequency_hz": float(lam.imag / (2 * np.pi)),
                          "cea_real": _number(self.cea[k].real),
+                         "cea_unstable": bool(self.cea_unstable[k]),
                          "run_real": float(lam.real),
                          "growth": _number(self.growth[k]),
                          "resolution": _number(self.resolution[k]),
@@ -195,10 +197,12 @@ def modal_growth(system, preload, time, rows, fmax, free_from, cea=None, window=
     end = len(t) if window is not None else linear_end(amp)
     growth, resolution, rms, windows = fit_modes(t[:end], a[:, :end], lam,
                                              tolerance if window is None else np.inf)
-    paired = (pair_modes(lam, cea.eigenvalues) if cea is not None
-              else np.full(len(lam), np.nan + 0j))
-    return ModalGrowth(t, lam, amp, growth, resolution, rms, windows, paired, float(free_from),
-                       float(t[end - 1]) if end else float(t0), h)
+    partner = pair_modes(lam, cea.eigenvalues) if cea is not None else np.full(len(lam), -1)
+    found = partner >= 0
+    paired = np.where(found, cea.eigenvalues[partner] if found.any() else 0j, np.nan + 0j)
+    unstable = found & (cea.unstable[partner] if found.any() else False)
+    return ModalGrowth(t, lam, amp, growth, resolution, rms, windows, paired, unstable,
+                       float(free_from), float(t[end - 1]) if end else float(t0), h)
 
 
 class _Preload:
@@ -312,13 +316,13 @@ def _rss(y, s, count, St, var_t):
 
 
 def pair_modes(lam, reference):
-    """(k,) the eigenvalue of reference paired with each of lam, one to one by the nearest
-    (scipy's assignment on |lambda - lambda_ref|); nan where none is left."""
+    """(k,) the index of the eigenvalue of reference paired with each of lam, one to one by
+    the nearest (scipy's assignment on |lambda - lambda_ref|); -1 where none is left."""
     from scipy.optimize import linear_sum_assignment
-    out = np.full(len(lam), np.nan + 0j)
+    out = np.full(len(lam), -1)
     if len(lam) and len(reference):
         i, j = linear_sum_assignment(np.abs(lam[:, None] - reference[None, :]))
-        out[i] = reference[j]
+        out[i] = j
     return out
 
 
