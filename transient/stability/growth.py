@@ -3,7 +3,9 @@ its own system linearized at its preload, each mode's amplitude in time, and the
 fitted where the mode stands out, beside the CEA's real part.
 
 The first-order form. A reduced run integrates M a + D v + K q = f about its preload (M = I:
-stability.linearize's matrices, the friction's included). With z = [q - q_eq; v] the state
+stability.linearize's matrices of the system the history stores, the friction's included;
+a material's loss factor enters them as the viscous damping the run integrates, where the CEA
+takes i H: the table's run and CEA real parts show the difference). With z = [q - q_eq; v] the state
 about the equilibrium q_eq, B = [[I, 0], [0, M]] and A = [[0, I], [-K, -D]], the free motion
 is B z' = A z. Its right eigenvectors x_k = [phi_k; lambda_k phi_k] (A x_k = lambda_k B x_k)
 and left ones y_k (y_k^H A = lambda_k y_k^H B) are B-biorthogonal, y_j^H B x_k = 0 for
@@ -52,8 +54,8 @@ from ..errors import DamagedHistory
 from .linearize import linearized
 from .modes import UNSTABLE_RTOL
 
-# the RMS deviation of log a_k (amplitude and phase) from its line that a fit admits: a leak
-# of another mode's motion about 1.4 times as large, relative to the mode's, beats in it
+# the RMS deviation of log a_k (amplitude and phase) from its line that a fit admits: the
+# beat of a leak of the other modes' motion up to about 1.4% of the mode's own
 LOG_RMS = 0.01
 
 # the shortest window a fit takes, in the mode's periods: over fewer, a leak of a neighbour
