@@ -201,7 +201,7 @@ def test_the_api_pages_example_runs(tmp_path):
     page reads, on a coarser mesh and a shorter run (every load appends them): a test of the
     calls, not of pad_disc's setup."""
     blocks = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "api.md").read_text(), re.S)
-    assert len(blocks) == 3
+    assert len(blocks) == 4
     (tmp_path / "cases").symlink_to(ROOT / "cases")
     coarser = ("import transient.api\n"
                "real = transient.api.load\n"
@@ -214,8 +214,12 @@ def test_the_api_pages_example_runs(tmp_path):
     outputs = [part.splitlines() for part in done.stdout.split("-- next example\n")]
     assert outputs[0][-1].split()[:2] == ["pad.h5", "complete"]
     assert (tmp_path / "pad.h5").is_file() and (tmp_path / "pad_export").is_dir()
-    # the history's rows and series, then the bench's rows, the reference first
+    # the history's rows and series, the squeal run's modes, the bench's rows (the reference
+    # first)
     assert outputs[1][0].split()[:2] == [str(transient.summary(tmp_path / "pad.h5")["steps"]),
                                          "complete"]
-    assert [line.split()[0] for line in outputs[2]] == ["fine"] * 2 + ["centre"] * 2 + [
+    # a line per mode of the squeal run's band, by frequency
+    frequencies = [float(line.split()[0]) for line in outputs[2]]
+    assert frequencies and frequencies == sorted(frequencies)
+    assert [line.split()[0] for line in outputs[3]] == ["fine"] * 2 + ["centre"] * 2 + [
         "greedy"]

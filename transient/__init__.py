@@ -2,16 +2,16 @@
 
 The public API (transient.api): `load`, `prepare`, `run`, `modes`, `cea` (and a dry run of the
 last three), `mu_map` and its `branches`, `compat`, `compat_pairs`, `sweep` and its
-`sweep_branches`; a run's `history`, its `summary` and `export`; the studies `bench` and
-`compare_modes`.
+`sweep_branches`; a run's `history`, its `summary`, `export` and `modal_growth`; the studies
+`bench` and `compare_modes`.
 Importing the package changes nothing in the process and loads none of the stages' modules;
 `configure()` makes the settings that speed it up (the command line calls it first).
 """
 from .settings import configure
 
 __all__ = ["configure", "load", "dry_run", "prepare", "run", "modes", "cea", "mu_map", "compat",
-           "compat_pairs", "sweep", "history", "summary", "export", "bench", "compare_modes",
-           "branches", "sweep_branches"]
+           "compat_pairs", "sweep", "history", "summary", "export", "modal_growth", "bench",
+           "compare_modes", "branches", "sweep_branches"]
 __version__ = "0.1.0"
 
 # the API's functions come from transient.api on first use (PEP 562), so that importing the

@@ -3,9 +3,9 @@ command line calls before it prints. A thin layer over the stages: each function
 (`load`'s) or a run's history, runs the stages it needs and returns a plain object of arrays.
 
 Here: `transient.load`, `prepare`, `run`, `modes`, `cea`, `mu_map` and `sweep`; on an interface,
-`compat` and `compat_pairs` (api_interface); on a run's history, `history`, `summary` and
-`export` (api_results); studies of a case, `bench` and `compare_modes` (api_studies); complex
-modes over a parameter, `branches` and `sweep_branches` (api_branches).
+`compat` and `compat_pairs` (api_interface); on a run's history, `history`, `summary`, `export`
+and `modal_growth` (api_results); studies of a case, `bench` and `compare_modes` (api_studies);
+complex modes over a parameter, `branches` and `sweep_branches` (api_branches).
 
 The stages' modules (Numba, SciPy) are imported by the functions that need them, so that
 `import transient` stays light and a case's bad input is refused before they load.
@@ -15,7 +15,7 @@ from pathlib import Path
 
 from .api_branches import branches, sweep_branches
 from .api_interface import InterfaceCompatibility, compat, compat_pairs, pair_name
-from .api_results import export, history, summary
+from .api_results import export, history, modal_growth, summary
 from .api_studies import Bench, bench, compare_modes
 from .case.checks import check_transient
 from .case.loading import literal
@@ -23,8 +23,9 @@ from .case.loading import load as _load
 from .errors import CaseError
 
 __all__ = ["load", "prepare", "run", "modes", "cea", "mu_map", "compat", "compat_pairs",
-           "sweep", "history", "summary", "export", "bench", "compare_modes", "NormalModes",
-           "InterfaceCompatibility", "Campaign", "Bench", "branches", "sweep_branches"]
+           "sweep", "history", "summary", "export", "modal_growth", "bench", "compare_modes",
+           "NormalModes", "InterfaceCompatibility", "Campaign", "Bench", "branches",
+           "sweep_branches"]
 
 
 def load(path, overrides=()):

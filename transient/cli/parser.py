@@ -213,6 +213,19 @@ def _plot_parser(sub):
                    "a thousandth of it)")
     p.add_argument("--band", metavar="F0:F1", help="the series' part in this band [Hz] only "
                    "(one mode's growth among others)")
+    p = kinds.add_parser("modal-growth", help="a run with output.field read mode by mode: its "
+                         "reduced state projected on the left complex eigenvectors of its "
+                         "system linearized at its preload, each mode's amplitude in time and "
+                         "growth rate fitted over the linear phase, beside the CEA's real part "
+                         "(a PNG, a CSV and the table printed)")
+    _history_args(p, "modal-growth")
+    p.add_argument("--csv", metavar="CSV", help="table to write (default: next to the "
+                   "history, <name>_modal-growth.csv)")
+    p.add_argument("--window", metavar="T0:T1", help="times [s] fitted whole by every mode "
+                   "(default: from the loads' end over the linear phase, each mode as long "
+                   "as its log amplitude stays within --tolerance of a line)")
+    p.add_argument("--tolerance", type=float, metavar="RMS", help="RMS deviation of a mode's "
+                   "log amplitude (and phase) from its line that a fit admits (default 0.01)")
     p = kinds.add_parser("friction", help="the friction of a run with output.contact: the "
                          "sliding's input and the slip's dissipated power in time, the shares "
                          "of the contact area open, sticking (|slip| < v_eps) and slipping, and "

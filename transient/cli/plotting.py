@@ -14,7 +14,7 @@ def cmd_plot(args):
             "frf": _plot_frf, "pressure": _plot_pressure, "cea": _plot_cea,
             "spectrogram": _plot_spectrogram, "envelope": _plot_envelope,
             "friction": _plot_friction, "sweep": _plot_sweep,
-            "modal-frf": _plot_modal_frf}[args.kind](args)
+            "modal-frf": _plot_modal_frf, "modal-growth": _plot_modal_growth}[args.kind](args)
 
 
 def _plot_sweep(args):
@@ -84,6 +84,47 @@ def _plot_envelope(args):
     for name, (sigma, (t0, t1), rms) in fits.items():
         print(f"{name}: growth rate {sigma:.6g} 1/s over {t0:.6g}-{t1:.6g} s (log-envelope "
               f"RMS deviation {rms:.2g})")
+    return 0
+
+
+def _plot_modal_growth(args):
+    from ..io.lock import check_writable
+    from ..plots.growth import growth_figure, growth_rows, write_growth_csv
+    stored = api.history(args.file)
+    window = _pair_of(stored, args.window, "--window", "times [s]")
+    if args.tolerance is not None and not args.tolerance > 0:
+        raise CaseError(stored.path, "--tolerance", f"expected an RMS > 0, got "
+                        f"{args.tolerance}")
+    path = _png_path(args, stored.path)
+    table = Path(args.csv) if args.csv else path.with_suffix(".csv")
+    check_writable(path, "-o")
+    check_writable(table, "--csv")
+    result = api.modal_growth(stored.path, window=window, tolerance=args.tolerance)
+    print(f"modes of the run's linearization to the band's top, fitted from "
+          f"{result.free_from:.6g} s over the linear phase to {result.linear_end:.6g} s "
+          f"(rows every {result.stride:.4g} s)")
+    print("CEA: its real part; run: the run's own linearization's; fit: the projection's growth, "
+          "resolution: the slowest rate its window tells from neutral")
+    print(f"{'f [Hz]':>10} {'CEA [1/s]':>11} {'run [1/s]':>11} {'fit [1/s]':>11} "
+          f"{'resol.':>7} {'diff':>8} {'window [ms]':>15} {'rms':>7}")
+    for row in growth_rows(result):
+        cea = "-" if row["cea_real"] is None else f"{row['cea_real']:.5g}"
+        if row["excited"]:
+            diff = "-" if row["difference"] is None else f"{100 * row['difference']:+.2f}%"
+            fit = (f"{row['growth']:11.5g} {row['resolution']:7.2g} {diff:>8} "
+                   f"{1e3 * row['t0']:7.3f}-{1e3 * row['t1']:<7.3f} {row['rms']:7.2g}"
+                   + ("" if row["resolved"] else "  unresolved"))
+        else:
+            fit = f"{'not excited above the floor':>11}"
+        print(f"{row['frequency_hz']:10.1f} {cea:>11} {row['run_real']:11.5g} {fit}"
+              + ("  (CEA: unstable)" if row["cea_unstable"] else ""))
+    try:
+        write_growth_csv(result, table)
+    except OSError as exc:
+        raise CaseError(table, "--csv", f"cannot write: {exc}") from None
+    print(table)
+    _save(lambda: growth_figure(result, path, f"{stored.path.name}: modal amplitudes on the "
+                                "complex modes at the preload (dashed: fits)"), path)
     return 0
 
 
