@@ -131,7 +131,7 @@ def _finite(text):
 
 def _plot_cea(args):
     from ..plots.branches import branches_figure
-    from ..plots.cea import mode_figure, stability_figure
+    from ..plots.cea import mode_figure, out_of_plane, stability_figure
     from ..plots.render import RenderingUnavailable
     case = api.load(args.case, args.overrides)
     names = list(case.contact)
@@ -158,13 +158,14 @@ def _plot_cea(args):
     result, own = api.cea(case), case.contact[pair].friction.mu
     paths = [out / f"{stem}_stability.png"]
     stability_figure(result, paths[0], f"{stem}: complex modes at mu = {own:g}")
+    direction, along = out_of_plane(case, result.model)
     try:
         for row in result.shapes:
             j = row["mode"] - 1
             path = out / f"{stem}_mode_{row['mode']:03d}.png"
             mode_figure(result.model, result.displacement(j), path,
                         f"mode {row['mode']}, {row['frequency_hz']:.0f} Hz, "
-                        f"real {row['real']:.3g} 1/s")
+                        f"real {row['real']:.3g} 1/s", direction, args.colour, along)
             paths.append(path)
     except RenderingUnavailable as exc:
         print(f"error: {exc}", file=sys.stderr)
