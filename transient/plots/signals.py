@@ -2,8 +2,10 @@
 
 Numbers only, nothing is drawn: the uniform sample step of the rows (checked), the one-sided
 amplitude spectrum of a series through a Hann window, the default Welch segment length and the
-H1 transfer function between two series with its coherence (Welch averages of half-overlapping
-Hann segments). The figures of `history` draw these; tests check them directly.
+H1 transfer function to a series with its coherence (Welch averages of half-overlapping Hann
+segments, or rectangular ones end to end; an input sampled finer than the rows), as a
+receptance, mobility or accelerance. The figures of `history` and `frf` draw these; tests check
+them directly.
 """
 import numpy as np
 
