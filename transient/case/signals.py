@@ -174,7 +174,8 @@ def compile_signals(specs, keys=None):
 
 
 def evaluate(spec, t):
-    """Reference NumPy evaluation of one signal at the times t [s] (for tests)."""
+    """Reference NumPy evaluation of one signal at the times t [s]: the tests check the
+    kernels against it, and a history's pictures rebuild the load a run applied with it."""
     s = check_signal(spec)
     t = np.asarray(t, dtype=float)
     kind = s["kind"]

@@ -3,6 +3,9 @@ import argparse
 
 from .. import __version__
 
+FMAX_HELP = ("highest frequency drawn [Hz] (default: the model's band, the fmax of the case "
+             "the history keeps, as transient cea takes it; inf: half the sample rate)")
+
 
 def _case_args(p):
     p.add_argument("case", help="case file (TOML)")
@@ -154,6 +157,10 @@ def _plot_parser(sub):
                    "(or a comma-separated list), e.g. 0:0.6:13: one analysis each")
     p.add_argument("--pair", metavar="NAME", help="contact pair whose mu the map varies "
                    "(default: the first)")
+    p.add_argument("--colour", choices=("out-of-plane", "magnitude"), default="out-of-plane",
+                   help="the modes' colour: the signed displacement along the rotation's axis "
+                   "(or the model's thinnest direction), whose zero is the nodal lines, or "
+                   "its magnitude |u| (default out-of-plane)")
     p = kinds.add_parser("modal-frf", help="the transfer function between two sensors from "
                          "the case's modes (contact tied as solver.modes.tie says) against the "
                          "same case with other settings, and each mode's frequency shift (the "
@@ -177,33 +184,46 @@ def _plot_parser(sub):
     series = ("scalar series to draw: full names (sensors/tip, energy/kinetic) or groups "
               "(sensors, energy); default: every sensor")
     p = kinds.add_parser("history", help="time histories of a history's sensors (or energy "
-                         "terms), time in ms")
+                         "terms), time in ms; each sensor about its preload")
     _history_args(p, "history")
     p.add_argument("--series", nargs="+", metavar="NAME", help=series)
+    p.add_argument("--keep-preload", action="store_true", help="draw the sensors' values as "
+                   "stored, their preload included (default: each about its value at the "
+                   "run's first row, the preload it starts from)")
     p = kinds.add_parser("spectrum", help="amplitude spectra (Hann window, one-sided, log "
                          "amplitude) of a history's sensors, frequency in kHz")
     _history_args(p, "spectrum")
     p.add_argument("--series", nargs="+", metavar="NAME", help=series)
-    p.add_argument("--fmax", type=float, metavar="HZ", help="highest frequency drawn [Hz] "
-                   "(default: half the sample rate)")
-    p = kinds.add_parser("frf", help="transfer function between two series of a history: "
-                         "H1 = Pxy / Pxx from Welch averages, magnitude, phase and coherence")
+    p.add_argument("--fmax", type=float, metavar="HZ", help=FMAX_HELP)
+    p = kinds.add_parser("frf", help="transfer function to a sensor of a history from a load "
+                         "of its run (receptance, mobility or accelerance) or from another "
+                         "series: H1 = Pxy / Pxx from Welch averages, magnitude, phase and "
+                         "coherence")
     _history_args(p, "frf")
-    p.add_argument("--input", required=True, metavar="NAME", help="input series, e.g. "
-                   "sensors/tip")
+    p.add_argument("--input", metavar="NAME", help="loads/NAME, a load of the run's case "
+                   "(its size times its signal, rebuilt from the case the history keeps), or "
+                   "a series, e.g. sensors/tip (default: the case's one load that varies in "
+                   "time)")
     p.add_argument("--output", required=True, metavar="NAME", help="output series, e.g. "
                    "sensors/tail")
+    # not args.kind: that is the picture's (plot KIND)
+    p.add_argument("--kind", dest="frf_kind", choices=("receptance", "mobility",
+                                                       "accelerance"),
+                   help="from a load: displacement, velocity or acceleration per unit of the "
+                   "load (default receptance)")
+    p.add_argument("--window", choices=("hann", "rectangular"), help="Welch segments: Hann, "
+                   "half overlapping, or rectangular, end to end (default: rectangular from "
+                   "the start of an impulse load, Hann otherwise)")
     p.add_argument("--segment", type=int, metavar="SAMPLES", help="samples per Welch segment "
                    "(default: the largest power of two up to a quarter of the rows)")
-    p.add_argument("--fmax", type=float, metavar="HZ", help="highest frequency drawn [Hz] "
-                   "(default: half the sample rate)")
+    p.add_argument("--fmax", type=float, metavar="HZ", help=FMAX_HELP)
     p = kinds.add_parser("spectrogram", help="time-frequency map of a series of a history: "
                          "short-time amplitude spectra in dB")
     _history_args(p, "spectrogram")
     p.add_argument("--series", metavar="NAME", help="the series (default: the first sensor)")
     p.add_argument("--segment", type=int, metavar="SAMPLES", help="samples per segment "
                    "(default: half the transfer function's default)")
-    p.add_argument("--fmax", type=float, metavar="HZ", help="highest frequency drawn [Hz]")
+    p.add_argument("--fmax", type=float, metavar="HZ", help=FMAX_HELP)
     p = kinds.add_parser("envelope", help="envelopes of a history's series and their "
                          "exponential growth (or decay) rate fitted over the linear phase")
     _history_args(p, "envelope")

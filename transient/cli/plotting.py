@@ -172,7 +172,7 @@ def _finite(text):
 
 def _plot_cea(args):
     from ..plots.branches import branches_figure
-    from ..plots.cea import mode_figure, stability_figure
+    from ..plots.cea import mode_figure, out_of_plane, stability_figure
     from ..plots.render import RenderingUnavailable
     case = api.load(args.case, args.overrides)
     names = list(case.contact)
@@ -199,13 +199,14 @@ def _plot_cea(args):
     result, own = api.cea(case), case.contact[pair].friction.mu
     paths = [out / f"{stem}_stability.png"]
     stability_figure(result, paths[0], f"{stem}: complex modes at mu = {own:g}")
+    direction, along = out_of_plane(case, result.model)
     try:
         for row in result.shapes:
             j = row["mode"] - 1
             path = out / f"{stem}_mode_{row['mode']:03d}.png"
             mode_figure(result.model, result.displacement(j), path,
                         f"mode {row['mode']}, {row['frequency_hz']:.0f} Hz, "
-                        f"real {row['real']:.3g} 1/s")
+                        f"real {row['real']:.3g} 1/s", direction, args.colour, along)
             paths.append(path)
     except RenderingUnavailable as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -264,7 +265,7 @@ def _plot_history(args):
     stored = api.history(args.file)
     names = select_series(stored, args.series)
     path = _png_path(args, stored.path)
-    _save(lambda: history_figure(stored, names, path), path)
+    _save(lambda: history_figure(stored, names, path, args.keep_preload), path)
     return 0
 
 
@@ -279,17 +280,33 @@ def _plot_spectrum(args):
 
 
 def _plot_frf(args):
-    from ..plots.history import MIN_SEGMENT, frf_figure, one_series
+    from ..plots.frf import LOADS, frf_figure
+    from ..plots.history import MIN_SEGMENT, one_series
     stored = api.history(args.file)
     _check_fmax(stored, args.fmax)
-    source = one_series(stored, args.input, "--input")
+    source = args.input or LOADS + _varying_load(stored)
+    if not source.startswith(LOADS):
+        source = one_series(stored, source, "--input")
     response = one_series(stored, args.output, "--output")
     if args.segment is not None and args.segment < MIN_SEGMENT:
         raise CaseError(stored.path, "--segment", f"expected at least {MIN_SEGMENT} samples, "
                         f"got {args.segment}")
     path = _png_path(args, stored.path)
-    _save(lambda: frf_figure(stored, source, response, path, args.segment, args.fmax), path)
+    _save(lambda: frf_figure(stored, source, response, path, args.segment, args.fmax,
+                             args.frf_kind, args.window), path)
     return 0
+
+
+def _varying_load(stored):
+    """The name of the one load of a history's case whose signal is not constant: the
+    input a transfer function is from when none is named."""
+    varying = [n for n, load in stored.case().loads.items()
+               if load.signal["kind"] != "constant"]
+    if len(varying) != 1:
+        raise stored.error("--input", f"{len(varying)} loads of the run vary in time "
+                           f"({', '.join(varying) or 'none'}): name the input, loads/NAME or a "
+                           "series such as sensors/tip")
+    return varying[0]
 
 
 def _check_fmax(stored, fmax):

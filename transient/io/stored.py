@@ -108,12 +108,54 @@ class Stored:
                 raise self.error(exc.key, f"damaged history: {exc.message}") from None
         return run_case(self.path, {**self.meta, CASE_TEXT: text})
 
+    def applied_load(self, name):
+        """The load `name` of the case the history keeps (its `loads.NAME`), as the run applied
+        it: an AppliedLoad whose `values(t)` rebuild its amplitude at the rows' times."""
+        loads = self.case().loads
+        if name not in loads:
+            raise self.error("--input", f"no load '{name}' in the run's case (loads: "
+                             f"{', '.join(loads) or 'none'})")
+        load = loads[name]
+        if load.kind == "pressure":
+            size, direction = load.value, None
+        else:
+            size = float(np.linalg.norm(load.vector))
+            direction = np.asarray(load.vector, float) / size if size > 0 else None
+        if load.signal["kind"] == "constant" or size == 0:
+            raise self.error("--input", f"load '{name}' does not vary in time (signal "
+                             f"{load.signal['kind']}, size {size:g}): it is part of the "
+                             "preload, no input of a transfer function")
+        return AppliedLoad(name, load.kind, LOAD_UNITS[load.kind], size, direction,
+                           dict(load.signal))
+
     def pairs(self):
         """Contact pair name -> its description (rule, points, regularized, eps, law)."""
         return self.meta.get("pairs") or {}
 
     def error(self, key, message):
         return CaseError(self.path, key, message)
+
+
+LOAD_UNITS = {"force": "N", "pressure": "Pa", "gravity": "m/s^2"}
+
+
+@dataclass(frozen=True)
+class AppliedLoad:
+    """A load of a run's case: its size (|vector| of a force [N] or of gravity [m/s^2], the
+    value of a pressure [Pa]) times its time signal (case.signals) is the amplitude the run
+    applied; the force's (or gravity's) direction, None for a pressure (normal to its faces)."""
+    name: str
+    kind: str                # force, pressure, gravity
+    unit: str
+    size: float
+    direction: np.ndarray    # (3,) unit vector, or None
+    signal: dict             # kind and that kind's keys
+
+    def values(self, t):
+        """The amplitude at times t [s], in `unit`: the signal evaluated as the kernels
+        evaluate it at each step (case.signals.evaluate, their reference)."""
+        from ..case.signals import evaluate
+        return self.size * evaluate(self.signal, t)
 
 
 def run_case(path, meta):

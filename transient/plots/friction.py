@@ -3,7 +3,7 @@ sticking and slipping, and the status map on Gamma at a time (`transient plot fr
 import numpy as np
 
 from ..contact.friction import STATUS_NAMES, contact_status, friction_powers
-from .history import _figure, _title
+from .history import _figure, _suptitle, _title
 from .pressure import contact_pair, plane_frame
 
 COLOURS = ("#bbbbbb", "#1f77b4", "#d62728")     # open, stick, slip
@@ -62,6 +62,6 @@ def friction_figure(stored, series, path, time=None):
     where.set_xlabel("[mm]")
     where.set_title(f"t = {t[row] * 1e3:.4g} ms", fontsize=9)
     where.legend(fontsize=8, loc="best")
-    fig.suptitle(f"{_title(stored)}: friction on pair '{series['pair']}'")
+    _suptitle(fig, f"{_title(stored)}: friction on pair '{series['pair']}'")
     fig.savefig(path, dpi=110)
     return row

@@ -1,27 +1,35 @@
-"""Pictures of a history (PNG): time histories, amplitude spectra, the transfer function between
-two sensors (the paper's figure 11) and contact pressure maps on Gamma (figure 10).
+"""Pictures of a history (PNG): time histories, amplitude spectra, spectrograms, envelopes and
+contact pressure maps on Gamma (the paper's figure 10); transfer functions are in `frf`.
 
 This module holds the choice of the series to draw and the figures. The numbers drawn come from
 functions that draw nothing, so tests check them directly: `amplitude_spectrum` and
-`transfer_function` in `signals`, `contact_force`, `plane_frame` and `pressure_panels` in
-`pressure`. Figures are matplotlib `Figure`s saved through the Agg canvas, with no pyplot state.
+`spectrogram` in `signals`, `contact_force`, `plane_frame` and `pressure_panels` in
+`pressure`. Figures are matplotlib `Figure`s on the Agg canvas, with no pyplot state; each
+figure function returns its Figure, saved.
+
+What a squeal engineer reads by default: a sensor drawn about its preload (the run's first row,
+the state it starts from), frequency axes to the model's band (`model_band`) rather than the
+rows' Nyquist frequency, and titles wrapped to the figure's width.
 """
+import textwrap
+
 import numpy as np
 
 from .pressure import plane_frame, pressure_panels
 from .signals import (MIN_SEGMENT, amplitude_spectrum, default_segment, envelope,
-                      growth_rate, peak_pooled, sample_step, spectrogram, transfer_function)
+                      growth_rate, peak_pooled, sample_step, spectrogram)
 
-__all__ = ["MIN_SEGMENT", "select_series", "one_series", "history_figure", "spectrum_figure",
-           "frf_figure", "spectrogram_figure", "envelope_figure", "pressure_panels",
+__all__ = ["MIN_SEGMENT", "select_series", "one_series", "model_band", "history_figure",
+           "spectrum_figure", "spectrogram_figure", "envelope_figure", "pressure_panels",
            "pressure_figure"]
 
 UNITS = {"sensors": "m", "energy": "J"}      # unit of the series of each group
-MIN_DB_SPAN = 20.0      # smallest range of the magnitude axis of a transfer function [dB]
+PRELOADED = ("sensors",)    # the groups drawn about their preload (displacements)
 CONTOUR_POINTS = 100    # from this many contact points a map is filled contours, not markers
 LONG_EDGE = 4.0         # triangles with an edge this many times the median edge are not drawn
 CMAP = "viridis"        # sequential: pressure has one sign
 MARKER_AREA = 0.5       # marker area / point weight: markers of neighbours do not overlap
+TITLE_MARGIN = 0.01     # part of the figure's width left free on each side of its title
 
 
 def select_series(stored, names):
@@ -69,13 +77,64 @@ def one_series(stored, name, key):
 
 
 def _figure(width, height):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
-    return Figure(figsize=(width, height), layout="constrained")
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)        # its renderer measures the titles
+    return fig
 
 
 def _title(stored):
     status = stored.meta["status"]
     return stored.path.name + ("" if status == "complete" else f" ({status})")
+
+
+def _suptitle(fig, text):
+    """The figure's title, wrapped onto as many lines as it takes to fit the figure's width
+    (a word longer than a line, a long file name, is broken): a title one line long ran past
+    both edges of the picture. Returns the Text."""
+    renderer = fig.canvas.get_renderer()
+    room = fig.bbox.width * (1 - 2 * TITLE_MARGIN)
+    title = fig.suptitle(text)
+    columns = len(text)
+    while title.get_window_extent(renderer).width > room and columns > 1:
+        # the columns that fit at the mean width of a character, then one fewer until it fits
+        wide = title.get_window_extent(renderer).width
+        longest = max(len(line) for line in title.get_text().split("\n"))
+        columns = max(1, min(columns - 1, int(longest * room / wide)))
+        title.set_text("\n".join(textwrap.fill(line, columns, break_on_hyphens=False)
+                                  for line in text.split("\n")))
+    return title
+
+
+def model_band(stored):
+    """(fmax [Hz], its case key) of the model a history was run with, the band its answer
+    holds (stability.stage.fmax_of, the band `transient cea` reports: solver.reduction.fmax of
+    a reduced model, of a full one solver.modes.fmax when set), from the case the history
+    keeps; (None, reason) when it keeps none that loads: the frequency axes then run to the
+    rows' Nyquist frequency."""
+    from ..errors import CaseError
+    from ..stability.stage import fmax_of
+    try:
+        case = stored.case()
+    except CaseError as exc:
+        return None, exc.message
+    solver = case.solver
+    key = ("solver.modes.fmax" if not solver.reduction.enabled and solver.modes.fmax
+           else "solver.reduction.fmax")
+    return float(fmax_of(case)), key
+
+
+def frequency_top(stored, dt, fmax=None):
+    """The top of a frequency axis [Hz] and what set it: fmax asked, else the model's band,
+    at most the Nyquist frequency 1 / (2 dt) of the rows."""
+    nyquist = 0.5 / dt
+    if fmax is not None:
+        return min(fmax, nyquist), ("--fmax" if fmax < nyquist else "the Nyquist frequency")
+    band, key = model_band(stored)
+    if band is None or band >= nyquist:
+        return nyquist, "the Nyquist frequency"
+    return band, f"the model's band, {key}"
 
 
 def _groups(names):
@@ -91,30 +150,39 @@ def _label(group):
     return f"{group} [{unit}]" if unit else group
 
 
-def history_figure(stored, names, path):
-    """Time histories of scalar series, one panel per group, time in ms."""
+def history_figure(stored, names, path, keep_preload=False):
+    """Time histories of scalar series, one panel per group, time in ms; each sensor drawn
+    about its preload, its value at the run's first row (the state the run starts from, which
+    the stages' preload sets), unless keep_preload: the vibration is a small part of a sensor's
+    static offset under the clamp force, and would be drawn flat on its scale."""
     t = stored.time()
     groups = _groups(names)
     fig = _figure(10, 1.2 + 2.6 * len(groups))
     axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
     for ax, (group, members) in zip(axes, groups.items()):
+        about = group in PRELOADED and not keep_preload and len(t) > 0
         for name in members:
-            ax.plot(t * 1e3, stored.read(name), lw=1, label=name.split("/", 1)[1])
-        ax.set_ylabel(_label(group))
+            x, label = stored.read(name), name.split("/", 1)[1]
+            if about:
+                x, label = x - x[0], f"{label} (preload {x[0]:.4g} {UNITS[group]})"
+            ax.plot(t * 1e3, x, lw=1, label=label)
+        ax.set_ylabel(f"{group} about the preload [{UNITS[group]}]" if about
+                      else _label(group))
         ax.grid(alpha=0.3)
         ax.legend(loc="best", fontsize=8)
     axes[-1].set_xlabel("time [ms]")
-    fig.suptitle(f"{_title(stored)}: time histories")
+    _suptitle(fig, f"{_title(stored)}: time histories")
     fig.savefig(path, dpi=110)
+    return fig
 
 
 def spectrum_figure(stored, names, path, fmax=None):
     """Amplitude spectra (Hann window, one-sided, log amplitude) of scalar series, frequency in
-    kHz, one panel per group."""
+    kHz, one panel per group, to fmax [Hz] or the model's band (`frequency_top`)."""
     stored = stored.uniform()
     t = stored.time()
     dt = sample_step(stored, t)
-    top = min(fmax or np.inf, 0.5 / dt)        # at most the Nyquist frequency [Hz]
+    top, why = frequency_top(stored, dt, fmax)
     groups = _groups(names)
     fig = _figure(10, 1.2 + 2.8 * len(groups))
     axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
@@ -130,9 +198,11 @@ def spectrum_figure(stored, names, path, fmax=None):
         ax.legend(loc="best", fontsize=8)
     axes[-1].set_xlim(0, top / 1e3)
     axes[-1].set_xlabel("frequency [kHz]")
-    fig.suptitle(f"{_title(stored)}: amplitude spectra ({len(t)} samples of "
-                 f"{dt * 1e6:.4g} us, Hann window, resolution {1e-3 / (len(t) * dt):.3g} kHz)")
+    _suptitle(fig, f"{_title(stored)}: amplitude spectra ({len(t)} samples of "
+              f"{dt * 1e6:.4g} us, Hann window, resolution {1e-3 / (len(t) * dt):.3g} kHz; "
+              f"to {top / 1e3:.4g} kHz, {why})")
     fig.savefig(path, dpi=110)
+    return fig
 
 
 SPECTROGRAM_ROWS = 400   # frequency rows drawn at most: about the map's height in pixels
@@ -140,7 +210,8 @@ SPECTROGRAM_ROWS = 400   # frequency rows drawn at most: about the map's height 
 
 def spectrogram_figure(stored, name, path, segment=None, fmax=None):
     """Time-frequency map of one series: short-time amplitude spectra in dB (Hann segments
-    overlapping by three quarters), time in ms, frequency in kHz."""
+    overlapping by three quarters), time in ms, frequency in kHz to fmax [Hz] or the model's
+    band (`frequency_top`)."""
     stored = stored.uniform()
     t = stored.time()
     dt = sample_step(stored, t)
@@ -150,7 +221,7 @@ def spectrogram_figure(stored, name, path, segment=None, fmax=None):
         raise stored.error("--segment", f"the history has {n} rows, fewer than the segment of "
                            f"{segment}")
     f, tc, A = spectrogram(stored.read(name), dt, segment)
-    top = min(fmax or np.inf, 0.5 / dt)
+    top, why = frequency_top(stored, dt, fmax)
     keep = f <= top
     f, A = peak_pooled(f[keep], A[keep], SPECTROGRAM_ROWS)
     with np.errstate(divide="ignore"):
@@ -162,8 +233,11 @@ def spectrogram_figure(stored, name, path, segment=None, fmax=None):
     fig.colorbar(mesh, ax=ax, label="amplitude [dB re peak]")
     ax.set_xlabel("time [ms]")
     ax.set_ylabel("frequency [kHz]")
-    ax.set_title(f"{_title(stored)}: {name} (segments of {segment} rows)")
+    ax.set_ylim(0, top / 1e3)
+    _suptitle(fig, f"{_title(stored)}: {name} (segments of {segment} rows; to "
+              f"{top / 1e3:.4g} kHz, {why})")
     fig.savefig(path, dpi=110)
+    return fig
 
 
 def envelope_figure(stored, names, path, window=None, band=None):
@@ -198,61 +272,9 @@ def envelope_figure(stored, names, path, window=None, band=None):
     for ax in (top, bottom):
         ax.grid(alpha=0.3)
     what = f", band {band[0]:g}-{band[1]:g} Hz" if band else ""
-    fig.suptitle(f"{_title(stored)}: envelopes and growth rates (dashed: fit){what}")
+    _suptitle(fig, f"{_title(stored)}: envelopes and growth rates (dashed: fit){what}")
     fig.savefig(path, dpi=110)
     return fits
-
-
-def frf_figure(stored, source, response, path, segment=None, fmax=None):
-    """Transfer function from one series to another (H1, Welch): magnitude in dB, phase and
-    coherence against frequency in kHz, the paper's figure 11.
-
-    Raises CaseError when the history has fewer rows than a segment.
-    """
-    stored = stored.uniform()
-    t = stored.time()
-    dt = sample_step(stored, t)
-    n = len(t)
-    if segment is None:
-        if n < MIN_SEGMENT:
-            raise stored.error("--segment", f"{n} rows: too short for a transfer function "
-                               f"(at least {MIN_SEGMENT} rows; run longer)")
-        segment = default_segment(n)
-    if segment > n:
-        raise stored.error("--segment", f"the history has {n} rows, fewer than the segment of "
-                           f"{segment} samples (use --segment <= {n}, or run longer)")
-    f, H, coherence = transfer_function(stored.read(source), stored.read(response), dt, segment)
-    averages = 1 + (n - segment) // (segment - segment // 2)
-    top = min(fmax or np.inf, 0.5 / dt)        # at most the Nyquist frequency [Hz]
-    shown = f <= top                           # so that each axis fits what is drawn
-    f, H, coherence = f[shown] / 1e3, H[shown], coherence[shown]
-    fig = _figure(10, 8)
-    ax, bx, cx = fig.subplots(3, 1, sharex=True, height_ratios=(2, 1, 1))
-    with np.errstate(divide="ignore"):
-        db = 20 * np.log10(np.abs(H))
-    ax.plot(f, db, lw=1, color="tab:blue")
-    finite = db[np.isfinite(db)]
-    if len(finite) and np.ptp(finite) < MIN_DB_SPAN:
-        # a flat |H| (a sensor against itself) would show round-off across the whole axis
-        middle = 0.5 * (finite.min() + finite.max())
-        ax.set_ylim(middle - MIN_DB_SPAN / 2, middle + MIN_DB_SPAN / 2)
-    ax.set_ylabel(f"|H| [dB re 1{_unit_ratio(source, response)}]")
-    bx.plot(f, np.degrees(np.angle(H)), lw=1, color="tab:blue")
-    bx.set(ylabel="phase [deg]", ylim=(-185, 185), yticks=(-180, -90, 0, 90, 180))
-    cx.plot(f, coherence, lw=1, color="tab:green")
-    cx.set(ylabel="coherence", ylim=(-0.02, 1.05), xlabel="frequency [kHz]")
-    cx.set_xlim(0, top / 1e3)
-    for a in (ax, bx, cx):
-        a.grid(alpha=0.3)
-    fig.suptitle(f"{_title(stored)}: H1 from {source} to {response} ({averages} Hann segments "
-                 f"of {segment} samples, half overlapping; resolution "
-                 f"{1e-3 / (segment * dt):.3g} kHz)")
-    fig.savefig(path, dpi=110)
-
-
-def _unit_ratio(source, response):
-    units = UNITS.get(source.split("/")[0], "-"), UNITS.get(response.split("/")[0], "-")
-    return "" if units[0] == units[1] else f" {units[1]}/{units[0]}"
 
 
 def pressure_figure(panels, path):
@@ -295,8 +317,8 @@ def pressure_figure(panels, path):
     ax_list[0].set_ylim(every[:, 1].min() - pad, every[:, 1].max() + pad)
     fig.colorbar(ScalarMappable(norm, CMAP), ax=list(ax_list), label="contact pressure [MPa]",
                  shrink=0.9)
-    fig.suptitle(f"contact pressure on pair '{panels[0]['pair']}', seen from surface 1"
-                 + (f"\nmarker area: {MARKER_AREA:g} x the point's weight" if markers else ""))
+    _suptitle(fig, f"contact pressure on pair '{panels[0]['pair']}', seen from surface 1"
+              + (f"\nmarker area: {MARKER_AREA:g} x the point's weight" if markers else ""))
     if markers:
         fig.draw_without_rendering()
         for ax, scatter, w in markers:

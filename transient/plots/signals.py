@@ -2,13 +2,18 @@
 
 Numbers only, nothing is drawn: the uniform sample step of the rows (checked), the one-sided
 amplitude spectrum of a series through a Hann window, the default Welch segment length and the
-H1 transfer function between two series with its coherence (Welch averages of half-overlapping
-Hann segments). The figures of `history` draw these; tests check them directly.
+H1 transfer function to a series with its coherence (Welch averages of half-overlapping Hann
+segments, or rectangular ones end to end; an input sampled finer than the rows), as a
+receptance, mobility or accelerance. The figures of `history` and `frf` draw these; tests check
+them directly.
 """
 import numpy as np
 
 UNIFORM = 1e-6          # relative spread of the time differences still taken as one step
 MIN_SEGMENT = 16        # fewest samples of a Welch segment for a transfer function
+WINDOWS = {"hann": "hann", "rectangular": "boxcar"}     # Welch windows by name (SciPy's)
+# a transfer function per unit force [m/N] as a receptance, and times i omega, (i omega)^2
+FRF_KINDS = {"receptance": 0, "mobility": 1, "accelerance": 2}
 
 
 def sample_step(stored, time):
@@ -60,20 +65,32 @@ def default_segment(n):
     return max(MIN_SEGMENT, 2 ** int(np.floor(np.log2(max(n // 4, 1)))))
 
 
-def transfer_function(x, y, dt, segment):
+def transfer_function(x, y, dt, segment, window="hann", oversample=1):
     """H1 estimate of the transfer function from x to y and its coherence (Welch averages).
 
-    H1 = P_xy / P_xx, coherence |P_xy|^2 / (P_xx P_yy), with Hann segments overlapping by half,
-    each with its mean removed.
+    H1 = P_xy / P_xx, coherence |P_xy|^2 / (P_xx P_yy), each segment with its mean removed:
+    Hann segments overlapping by half, or rectangular ones end to end (an impulse's: the force
+    and the response it starts are not tapered, and the coherence is the share of the
+    response's power that the segment holding the impulse holds).
 
     Parameters
     ----------
-    x, y : (n,) arrays
-        Input and output samples.
+    x : (n * oversample,) array
+        Input samples, `oversample` of them per sample of y, the first at y's first: a load
+        evaluated finer than the rows. Each segment's transform is then that of the finer
+        samples, kept to the rows' frequencies: the input's spectrum above the rows' Nyquist
+        frequency is left out where the rows' own samples would fold it back onto the band (a
+        tap a few rows long has a few percent of its spectrum there).
+    y : (n,) array
+        Output samples.
     dt : float
-        Sample step [s].
+        Sample step of y [s].
     segment : int
-        Samples per segment, at most n.
+        Samples of y per segment, at most n.
+    window : str
+        "hann" or "rectangular".
+    oversample : int
+        Samples of x per sample of y.
 
     Returns
     -------
@@ -84,15 +101,45 @@ def transfer_function(x, y, dt, segment):
     coherence : array
         Between 0 and 1; NaN where x or y has no power.
     """
-    from scipy.signal import csd, welch
-    kw = {"fs": 1.0 / dt, "window": "hann", "nperseg": segment, "detrend": "constant"}
-    f, pxx = welch(x, **kw)
-    _, pyy = welch(y, **kw)
-    _, pxy = csd(x, y, **kw)
+    y = np.asarray(y, dtype=float)
+    step = segment - segment // 2 if window == "hann" else segment
+    starts = np.arange(0, len(y) - segment + 1, step)
+    X = _segment_spectra(x, starts * oversample, segment * oversample, window)
+    X = X[:, :segment // 2 + 1] / oversample
+    Y = _segment_spectra(y, starts, segment, window)
+    pxy = np.sum(np.conj(X) * Y, axis=0)
+    pxx = np.sum(np.abs(X) ** 2, axis=0)
+    pyy = np.sum(np.abs(Y) ** 2, axis=0)
+    # no power: at the round-off of the largest, as the mean removed leaves at 0 Hz
+    floor = (np.finfo(float).eps * segment) ** 2
+    powered = (pxx > floor * pxx.max()) & (pyy > floor * pyy.max())
     with np.errstate(divide="ignore", invalid="ignore"):
-        H = np.where(pxx > 0, pxy / pxx, np.nan)
-        coherence = np.where((pxx > 0) & (pyy > 0), np.abs(pxy) ** 2 / (pxx * pyy), np.nan)
-    return f, H, coherence
+        H = np.where(pxx > floor * pxx.max(), pxy / pxx, np.nan)
+        coherence = np.where(powered, np.abs(pxy) ** 2 / (pxx * pyy), np.nan)
+    return np.fft.rfftfreq(segment, dt), H, coherence
+
+
+def _segment_spectra(x, starts, length, window):
+    """(k, length // 2 + 1) the one-sided DFT of each segment of x from `starts`, its mean
+    removed, through the window (SciPy's periodic Hann, as Welch takes it, or none)."""
+    from scipy.signal import get_window
+    segments = np.lib.stride_tricks.sliding_window_view(np.asarray(x, float), length)[starts]
+    segments = segments - segments.mean(axis=1, keepdims=True)
+    return np.fft.rfft(segments * get_window(WINDOWS[window], length), axis=1)
+
+
+def segments_averaged(n, segment, window):
+    """The number of Welch segments of `segment` samples in n: half-overlapping Hann ones, or
+    rectangular ones end to end."""
+    step = segment - segment // 2 if window == "hann" else segment
+    return 1 + (n - segment) // step
+
+
+def derived(f, H, kind):
+    """A receptance H (displacement per input) as the kind asked: itself, the mobility
+    i omega H (velocity) or the accelerance -omega^2 H (acceleration), omega = 2 pi f: the
+    derivatives of the response in time, exact on its Fourier transform."""
+    return H * (2j * np.pi * np.asarray(f)) ** FRF_KINDS[kind]
 
 
 def envelope(x, dt, band=None):
