@@ -131,6 +131,30 @@ def test_frequency_axes_end_at_the_model_band(rod, tmp_path):
     assert whole.axes[-1].get_xlim()[1] == pytest.approx(nyquist / 1e3, rel=1e-6)
 
 
+def test_a_full_models_axes_run_to_the_nyquist_frequency(tmp_path):
+    """A full model holds every mode its mesh resolves: with no solver.modes.fmax its run has
+    no band, and the axes run to the rows' Nyquist frequency (the unused default
+    solver.reduction.fmax is none of its, above which bar_impact's first mode lies)."""
+    text = (CASE.replace("enabled = true", "enabled = false")
+            .replace("t_end = 0.128", "t_end = 2e-4\ndt = 2e-6")
+            .replace('scheme = "exponential"', 'scheme = "implicit"')
+            .replace("modal = 0.02", "beta = 1e-7"))
+    path = tmp_path / "full.toml"
+    path.write_text(text)
+    run(parse(text, path), tmp_path / "full.h5")
+    stored = open_history(tmp_path / "full.h5")
+    nyquist = 0.5 / float(np.diff(stored.time()[:2])[0])
+    top = spectrum_figure(stored, ["sensors/tip"], tmp_path / "s.png").axes[-1].get_xlim()[1]
+    assert top == pytest.approx(nyquist / 1e3, rel=1e-6)
+    with_band = text.replace("[solver.reduction]", "[solver.modes]\nfmax = 4000.0\n"
+                             "[solver.reduction]")
+    path.write_text(with_band)
+    run(parse(with_band, path), tmp_path / "band.h5")
+    banded = spectrum_figure(open_history(tmp_path / "band.h5"), ["sensors/tip"],
+                             tmp_path / "b.png")
+    assert banded.axes[-1].get_xlim()[1] == pytest.approx(4.0)
+
+
 def test_titles_lie_inside_the_figure(rod, tmp_path):
     """A history with a long name: its frf title, one line, would run past both edges of the
     picture; wrapped, every title's extent lies inside the figure."""

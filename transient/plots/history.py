@@ -111,8 +111,8 @@ def model_band(stored):
     """(fmax [Hz], its case key) of the model a history was run with, the band its answer
     holds (stability.stage.fmax_of, the band `transient cea` reports: solver.reduction.fmax of
     a reduced model, of a full one solver.modes.fmax when set), from the case the history
-    keeps; (None, reason) when it keeps none that loads: the frequency axes then run to the
-    rows' Nyquist frequency."""
+    keeps; (None, reason) when it keeps none that loads, or a full model sets no band: the
+    frequency axes then run to the rows' Nyquist frequency."""
     from ..errors import CaseError
     from ..stability.stage import fmax_of
     try:
@@ -120,8 +120,11 @@ def model_band(stored):
     except CaseError as exc:
         return None, exc.message
     solver = case.solver
-    key = ("solver.modes.fmax" if not solver.reduction.enabled and solver.modes.fmax
-           else "solver.reduction.fmax")
+    if not solver.reduction.enabled and not solver.modes.fmax:
+        # a full model holds every mode its mesh resolves: solver.reduction.fmax, unused,
+        # is no band of it (bar_impact's first mode is above its default)
+        return None, "a full model without solver.modes.fmax"
+    key = "solver.modes.fmax" if not solver.reduction.enabled else "solver.reduction.fmax"
     return float(fmax_of(case)), key
 
 
