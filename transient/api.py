@@ -2,10 +2,10 @@
 command line calls before it prints. A thin layer over the stages: each function takes a case
 (`load`'s) or a run's history, runs the stages it needs and returns a plain object of arrays.
 
-Here: `transient.load`, `prepare`, `run`, `modes`, `cea`, `mu_map` and `sweep`; on an interface,
+Here: `transient.load`, `prepare`, `run`, `modes`, `cea` and `sweep`; on an interface,
 `compat` and `compat_pairs` (api_interface); on a run's history, `history`, `summary`, `export`
 and `modal_growth` (api_results); studies of a case, `bench` and `compare_modes` (api_studies);
-complex modes over a parameter, `branches` and `sweep_branches` (api_branches).
+complex modes over a parameter, `mu_map`, `branches` and `sweep_branches` (api_branches).
 
 The stages' modules (Numba, SciPy) are imported by the functions that need them, so that
 `import transient` stays light and a case's bad input is refused before they load.
@@ -13,8 +13,8 @@ The stages' modules (Numba, SciPy) are imported by the functions that need them,
 from dataclasses import dataclass
 from pathlib import Path
 
-from .api_branches import branches, sweep_branches
-from .api_interface import InterfaceCompatibility, compat, compat_pairs, pair_name
+from .api_branches import branches, mu_map, sweep_branches
+from .api_interface import InterfaceCompatibility, compat, compat_pairs
 from .api_results import export, history, modal_growth, summary
 from .api_studies import Bench, bench, compare_modes
 from .case.checks import check_transient
@@ -293,45 +293,6 @@ def cea(case, matrices=False, workers=0, scheduler=None, cache=None, on_part=Non
     except OSError as exc:
         raise CaseError(case.directory / case.output.vtu, "output.vtu",
                         f"cannot write: {exc}") from None
-
-
-def mu_map(case, mus, pair=None):
-    """The complex modes of a case at each of several friction coefficients on one pair,
-    sharing the model, the contact's geometry and the factorization (and the basis, for
-    variants equal on a ``basis_mu``), as ``transient plot cea --mu`` maps them.
-
-    Parameters
-    ----------
-    case : Case
-        From `load`; its own friction is not among the map's unless given in ``mus``.
-    mus : sequence of float
-        The friction coefficients (>= 0).
-    pair : str, optional
-        The pair whose ``friction.mu`` varies; by default the case's first.
-
-    Returns
-    -------
-    list of Analysis
-        One per value of ``mus``, as `cea` returns it.
-    """
-    from .shared import build_shared, stage_key
-    from .stability.stage import analyse, analysed_case
-    name = pair_name(case, pair)
-    if not len(mus) or min(mus) < 0:
-        raise CaseError(case.path, "mus", "expected friction coefficients >= 0")
-    # every variant is checked at load before the first analysis (float: NumPy 2's repr of
-    # its own floats, np.float64(0.2), is no TOML literal)
-    variants = [_load(case.path, list(case.overrides)
-                      + [f"contact.{name}.friction.mu={float(mu)!r}"]) for mu in mus]
-    built = basis = key = None
-    if case.solver.reduction.enabled:
-        analysed = analysed_case(case)
-        built = build_shared(analysed, "factorization")
-        if any(c.friction.basis_mu for c in case.contact.values()):
-            basis = build_shared(analysed, "basis", built)
-            key = stage_key(case, "basis")
-    return [analyse(v, built=basis if key is not None and stage_key(v, "basis") == key
-                    else built) for v in variants]
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,49 @@
-"""The public API on complex modes over a parameter: `branches` (a mu map's modes linked from
-one value to the next) and `sweep_branches` (the same for a cea sweep's folder), each with the
-table of its unstable modes and the points where its branches turn unstable."""
+"""The public API on complex modes over a parameter: `mu_map` (a case's complex modes at several
+friction coefficients, sharing their stages), `branches` (a mu map's modes linked from one value
+to the next) and `sweep_branches` (the same for a cea sweep's folder), each with the table of
+its unstable modes and the points where its branches turn unstable."""
+from .api_interface import pair_name
+from .case.loading import load as _load
 from .errors import CaseError
+
+
+def mu_map(case, mus, pair=None):
+    """The complex modes of a case at each of several friction coefficients on one pair,
+    sharing the model, the contact's geometry and the factorization (and the basis, for
+    variants equal on a ``basis_mu``), as ``transient plot cea --mu`` maps them.
+
+    Parameters
+    ----------
+    case : Case
+        From `load`; its own friction is not among the map's unless given in ``mus``.
+    mus : sequence of float
+        The friction coefficients (>= 0).
+    pair : str, optional
+        The pair whose ``friction.mu`` varies; by default the case's first.
+
+    Returns
+    -------
+    list of Analysis
+        One per value of ``mus``, as `cea` returns it.
+    """
+    from .shared import build_shared, stage_key
+    from .stability.stage import analyse, analysed_case
+    name = pair_name(case, pair)
+    if not len(mus) or min(mus) < 0:
+        raise CaseError(case.path, "mus", "expected friction coefficients >= 0")
+    # every variant is checked at load before the first analysis (float: NumPy 2's repr of
+    # its own floats, np.float64(0.2), is no TOML literal)
+    variants = [_load(case.path, list(case.overrides)
+                      + [f"contact.{name}.friction.mu={float(mu)!r}"]) for mu in mus]
+    built = basis = key = None
+    if case.solver.reduction.enabled:
+        analysed = analysed_case(case)
+        built = build_shared(analysed, "factorization")
+        if any(c.friction.basis_mu for c in case.contact.values()):
+            basis = build_shared(analysed, "basis", built)
+            key = stage_key(case, "basis")
+    return [analyse(v, built=basis if key is not None and stage_key(v, "basis") == key
+                    else built) for v in variants]
 
 
 def branches(mus, analyses, parameter="mu"):
