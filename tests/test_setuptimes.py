@@ -68,3 +68,12 @@ def test_off_writes_nothing(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     setuptimes.record("assembled/run", 1e6, 1, 1.0)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_modes_command_records_its_time_and_its_dry_run_reads_it(log):
+    case = load(PAD, PAD_DISC)
+    assert transient.dry_run(case, "modes")["setup_seconds"] is None
+    transient.modes(case)
+    (line,) = [json.loads(x) for x in log.read_text().splitlines()]
+    assert line["path"] == "modes" and line["seconds"] > 0
+    assert transient.dry_run(case, "modes")["setup_seconds"]["setups"] == 1

@@ -10,14 +10,17 @@ complex modes over a parameter, `mu_map`, `branches` and `sweep_branches` (api_b
 The stages' modules (Numba, SciPy) are imported by the functions that need them, so that
 `import transient` stays light and a case's bad input is refused before they load.
 """
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from . import setuptimes
 from .api_branches import branches, mu_map, sweep_branches
 from .api_interface import InterfaceCompatibility, compat, compat_pairs
 from .api_results import export, history, modal_growth, summary
 from .api_studies import Bench, bench, compare_modes
 from .case.checks import check_transient
+from .case.sizes import entries, parts_cells
 from .case.loading import literal
 from .case.loading import load as _load
 from .errors import CaseError
@@ -179,7 +182,9 @@ def dry_run(case, command="run"):
     dict
         ``parts`` (dofs, free dofs, cells), ``pairs`` (fine points, ``gap0``), ``memory``
         (``estimate_gb``, ``limit_gb``, ``largest_part``), for a run ``steps`` (``steps``,
-        ``exact``: False where it is a bound, None where the setup's critical step sets it).
+        ``exact``: False where it is a bound, None where the setup's critical step sets it),
+        ``setup_seconds`` (``low``, ``high``, ``setups``: estimated from the setups of its
+        kind this machine has timed, transient.setuptimes; None before any).
     """
     from .dryrun import measure
     if command not in ("run", "modes", "cea"):
@@ -211,10 +216,14 @@ def modes(case, matrices=False):
     if case.output.vtu:
         from .io.lock import check_writable
         check_writable(case.directory / case.output.vtu, "output.vtu")
+    t0 = time.perf_counter()
     model = build_model(case)
     check_modes_band(case, model)
     pairs = build_contact(case, model)
     found, tie = contact_modes(case, model, pairs)
+    # what a dry run of `modes` on a model its size is estimated from, on this machine
+    setuptimes.record("modes", entries(parts_cells(model.parts)),
+                      sum(p.interface.fine.n_points for p in pairs), time.perf_counter() - t0)
     stage_times = {f"contact.{p.name}.{k}": v for p in pairs for k, v in p.timings.items()}
     vtu = None
     if case.output.vtu:

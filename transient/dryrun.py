@@ -16,8 +16,8 @@ def measure(case, command):
     """A dict of what `command` ("run", "modes" or "cea") would take on the case: parts
     (dofs, free dofs, cells), pairs (fine points, initial gaps), memory (the estimate, the
     limit and the part that sets it on the components path), for a run its steps (exact
-    where the step is known before the setup, else a bound or None) and, for a run or a cea,
-    its setup's seconds as estimated from the setups timed on this machine
+    where the step is known before the setup, else a bound or None) and its setup's seconds
+    (the modes' for `modes`) as estimated from those timed on this machine
     (setuptimes.estimate: low, high, from how many; None before any)."""
     model = build_model(case)
     free = ~model.fixed
@@ -39,10 +39,9 @@ def measure(case, command):
                       "largest_part": largest}}
     if command == "run":
         out["steps"] = _steps(case)
-    if command in ("run", "cea"):
-        # from the setups this machine has timed (setuptimes): None before any of this kind
-        out["setup_seconds"] = setuptimes.estimate(setuptimes.kind(case, command == "cea"),
-                                                   entries(sum(cells.values(), [])))
+    # from the setups this machine has timed (setuptimes): None before any of this kind
+    kind = "modes" if command == "modes" else setuptimes.kind(case, command == "cea")
+    out["setup_seconds"] = setuptimes.estimate(kind, entries(sum(cells.values(), [])))
     return out
 
 

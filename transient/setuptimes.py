@@ -2,9 +2,9 @@
 
 A setup's time depends on the machine as much as on the model (its cores, its memory's speed,
 what else runs), so no figure measured elsewhere is a fair estimate. Each setup that ends
-(stages.prepare, from scratch) appends a line to a log in the user's cache: the host, the path
-(assembled, components, full), the model's element-matrix entries and contact fine points,
-and its seconds. `--dry-run` estimates from the lines of the same host and path: the setups'
+(stages.prepare, from scratch; `transient modes` whole) appends a line to a log in the user's
+cache: the host, the kind (assembled, components or full, for a run or a cea; modes), the
+model's element-matrix entries and contact fine points, and its seconds. `--dry-run` estimates from the lines of the same host and path: the setups'
 time grows as a power of the entries, fitted over two sizes or more, and from a single size
 scaled between the powers measured on the pad and disc family (EXPONENTS: 1.33 on the
 components path, 1.65 on the assembled one, docs/performance.md). None before any setup
