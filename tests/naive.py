@@ -434,12 +434,14 @@ def coupled_newton(terms, P, R):
 
 # ----------------------------------------------------------------------------- explicit
 
-def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0, code,
-                     params, fr, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p, out_v,
-                     out_e):
+def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, contact, fr, signals, blocks,
+                     gmin, out):
     """Velocity Verlet on the modal system, the diagonal damping taken implicitly at the end
     of the step: v_{n+1} = (v_{n+1/2} + dt/2 f_{n+1}) / (1 + dt/2 c); friction at the
     half-step velocity."""
+    C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
+    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     t = state[TIME_ROW, 0]
     m, n = C.shape
@@ -480,12 +482,15 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
     return OK, n_steps
 
 
-def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w, kt0, code,
-                  params, fr, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_v, out_e):
+def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, contact, fr, signals, gmin,
+                  out):
     """Central differences with a lumped mass: alpha M implicit at the end of the step, beta K
     on the half-step velocity. The dissipation is the trapezoid of the damping power
     v . (alpha M v + beta K v_half) at the steps' ends, carried between calls in acc[DAMPING_ACC].
     Friction (fr with CSR rows) at the half-step velocity, as explicit_reduced takes it."""
+    C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
+    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     t = state[TIME_ROW, 0]
     n, m = len(q), len(g0)
@@ -541,15 +546,20 @@ def _finish(state, t, f0, fstart, omega2, damp):
     state[A_ROW] = f0 - omega2 * state[Q_ROW] - damp * state[V_ROW]
 
 
-def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
-                        code, params, fr, patterns, sig, S, blocks, corrections,
-                        propagate_last, fprev, fstart, out_t, out_s, out_g, out_p, out_v, out_e):
+def exponential_reduced(state, acc, n_steps, every, dt, modal, contact, fr, signals, blocks,
+                        corrector, carry, out):
     """Exact modal propagation under forces linear over the step. The end forces are first
     extrapolated from the step's start and fprev (the previous step's start), then evaluated
     1 + corrections times, each at the state propagated with the last ones; if
     propagate_last, a final propagation with the last forces ends the step (the gaps,
     pressures and contact energy stay those of the last evaluation). The start forces come
     in fstart and go out there for the next call; the acceleration left is theirs."""
+    coef, damp, omega2 = modal
+    C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
+    corrections, propagate_last = corrector
+    fprev, fstart = carry
+    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v = state[Q_ROW], state[V_ROW]
     t = state[TIME_ROW, 0]
     m, n = C.shape
@@ -588,15 +598,20 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     return OK, n_steps
 
 
-def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
-                         code, params, fr, patterns, sig, S, blocks, GQ, GV, max_iter, fprev,
-                         fstart, out_t, out_s, out_g, out_p, out_v, out_e):
+def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, signals, blocks,
+                         iteration, carry, out):
     """The exponential step with the end forces x implicit: q = qb + D x, v = vb + Dv x
     (D, Dv = diag(G1x), diag(G1v)), R(x) = x - fext - remainder(q) - friction(q, v) = 0 solved
     by Newton from the extrapolated forces, with J = I + the terms of coupled_terms solved
     densely: GQ and GV are taken for the signature only. Converged when |D R| <= IMPLICIT_TOL
     |q - q0| (and with friction |Dv R| <= IMPLICIT_TOL |v - v0|); q stays the last state
     evaluated, v is propagated with the forces found there."""
+    coef, damp, omega2 = modal
+    C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
+    GQ, GV, max_iter = iteration
+    fprev, fstart = carry
+    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v = state[Q_ROW], state[V_ROW]
     t = state[TIME_ROW, 0]
     m, n = C.shape
@@ -736,11 +751,14 @@ def _newmark(state, acc, n_steps, every, dt, M, K, cdamp, C, contact, patterns, 
     return OK, n_steps
 
 
-def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0, code, params,
-                    fr, patterns, sig, S, blocks, GQ, GV, tol, max_iter, out_t, out_s, out_g,
-                    out_p, out_v, out_e):
+def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, signals, blocks,
+                    iteration, out):
     """Newmark on the modal system (M = I, diagonal damping and K_lin), friction included.
     GQ and GV are taken for the signature only (see _newmark)."""
+    C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
+    GQ, GV, tol, max_iter = iteration
+    out_t, out_s, out_g, out_p, out_v, out_e = out
     m, n = C.shape
     fbuf = np.empty((len(blocks) - 1, n))
 
@@ -754,12 +772,15 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
                     max_iter, (out_t, out_s, out_g, out_p, out_v, out_e), fr)
 
 
-def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt0, code,
-                 params, fr, patterns, sig, S, factor, Z, G, GV, tol, max_iter, out_t, out_s,
-                 out_g, out_p, out_v, out_e):
+def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr, signals,
+                 iteration, out):
     """Newmark on the full model, K (K_lin), M, C and S CSR triplets, Rayleigh damping
     alpha M + beta K, friction's rows fr as CSR triplets. The iteration operator is formed and
     solved densely: factor, Z, G and GV are taken for the signature only."""
+    C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
+    factor, Z, G, GV, tol, max_iter = iteration
+    out_t, out_s, out_g, out_p, out_v, out_e = out
     n, m = state.shape[1], len(g0)
     fr = (csr(fr[0], n).toarray(), csr(fr[1], n).toarray()) + tuple(fr[2:])
     Kd, Md = csr(K, n).toarray(), csr(M, n).toarray()

@@ -235,33 +235,30 @@ ONE_BLOCK = np.array([0, N_POINTS])
 TWO_BLOCKS = np.array([0, N_POINTS // 2, N_POINTS])
 
 
-def reduced_args(r, *tail, blocks=ONE_BLOCK, friction=False):
-    """The reduced system's arguments from C to blocks (with the friction's after the laws
-    for the kernels that take them: none for a system without), then tail."""
-    fr = (r.fr,) if friction else ()
-    return (r.C, r.g0, r.w, r.kt0, r.code, r.params) + fr + (r.patterns, r.sig, r.S,
-                                                             blocks) + tail
+def reduced_args(r, *tail, blocks=ONE_BLOCK):
+    """The reduced system's groups from the contact's to blocks (the kernels' contact,
+    friction and signals groups, as dynamics.schemes builds them), then tail."""
+    return ((r.C, r.g0, r.w, r.kt0, r.code, r.params), r.fr, (r.patterns, r.sig, r.S),
+            blocks) + tail
 
 
-def full_args(f, *tail, friction=False):
-    """The full system's arguments from C to S (with the friction's, CSR rows, after the laws
-    for the kernels that take them), then tail."""
-    fr = (f.fr,) if friction else ()
-    return (f.C, f.g0, f.w, f.kt0, f.code, f.params) + fr + (f.patterns, f.sig, f.S) + tail
+def full_args(f, *tail):
+    """The full system's groups from the contact's to the signals' (CSR rows), then tail."""
+    return ((f.C, f.g0, f.w, f.kt0, f.code, f.params), f.fr, (f.patterns, f.sig, f.S)) + tail
 
 
 def explicit_reduced_args(r, dt, blocks=ONE_BLOCK):
-    return (r.omega2, r.damp) + reduced_args(r, r.gap0.copy(), blocks=blocks, friction=True)
+    return (r.omega2, r.damp) + reduced_args(r, r.gap0.copy(), blocks=blocks)
 
 
 def explicit_full_args(f, dt):
-    return (f.K, f.mass, f.alpha, f.beta) + full_args(f, f.gap0.copy(), friction=True)
+    return (f.K, f.mass, f.alpha, f.beta) + full_args(f, f.gap0.copy())
 
 
 def exponential_reduced_args(r, dt, corrections, propagate):
     coef = nv.exponential_coefficients(r.omega2, r.damp, dt)
-    return (coef, r.damp, r.omega2) + reduced_args(r, corrections, propagate, r.fprev.copy(),
-                                                  r.fprev.copy(), friction=True)
+    return ((coef, r.damp, r.omega2),) + reduced_args(
+        r, (corrections, propagate), (r.fprev.copy(), r.fprev.copy()))
 
 
 def coupled_operators(r, Dq, Dv):
@@ -277,15 +274,15 @@ def coupled_operators(r, Dq, Dv):
 
 def exponential_implicit_args(r, dt, max_iter=30):
     coef = nv.exponential_coefficients(r.omega2, r.damp, dt)
-    return (coef, r.damp, r.omega2) + reduced_args(
-        r, *coupled_operators(r, coef[:, 6], coef[:, 7]), max_iter, r.fprev.copy(),
-        r.fprev.copy(), friction=True)
+    return ((coef, r.damp, r.omega2),) + reduced_args(
+        r, (*coupled_operators(r, coef[:, 6], coef[:, 7]), max_iter),
+        (r.fprev.copy(), r.fprev.copy()))
 
 
 def newmark_reduced_args(r, dt, max_iter=50):
     op = 1.0 + 0.5 * dt * r.damp + 0.25 * dt ** 2 * r.omega2
     GQ, GV = coupled_operators(r, 0.25 * dt * dt / op, 0.5 * dt / op)
-    return (r.damp, r.omega2) + reduced_args(r, GQ, GV, 1e-10, max_iter, friction=True)
+    return (r.damp, r.omega2) + reduced_args(r, (GQ, GV, 1e-10, max_iter))
 
 
 def newmark_full_args(f, dt, max_iter=50):
@@ -301,8 +298,7 @@ def newmark_full_args(f, dt, max_iter=50):
         Z = np.linalg.solve(op, np.vstack([f.C_dense, rows]).T)
         G = np.ascontiguousarray(h * h * f.C_dense @ Z)
         GV = np.ascontiguousarray(h * rows @ Z)
-    return (f.K, f.M, f.alpha, f.beta) + full_args(f, factor, Z, G, GV, 1e-10, max_iter,
-                                                  friction=True)
+    return (f.K, f.M, f.alpha, f.beta) + full_args(f, (factor, Z, G, GV, 1e-10, max_iter))
 
 
 # id -> (kernel, its arguments from the system and dt, their options)
@@ -393,16 +389,21 @@ def run(fn, state, dt, args, chunks=STEPS, every=EVERY, contact_outputs=True, ac
         rows = n_steps // every
         out = (np.zeros(rows), np.zeros((rows, 3)), np.zeros((rows, m)), np.zeros((rows, m)),
                np.zeros((rows, 2, m if friction else 0)), np.zeros((rows, 5)))
-        statuses.append(tuple(int(x) for x in fn(state, acc, n_steps, every, dt, *args, *out)))
+        statuses.append(tuple(int(x) for x in fn(state, acc, n_steps, every, dt, *args, out)))
         outs.append(out)
     arrays = {"q": state[0], "v": state[1], "a": state[2], "time": state[3, :1], "acc": acc}
     if len(state) > 6:
         arrays["friction"] = state[6]
     for k, name in enumerate(("out_t", "out_s", "out_g", "out_p", "out_v", "out_e")):
         arrays[name] = np.concatenate([o[k] for o in outs])
-    # gmin and fprev, the float vectors updated in place (the others compare equal)
-    arrays.update({f"args[{k}]": a for k, a in enumerate(args)
-                   if isinstance(a, np.ndarray) and a.dtype == np.float64 and a.ndim == 1})
+    # gmin and the carried forces, the float vectors updated in place (the others compare
+    # equal), among the arguments and inside their groups
+    named = [(f"args[{k}]", a) for k, a in enumerate(args)]
+    named += [(f"args[{k}][{j}]", b) for k, a in enumerate(args) if isinstance(a, tuple)
+              for j, b in enumerate(a)]
+    arrays.update({name: a for name, a in named
+                   if isinstance(a, np.ndarray) and a.dtype == np.float64 and a.ndim == 1
+                   and a.size})
     return statuses, arrays
 
 
@@ -607,10 +608,11 @@ def test_kernel_equals_its_twin(systems, name, monkeypatch):
     assert np.any(g[:, exp] - system.gap0[exp] > 1.0 / LAM)
     assert np.any(p[:, system.code == nv.LINEAR] > 0.0)
     if kernel in IMPLICIT:
-        # the full Newmark's G before (GV, tol, max_iter); the reduced kernels' GQ before
-        # (GV, tol, max_iter) or (GV, max_iter, fprev, fstart)
-        G = {exponential.exponential_implicit: args[-5], newmark.newmark_reduced: args[-4],
-             newmark.newmark_full: args[-4]}[kernel]
+        # the Newton group's G (factor, Z, G, GV, tol, max_iter) of the full Newmark, GQ
+        # first in the reduced kernels' (GQ, GV, tol, max_iter) or (GQ, GV, max_iter), the
+        # exponential's before its carried forces
+        G = (args[-2][0] if kernel is exponential.exponential_implicit else
+             args[-1][2] if kernel is newmark.newmark_full else args[-1][0])
         assert corrected_rows(system, got, kernel, G) > 10
 
 

@@ -169,11 +169,12 @@ def test_stick_bound_is_where_explicit_friction_turns_unstable(factor, grows):
     out = (np.zeros(steps), np.zeros((steps, 0)), np.zeros((steps, 0)), np.zeros((steps, 0)),
            np.zeros((steps, 2, 1)), np.zeros((steps, 5)))
     code = np.array([codes.LINEAR], np.int64)
-    status, _ = stepping.explicit_reduced(
-        state, np.zeros(4), steps, 1, dt, np.zeros(1), np.zeros(1), np.zeros((1, 1)), g0,
-        np.ones(1), np.zeros(1), code, params[None, :], law, np.zeros((0, 1)),
-        (np.zeros(0, np.int64), np.zeros((0, 8)), np.zeros((0, 1)), np.zeros((0, 1)),
-         np.zeros(0, np.int64)), np.zeros((0, 1)), np.array([0, 1]), np.zeros(1), *out)
+    contact = (np.zeros((1, 1)), g0, np.ones(1), np.zeros(1), code, params[None, :])
+    signals = (np.zeros((0, 1)), (np.zeros(0, np.int64), np.zeros((0, 8)), np.zeros((0, 1)),
+                                  np.zeros((0, 1)), np.zeros(0, np.int64)), np.zeros((0, 1)))
+    status, _ = stepping.explicit_reduced(state, np.zeros(4), steps, 1, dt, np.zeros(1),
+                                          np.zeros(1), contact, law, signals, np.array([0, 1]),
+                                          np.zeros(1), out)
     assert status == codes.OK
     # the slip, at the half step's velocity, changes sign and by 1 - c dt each step
     slip = np.abs(out[4][:, 0, 0])

@@ -51,9 +51,17 @@ def single_block(m):
     return np.array([0, m], np.int64)
 
 
-def _contact(system):
-    return system.contacts.gap0, system.contacts.weights, system.tangent, \
-        system.contacts.code, system.contacts.params
+def contact_group(system, C):
+    """The kernels' contact group: the rows C (dense, or a CSR triplet on the full model), the
+    points' initial gaps, weights and tangent, the laws' codes and parameters."""
+    return (C, system.contacts.gap0, system.contacts.weights, system.tangent,
+            system.contacts.code, system.contacts.params)
+
+
+def signals_group(system, S):
+    """The kernels' signals group: the loads' patterns, their signals' arrays and the sensors'
+    rows S (dense, or a CSR triplet on the full model)."""
+    return system.patterns, system.signals, S
 
 
 def friction_arrays(system):
@@ -86,20 +94,20 @@ def explicit(system, dt, blocks=None):
     """Central differences (velocity Verlet); the state's gmin follows the smallest gaps."""
     if system.reduced:
         blocks = single_block(system.n_points) if blocks is None else blocks
-        args = (system.omega2, system.damp, system.C, *_contact(system),
-                friction_arrays(system), system.patterns, system.signals, system.sensors)
+        args = (system.omega2, system.damp, contact_group(system, system.C),
+                friction_arrays(system), signals_group(system, system.sensors))
 
         def advance(state, n_steps, every, rows, blocks):
             return stepping.explicit_reduced(state.array, state.acc, n_steps, every, dt, *args,
-                                             blocks, state.gmin, *rows.arrays)
+                                             blocks, state.gmin, rows.arrays)
     else:
         args = (csr_triplet(system.K), system.mass, system.alpha, system.beta,
-                csr_triplet(system.C), *_contact(system), friction_arrays_sparse(system),
-                system.patterns, system.signals, csr_triplet(system.sensors))
+                contact_group(system, csr_triplet(system.C)), friction_arrays_sparse(system),
+                signals_group(system, csr_triplet(system.sensors)))
 
         def advance(state, n_steps, every, rows, blocks):
             return stepping.explicit_full(state.array, state.acc, n_steps, every, dt, *args,
-                                          state.gmin, *rows.arrays)
+                                          state.gmin, rows.arrays)
     return Stepper("explicit", dt, advance, blocks)
 
 
@@ -110,26 +118,26 @@ def implicit(system, dt, newton, linear_solver="auto", blocks=None):
         blocks = single_block(system.n_points) if blocks is None else blocks
         op = 1.0 + 0.5 * dt * system.damp + 0.25 * dt * dt * system.omega2
         GQ, GV = coupled_operators(system, 0.25 * dt * dt / op, 0.5 * dt / op, "scheme")
-        head = (system.damp, system.omega2, system.C, *_contact(system),
-                friction_arrays(system), system.patterns, system.signals, system.sensors)
-        tail = (GQ, GV, newton.tolerance, newton.max_iter)
+        head = (system.damp, system.omega2, contact_group(system, system.C),
+                friction_arrays(system), signals_group(system, system.sensors))
+        iteration = (GQ, GV, newton.tolerance, newton.max_iter)
         stages, meta = {}, {}
 
         def advance(state, n_steps, every, rows, blocks):
             return newmark.newmark_reduced(state.array, state.acc, n_steps, every, dt, *head,
-                                           blocks, *tail, *rows.arrays)
+                                           blocks, iteration, rows.arrays)
     else:
         t0 = time.perf_counter()
         factors, Z, G, GV, meta = _newmark_operator(system, dt, linear_solver)
         stages = {"iteration_operator": time.perf_counter() - t0}
         args = (csr_triplet(system.K), csr_triplet(system.M), system.alpha, system.beta,
-                csr_triplet(system.C), *_contact(system), friction_arrays_sparse(system),
-                system.patterns, system.signals, csr_triplet(system.sensors),
-                factors, Z, G, GV, newton.tolerance, newton.max_iter)
+                contact_group(system, csr_triplet(system.C)), friction_arrays_sparse(system),
+                signals_group(system, csr_triplet(system.sensors)),
+                (factors, Z, G, GV, newton.tolerance, newton.max_iter))
 
         def advance(state, n_steps, every, rows, blocks):
             return newmark.newmark_full(state.array, state.acc, n_steps, every, dt, *args,
-                                        *rows.arrays)
+                                        rows.arrays)
     return Stepper("implicit", dt, advance, blocks, stages, meta)
 
 
@@ -202,21 +210,20 @@ def exponential(system, dt, corrections, corrector, newton, blocks=None):
                         "reduced model: set solver.reduction.enabled = true")
     blocks = single_block(system.n_points) if blocks is None else blocks
     coef = exponential_coefficients(system.omega2, system.damp, dt)
-    head = (coef, system.damp, system.omega2, system.C, *_contact(system))
-    tail_head = (system.patterns, system.signals, system.sensors)
-    head = head + (friction_arrays(system),)
+    head = ((coef, system.damp, system.omega2), contact_group(system, system.C),
+            friction_arrays(system), signals_group(system, system.sensors))
     if corrector == "implicit":
         # the end state moves by G1x (and its velocity by G1v) per unit end force
-        tail = (*coupled_operators(system, coef[:, 6], coef[:, 7], "corrector"),
-                newton.max_iter)
+        correction = (*coupled_operators(system, coef[:, 6], coef[:, 7], "corrector"),
+                      newton.max_iter)
         kernel = exponential_kernels.exponential_implicit
     else:
-        tail = (corrections, corrector == "propagated")
+        correction = (corrections, corrector == "propagated")
         kernel = exponential_kernels.exponential_reduced
 
     def advance(state, n_steps, every, rows, blocks):
-        return kernel(state.array, state.acc, n_steps, every, dt, *head, *tail_head, blocks,
-                      *tail, state.forces, state.start, *rows.arrays)
+        return kernel(state.array, state.acc, n_steps, every, dt, *head, blocks, correction,
+                      (state.forces, state.start), rows.arrays)
     return Stepper("exponential", dt, advance, blocks)
 
 

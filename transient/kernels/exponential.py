@@ -37,9 +37,8 @@ def _finish(state, t, f0, fstart, omega2, damp):
 
 
 @njit_fast
-def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
-                        code, params, fr, patterns, sig, S, blocks, corrections, propagate,
-                        fprev, fstart, out_t, out_s, out_g, out_p, out_v, out_e):
+def exponential_reduced(state, acc, n_steps, every, dt, modal, contact, fr, signals, blocks,
+                        corrector, carry, out):
     """Exponential integrator on the reduced system: each mode's linear part (K_lin, damping)
     is propagated exactly over a step, the forces F = patterns s(t) + remainder(q) taken linear
     in time between the step's ends (first-order hold).
@@ -61,6 +60,12 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
     fr: the friction's arrays (contact.contact_pass), its tractions part of the remainder,
     at each evaluation's velocity; the state's FRICTION_ROW and the SLIDING_ACC accumulator
     carry its force and input power."""
+    coef, damp, omega2 = modal
+    C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
+    corrections, propagate = corrector
+    fprev, fstart = carry
+    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v = state[Q_ROW], state[V_ROW]
     t = state[TIME_ROW, 0]
     n = q.shape[0]
@@ -124,9 +129,8 @@ def exponential_reduced(state, acc, n_steps, every, dt, coef, damp, omega2, C, g
 
 
 @njit_fast
-def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, g0, w, kt0,
-                         code, params, fr, patterns, sig, S, blocks, GQ, GV, max_iter, fprev,
-                         fstart, out_t, out_s, out_g, out_p, out_v, out_e):
+def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, signals, blocks,
+                         iteration, carry, out):
     """The exponential integrator with the forces at the step's end taken implicitly.
 
     The end state is affine in the end forces x, q = qb + D x and v = vb + Dv x with
@@ -149,6 +153,12 @@ def exponential_implicit(state, acc, n_steps, every, dt, coef, damp, omega2, C, 
     and with friction Dv R below IMPLICIT_TOL of the velocity's change; NO_CONVERGENCE after
     max_iter iterations. q stays the last state evaluated, v is propagated with the forces
     found there. Otherwise as exponential_reduced."""
+    coef, damp, omega2 = modal
+    C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
+    GQ, GV, max_iter = iteration
+    fprev, fstart = carry
+    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v = state[Q_ROW], state[V_ROW]
     t = state[TIME_ROW, 0]
     n = q.shape[0]

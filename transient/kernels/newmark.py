@@ -35,9 +35,8 @@ def _corrected(qp, vp, a, dt, q, v):
 
 
 @njit_fast
-def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0, code, params,
-                    fr, patterns, sig, S, blocks, GQ, GV, tol, max_iter, out_t, out_s, out_g,
-                    out_p, out_v, out_e):
+def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, signals, blocks,
+                    iteration, out):
     """Newmark on the reduced system (M = I, diagonal damping and K_lin): S is diagonal, and
     the Jacobian with the contact's and the friction's exact terms is that of
     woodbury.coupled_rows with x = a, P = S, Dq = dt^2/4, Dv = dt/2: GQ = C Dq S^-1 Cs^T and
@@ -50,6 +49,10 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
     outputs as in stepping.explicit_reduced; friction at the end velocity, the state's
     FRICTION_ROW and the SLIDING_ACC accumulator carrying its force and input power
     (friction.friction_energy)."""
+    C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
+    GQ, GV, tol, max_iter = iteration
+    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     t = state[TIME_ROW, 0]
     n = q.shape[0]
@@ -151,9 +154,8 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, C, g0, w, kt0,
 
 
 @njit_fast
-def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt0, code,
-                 params, fr, patterns, sig, S, factor, Z, G, GV, tol, max_iter, out_t, out_s,
-                 out_g, out_p, out_v, out_e):
+def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr, signals,
+                 iteration, out):
     """Newmark on the free dofs of the full model: K (K_lin) and M CSR triplets, Rayleigh
     damping alpha M + beta K, C and S CSR triplets; factor = (p_in, L, U, p_out) of
     S = (1 + dt/2 alpha) M + (dt/2 beta + h2) K_lin (linsolve.triangular_factors). Without
@@ -161,6 +163,10 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, C, g0, w, kt
     G = C Z (m, m) for active_rows; with it Z = S^-1 Cs^T (n, 3m), G = h2 C Z and GV =
     dt/2 [Ct; Cc] Z for coupled_rows, the fixed point first and then Newton with backtracking,
     as newmark_reduced. Otherwise as newmark_reduced."""
+    C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
+    factor, Z, G, GV, tol, max_iter = iteration
+    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     t = state[TIME_ROW, 0]
     n = q.shape[0]

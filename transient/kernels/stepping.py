@@ -95,9 +95,8 @@ def _store(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, o
 
 
 @njit_fast
-def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0, code,
-                     params, fr, patterns, sig, S, blocks, gmin, out_t, out_s, out_g, out_p, out_v,
-                     out_e):
+def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, contact, fr, signals, blocks,
+                     gmin, out):
     """Central differences (velocity Verlet) on the reduced system, diagonal damping taken
     implicitly in the half step. state (STATE_ROWS, n), acc (ACC_SLOTS,): the rows and slots
     kernels.layout names (q, v, a, the time, the forces the exponential kernels carry; the
@@ -106,6 +105,9 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, C, g0, w, kt0
     fr: the friction's arrays (contact.contact_pass), taken at the half-step velocity; the
     state's FRICTION_ROW and the SLIDING_ACC accumulator then carry its force and input power
     (friction_energy). Returns (status, steps done)."""
+    C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
+    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     t = state[TIME_ROW, 0]
     n = q.shape[0]
@@ -189,14 +191,17 @@ def remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press):
 
 
 @njit_fast
-def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, C, g0, w, kt0, code,
-                  params, fr, patterns, sig, S, gmin, out_t, out_s, out_g, out_p, out_v, out_e):
+def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, contact, fr, signals, gmin,
+                  out):
     """Central differences on the free dofs of the full model: K = (indptr, indices, data) of
     K_lin (CSR), lumped mass (n,), Rayleigh damping alpha M (implicit in the half step) and
     beta K (on the half-step velocity); C and S dense-free CSR triplets; fr the friction's
     arrays with CSR rows (friction_pass_sparse), taken at the half-step velocity as in
     explicit_reduced. Same state and outputs as explicit_reduced; acc[DAMPING_ACC] carries the
     damping power at the end of the last step."""
+    C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
+    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     t = state[TIME_ROW, 0]
     n = q.shape[0]
