@@ -482,7 +482,7 @@ def passes(fn, args, qs, blocks, fr=None, vs=None, plain=False):
         if fn is contact.contact_pass:
             fr_k = fr if fr is not None else nv.no_friction(n)
             v = vs[k] if vs is not None else np.zeros(n)
-            out["energies"].append(fn(*args, q, fr_k, v, f, ff, gap, press, slip, blocks, fbuf,
+            out["energies"].append(fn(args, q, fr_k, v, f, ff, gap, press, slip, blocks, fbuf,
                                       ffbuf))
         elif fn is nv.remainder_dense:
             energies = fn(*args, q, f, gap, press, blocks, fbuf)

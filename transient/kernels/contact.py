@@ -99,8 +99,7 @@ def _traction(i, p, st, sc, fr, w, slip):
 
 
 @njit_fast
-def _friction_fours(C, g0, w, kt0, code, params, q, fr, v, fb, ffb, gap, press, slip, start,
-                    stop):
+def _friction_fours(contact, q, fr, v, fb, ffb, gap, press, slip, start, stop):
     """_contact_rows with friction on the rows start.. four at a time (as _normal_rows), up to
     the last four before stop: each four's normal part by _normal_rows, then the dots and
     updates of their rows along and across in loops of their own. pad_disc_squeal's three row
@@ -108,6 +107,7 @@ def _friction_fours(C, g0, w, kt0, code, params, q, fr, v, fb, ffb, gap, press, 
     at a time; on two, each core's half fits its own, and a step is 15% faster. Returns
     (contact potential, 1/2 sum w k_t* (g - g0)^2, the sliding's input power, the first row
     left)."""
+    C, g0, w, kt0, code, params = contact
     n = C.shape[1]
     Ct, Cc, V = fr[0], fr[1], fr[2]
     phi = 0.0
@@ -154,18 +154,18 @@ def _friction_fours(C, g0, w, kt0, code, params, q, fr, v, fb, ffb, gap, press, 
 
 
 @njit_fast
-def _contact_rows(C, g0, w, kt0, code, params, q, fr, v, fb, ffb, gap, press, slip, start,
-                  stop):
+def _contact_rows(contact, q, fr, v, fb, ffb, gap, press, slip, start, stop):
     """Rows start..stop of the fused pass: the normal remainder added into fb, the friction
     tractions at velocity v into ffb (friction's module docstring). Returns
     (contact potential, 1/2 sum w k_t* (g - g0)^2, the sliding's input power) of those rows."""
+    C, g0, w, kt0, code, params = contact
     n = C.shape[1]
     Ct, Cc, V, fcode, v_eps, table, tab_v, tab_mu, tab_n = fr
     friction = Ct.shape[0] > 0
     if not friction:
         phi, lin = _normal_rows(C, g0, w, kt0, code, params, q, fb, gap, press, start, stop)
         return phi, lin, 0.0
-    phi, lin, p_in, start = _friction_fours(C, g0, w, kt0, code, params, q, fr, v, fb, ffb,
+    phi, lin, p_in, start = _friction_fours(contact, q, fr, v, fb, ffb,
                                             gap, press, slip, start, stop)
     for i in range(start, stop):
         row = C[i]
@@ -228,13 +228,13 @@ def _sum_blocks(buf, out):
 
 
 @njit_parallel
-def contact_pass(C, g0, w, kt0, code, params, q, fr, v, f, ff, gap, press, slip, blocks, fbuf,
-                 ffbuf):
+def contact_pass(contact, q, fr, v, f, ff, gap, press, slip, blocks, fbuf, ffbuf):
     """f = C^T [w (p(g) + k_t* (g - g0))] + ff, ff the friction force at velocity v (fr:
     Ct, Cc, V, code, v_eps, table, speeds, values, counts; with no rows: none, ff untouched),
     in one pass over the points in row blocks (module docstring). Fills gap, press (m,) and
     with friction slip (2, m). Returns (contact potential, 1/2 sum w k_t* (g - g0)^2, the
     sliding's input power [W])."""
+    C, g0, w, kt0, code, params = contact
     n = C.shape[1]
     nb = blocks.shape[0] - 1
     friction = fr[0].shape[0] > 0
@@ -244,8 +244,7 @@ def contact_pass(C, g0, w, kt0, code, params, q, fr, v, f, ff, gap, press, slip,
         if friction:
             for j in range(n):
                 ff[j] = 0.0
-        phi, lin, p_in = _contact_rows(C, g0, w, kt0, code, params, q, fr, v, f, ff, gap,
-                                       press, slip, 0, C.shape[0])
+        phi, lin, p_in = _contact_rows(contact, q, fr, v, f, ff, gap, press, slip, 0, C.shape[0])
     else:
         parts = np.empty((nb, 3))
         for b in numba.prange(nb):
@@ -255,7 +254,7 @@ def contact_pass(C, g0, w, kt0, code, params, q, fr, v, f, ff, gap, press, slip,
                 fb[j] = 0.0
                 ffb[j] = 0.0
             parts[b, 0], parts[b, 1], parts[b, 2] = _contact_rows(
-                C, g0, w, kt0, code, params, q, fr, v, fb, ffb, gap, press, slip, blocks[b],
+                contact, q, fr, v, fb, ffb, gap, press, slip, blocks[b],
                 blocks[b + 1])
         phi = 0.0
         lin = 0.0

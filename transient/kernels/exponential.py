@@ -102,7 +102,7 @@ def exponential_reduced(state, acc, n_steps, every, dt, modal, contact, fr, sign
         p_in = 0.0
         for it in range(corrections + 1):
             _propagate(coef, q0, v0, f0, f1, q, v)
-            phi, lin, p_in = contact_pass(C, g0, w, kt0, code, params, q, fr, v, rem, ff, gap,
+            phi, lin, p_in = contact_pass(contact, q, fr, v, rem, ff, gap,
                                           press, slip, blocks, fbuf, ffbuf)
             for k in range(n):
                 f1[k] = fext[k] + rem[k]
@@ -215,7 +215,7 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
         alpha = 1.0
         newton = not friction
         for it in range(max_iter):
-            phi, lin, p_in = contact_pass(C, g0, w, kt0, code, params, q, fr, v, rem, ff, gap,
+            phi, lin, p_in = contact_pass(contact, q, fr, v, rem, ff, gap,
                                           press, slip, blocks, fbuf, ffbuf)
             rf = 0.0
             rq = 0.0

@@ -108,7 +108,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
         newton = not friction
         for it in range(max_iter):
             _corrected(qp, vp, a, dt, q, v)
-            phi, lin, p_in = contact_pass(C, g0, w, kt0, code, params, q, fr, v, rem, ff, gap,
+            phi, lin, p_in = contact_pass(contact, q, fr, v, rem, ff, gap,
                                           press, slip, blocks, fbuf, ffbuf)
             rnorm = 0.0
             fnorm = 0.0

@@ -138,7 +138,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, contact, fr, 
             v[k] = vh
         t += dt
         _external(t, patterns, sig, svals, fext)
-        phi, lin, p_in = contact_pass(C, g0, w, kt0, code, params, q, fr, v, f, ff, gap,
+        phi, lin, p_in = contact_pass(contact, q, fr, v, f, ff, gap,
                                       press, slip, blocks, fbuf, ffbuf)
         _track_min(gap, gmin)
         kin = 0.0
