@@ -20,7 +20,6 @@ from .api_interface import InterfaceCompatibility, compat, compat_pairs
 from .api_results import export, history, modal_growth, summary
 from .api_studies import Bench, bench, compare_modes
 from .case.checks import check_transient
-from .case.sizes import entries, parts_cells
 from .case.loading import literal
 from .case.loading import load as _load
 from .errors import CaseError
@@ -222,8 +221,7 @@ def modes(case, matrices=False):
     pairs = build_contact(case, model)
     found, tie = contact_modes(case, model, pairs)
     # what a dry run of `modes` on a model its size is estimated from, on this machine
-    setuptimes.record("modes", entries(parts_cells(model.parts)),
-                      sum(p.interface.fine.n_points for p in pairs), time.perf_counter() - t0)
+    setuptimes.record_setup("modes", model, pairs, time.perf_counter() - t0)
     stage_times = {f"contact.{p.name}.{k}": v for p in pairs for k, v in p.timings.items()}
     vtu = None
     if case.output.vtu:

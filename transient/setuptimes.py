@@ -60,6 +60,14 @@ def record(path_kind, entries, fine_points, seconds):
         pass
 
 
+def record_setup(path_kind, model, pairs, seconds):
+    """record of a setup of model (its element-matrix entries) with its contact pairs (their
+    fine rules' points)."""
+    from .case.sizes import entries, parts_cells
+    record(path_kind, entries(parts_cells(model.parts)),
+           sum(p.interface.fine.n_points for p in pairs), seconds)
+
+
 def _timed(path_kind):
     """(entries, seconds) of the log's newest setups of this host on this path."""
     path = log_path()

@@ -10,7 +10,7 @@ import numpy as np
 
 from .case.signals import compile_signals
 from . import heap, setuptimes
-from .case.sizes import check_steps, entries, parts_cells, setup_bytes
+from .case.sizes import check_steps, parts_cells, setup_bytes
 from .contact.contactset import first_tangent, stack
 from .contact.pair import build_contact, contact_stiffness
 from .dynamics import schemes
@@ -196,8 +196,8 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False, parts=No
     if built.model is None and getattr(parts, "cache", None) is None:
         # a setup from scratch, its parts reduced here or on workers but none read back: what
         # a dry run of a case its size on this machine is estimated from
-        setuptimes.record(setuptimes.kind(case, analysis), entries(parts_cells(model.parts)),
-                          sum(p.interface.fine.n_points for p in pairs), sum(stages.values()))
+        setuptimes.record_setup(setuptimes.kind(case, analysis), model, pairs,
+                                sum(stages.values()))
     return Setup(system, state, rows0, dict(stages), meta, _geometry(case, system, pairs),
                  model, (red.X, red.AW) if system.reduced else None, unsampled)
 
