@@ -8,10 +8,10 @@ GROWING = ("tab:red", "tab:purple", "tab:orange", "tab:brown", "tab:pink", "tab:
 
 
 def branches_figure(branches, path, title, xlabel):
-    """Frequency (kHz, or Hz below 1 kHz) and real part [1/s] against the parameter, a line per branch: on the
-    left coloured by the real part (a diverging map centred at 0, red grows), on the right
-    the branches unstable somewhere in colour, named in the legend, the others grey; the
-    coupling points (where a branch turns unstable) starred on both."""
+    """Frequency (kHz, or Hz below 1 kHz) and real part [1/s] against the parameter, a line per
+    branch: on the left coloured by the real part (a diverging map centred at 0, red
+    grows), on the right the branches unstable somewhere in colour, named in the legend,
+    the others grey; the coupling points (where a branch turns unstable) starred on both."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -1,14 +1,15 @@
 """A run read mode by mode (stability.growth): the modal amplitudes |a_k(t)| on a log axis with
 their fitted exponentials, and the table beside the CEA's as CSV."""
-import csv
-
 import numpy as np
+
+from ..io.tables import write_csv
 
 # the stable modes drawn beside the unstable ones: the strongest at the free motion's start
 STABLE_SHOWN = 6
 
-COLUMNS = ("frequency_hz", "cea_real", "cea_unstable", "run_real", "growth", "resolution", "difference", "t0",
-           "t1", "rms", "amplitude_min", "amplitude_max", "excited", "resolved")
+COLUMNS = ("frequency_hz", "cea_real", "cea_unstable", "run_real", "growth", "resolution",
+           "difference", "t0", "t1", "rms", "amplitude_min", "amplitude_max", "excited",
+           "resolved")
 
 
 def growth_rows(result):
@@ -24,11 +25,7 @@ def growth_rows(result):
 
 def write_growth_csv(result, path):
     """The table of a ModalGrowth as CSV, one line per mode, empty cells where no value."""
-    with open(path, "w", newline="") as f:
-        out = csv.DictWriter(f, fieldnames=COLUMNS)
-        out.writeheader()
-        for row in growth_rows(result):
-            out.writerow({k: "" if v is None else v for k, v in row.items()})
+    write_csv(path, COLUMNS, growth_rows(result))
 
 
 def shown_modes(result):

@@ -102,8 +102,7 @@ def transfer_function(x, y, dt, segment, window="hann", oversample=1):
         Between 0 and 1; NaN where x or y has no power.
     """
     y = np.asarray(y, dtype=float)
-    step = segment - segment // 2 if window == "hann" else segment
-    starts = np.arange(0, len(y) - segment + 1, step)
+    starts = np.arange(0, len(y) - segment + 1, _segment_step(segment, window))
     X = _segment_spectra(x, starts * oversample, segment * oversample, window)
     X = X[:, :segment // 2 + 1] / oversample
     Y = _segment_spectra(y, starts, segment, window)
@@ -131,8 +130,13 @@ def _segment_spectra(x, starts, length, window):
 def segments_averaged(n, segment, window):
     """The number of Welch segments of `segment` samples in n: half-overlapping Hann ones, or
     rectangular ones end to end."""
-    step = segment - segment // 2 if window == "hann" else segment
-    return 1 + (n - segment) // step
+    return 1 + (n - segment) // _segment_step(segment, window)
+
+
+def _segment_step(segment, window):
+    """Samples from one Welch segment's start to the next's: half a Hann one, a whole
+    rectangular one."""
+    return segment - segment // 2 if window == "hann" else segment
 
 
 def derived(f, H, kind):

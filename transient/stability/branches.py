@@ -41,12 +41,12 @@ the pair's mean eigenvalue (smooth there too). Else (a damped pair, whose real p
 smoothly after the coupling; a mode alone) it is where the real part crosses, linearly.
 """
 import base64
-import csv
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
+from ..io.tables import write_csv
 from .modes import UNSTABLE_RTOL
 
 MAC_LINK = 0.5          # a mode resembling the one at the previous value less is another mode
@@ -125,18 +125,12 @@ class Branches:
 
     def write(self, unstable_path, coupling_path):
         """The table of unstable modes and the coupling points as CSV files; their paths."""
-        _write_csv(unstable_path, [self.parameter, "branch", "frequency_hz", "real",
+        write_csv(unstable_path, [self.parameter, "branch", "frequency_hz", "real",
                                    "damping_ratio"], self.unstable_modes())
-        _write_csv(coupling_path, ["branch", "partner", self.parameter, "frequency_hz",
+        write_csv(coupling_path, ["branch", "partner", self.parameter, "frequency_hz",
                                    "becomes"], self.coupling)
         return [unstable_path, coupling_path]
 
-
-def _write_csv(path, columns, rows):
-    with open(path, "w", newline="") as f:
-        writer = csv.DictWriter(f, columns)
-        writer.writeheader()
-        writer.writerows({k: ("" if r[k] is None else r[k]) for k in columns} for r in rows)
 
 
 def mac_matrix(X, Y):

@@ -3,14 +3,14 @@ its own system linearized at its preload, each mode's amplitude in time, and the
 fitted where the mode stands out, beside the CEA's real part.
 
 The first-order form. A reduced run integrates M a + D v + K q = f about its preload (M = I:
-stability.linearize's matrices of the system the history stores, the friction's included;
-a material's loss factor enters them as the viscous damping the run integrates, where the CEA
-takes i H: the table's run and CEA real parts show the difference). With z = [q - q_eq; v] the state
-about the equilibrium q_eq, B = [[I, 0], [0, M]] and A = [[0, I], [-K, -D]], the free motion
-is B z' = A z. Its right eigenvectors x_k = [phi_k; lambda_k phi_k] (A x_k = lambda_k B x_k)
-and left ones y_k (y_k^H A = lambda_k y_k^H B) are B-biorthogonal, y_j^H B x_k = 0 for
-lambda_j != lambda_k, so z(t) = sum_k a_k(t) x_k over all 2n modes (conjugates included)
-gives each amplitude alone:
+stability.linearize's matrices of the system the history stores, the friction's included; a
+material's loss factor enters them as the viscous damping the run integrates, where the CEA
+takes i H: the table's run and CEA real parts show the difference). With z = [q - q_eq; v] the
+state about the equilibrium q_eq, B = [[I, 0], [0, M]] and A = [[0, I], [-K, -D]], the free
+motion is B z' = A z. Its right eigenvectors x_k = [phi_k; lambda_k phi_k] (A x_k = lambda_k
+B x_k) and left ones y_k (y_k^H A = lambda_k y_k^H B) are B-biorthogonal, y_j^H B x_k = 0 for
+lambda_j != lambda_k, so z(t) = sum_k a_k(t) x_k over all 2n modes (conjugates included) gives
+each amplitude alone:
 
     a_k(t) = y_k^H B z(t) / (y_k^H B x_k),     a_k(t) = a_k(0) exp(lambda_k t),
 
@@ -199,7 +199,7 @@ def modal_growth(system, preload, time, rows, fmax, free_from, cea=None, window=
     end = len(t) if window is not None else linear_end(amp)
     growth, resolution, rms, windows = fit_modes(t[:end], a[:, :end], lam,
                                              tolerance if window is None else np.inf)
-    partner = pair_modes(lam, cea.eigenvalues) if cea is not None else np.full(len(lam), -1)
+    partner = nearest_pairs(lam, cea.eigenvalues) if cea is not None else np.full(len(lam), -1)
     found = partner >= 0
     paired = np.where(found, cea.eigenvalues[partner] if found.any() else 0j, np.nan + 0j)
     unstable = found & (cea.unstable[partner] if found.any() else False)
@@ -317,9 +317,11 @@ def _rss(y, s, count, St, var_t):
     return Syy - Sy ** 2 / count - cov ** 2 / var_t
 
 
-def pair_modes(lam, reference):
+def nearest_pairs(lam, reference):
     """(k,) the index of the eigenvalue of reference paired with each of lam, one to one by
-    the nearest (scipy's assignment on |lambda - lambda_ref|); -1 where none is left."""
+    the nearest (scipy's assignment on |lambda - lambda_ref|); -1 where none is left. Not
+    stability.compare.pair_modes, which pairs the unstable modes of two analyses, each with
+    its nearest, for their comparison's tolerances."""
     from scipy.optimize import linear_sum_assignment
     out = np.full(len(lam), -1)
     if len(lam) and len(reference):
