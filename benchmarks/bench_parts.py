@@ -28,8 +28,7 @@ from transient.case.loading import load
 from transient.contact.contactset import stack
 from transient.contact.pair import build_contact
 from transient.model import build_model, constant_load
-from transient.reduce.components import PART_REACH, part_tasks
-from transient.reduce.parts import PartTask
+from transient.reduce.components import part_tasks, part_work
 from transient.reduce.stage import reduction_mass
 from transient.stability.stage import analysed_case
 from transient.case.sizes import entries
@@ -38,12 +37,11 @@ case = analysed_case(load(path, overrides))
 m = build_model(case)
 pairs = build_contact(case, m)
 M = reduction_mass(case, m, None)[0]
-r, s = case.solver.reduction, case.solver
 names = []
-for dofs, task in part_tasks(m, M, pairs, stack(pairs, m.ndof),
-                             [m.load_patterns[n] for n in case.loads], constant_load(case, m)):
-    t = PartTask(*task, PART_REACH * r.modes_fmax, s.shift_hz, r.statics_tolerance,
-                 s.linear_solver)
+for t in part_work(case, part_tasks(m, M, pairs, stack(pairs, m.ndof),
+                                    [m.load_patterns[n] for n in case.loads],
+                                    constant_load(case, m),
+                                    {n: p.pieces for n, p in case.parts.items()})):
     if wanted and t.name not in wanted.split(","):
         continue
     cells = [(len(c), c.shape[1]) for c in m.parts[t.name].mesh.cells.values()]

@@ -404,7 +404,7 @@ def test_the_coupling_rows_a_pair_at_a_time_are_the_whole_rows(regularized):
     constant = np.zeros(model.ndof)
     scale = np.tile(contacts.weights * law_tangent(pairs, contacts), 3)
     stacked = sp.vstack([contacts.C] + list(contacts.tangential())).tocsr()
-    for (part_dofs, (name, _, _, interface, _)) in part_tasks(model, M, pairs, contacts, [],
+    for (part_dofs, (name, _, _, interface, _), _) in part_tasks(model, M, pairs, contacts, [],
                                                               constant):
         # with C = Cc E^T the part's rows, E G E^T = C^T diag(scale) C on the part
         Cp = stacked[:, part_dofs]

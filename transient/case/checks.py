@@ -15,6 +15,7 @@ def check(case):
     _signals(case)
     _directions(case)
     _mass_scaling(case)
+    _pieces(case)
     check_generated(case)
 
 
@@ -194,6 +195,14 @@ def _sampled(case):
         if c.rule == "sampled" and not case.solver.reduction.enabled:
             _fail(case, f"contact.{name}.rule", "the sampled rule picks its points on the "
                   "reduced model: set solver.reduction.enabled = true")
+
+
+def _pieces(case):
+    for name, part in case.parts.items():
+        if part.pieces > 1 and not case.solver.reduction.components:
+            _fail(case, f"parts.{name}.pieces", "the components path reduces a part in pieces: "
+                  "set solver.reduction.enabled = true and solver.reduction.method = "
+                  '"components"')
 
 
 def _solver(case):

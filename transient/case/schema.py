@@ -18,6 +18,10 @@ PART = Table("a solid part", {
     "sets": Named("named selections from geometry (mesh and generator sets are named too)",
                   SELECTION),
     "transform": TRANSFORM,
+    "pieces": Value("int", "the components path (solver.reduction.method) reduces the part "
+                    "in this many pieces, each on its own, coupled on the cuts between them by "
+                    "the traces of their modes: for a part too large for one worker's memory",
+                    1, minimum=1, maximum=64),
 })
 
 CONSTRAINT = Table("zero displacement of the nodes of a selection", {

@@ -49,10 +49,11 @@ def setup_bytes(cells):
     return BYTES_PER_ENTRY * entries(cells)
 
 
-def part_bytes(cells):
+def part_bytes(cells, pieces=1):
     """Estimated peak memory [bytes] of one part's reduction on a worker: cells (count, nodes)
-    pairs of the part."""
-    return PART_BYTES_FLOOR + PART_BYTES_PER_ENTRY * entries(cells)
+    pairs of the part; in pieces (reduce.pieces), each piece's stage on a worker holds its
+    share of the part."""
+    return PART_BYTES_FLOOR + PART_BYTES_PER_ENTRY * entries(cells) / pieces
 
 
 def parts_cells(parts):

@@ -80,6 +80,7 @@ class PartSpec:
     region_materials: dict   # cell set -> material name
     sets: dict               # name -> SelectionSpec
     transform: TransformSpec
+    pieces: int = 1          # the components path's pieces of the part (reduce.pieces)
 
 
 @dataclass(frozen=True)
@@ -320,7 +321,7 @@ def build(data):
         "parts": {n: PartSpec(_variant(MeshSpec, t["mesh"]), t["material"],
                               dict(t["region_materials"]),
                               {s: _variant(SelectionSpec, v) for s, v in t["sets"].items()},
-                              _transform(t["transform"]))
+                              _transform(t["transform"]), t["pieces"])
                   for n, t in data["parts"].items()},
         "constraints": {n: _make(ConstraintSpec, t) for n, t in data["constraints"].items()},
         "loads": {n: _make(LoadSpec, t, signal=dict(t["signal"]))

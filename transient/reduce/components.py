@@ -29,6 +29,7 @@ from .basis import Basis, flexible_shapes
 from .fields import part_rigid_motions, support_stiffness
 from .engine import Engine
 from .parts import PartError, PartInterface, PartTask
+from .pieces import PiecesTask, piece_of_dofs
 from .coupling import ALONG, PairRows
 from .sampling import ReducedPreloadError, reduced_preload
 from .synthesis import Synthesis
@@ -40,9 +41,10 @@ from .synthesis import Synthesis
 PART_REACH = 1.5
 
 
-def part_tasks(model, M, pairs, contacts, patterns, constant):
-    """(dofs, (name, K, M, interface, loads)) of each part: the arguments of part_basis on
-    the part's free dofs, which sit at dofs. The interface (a PartInterface) holds the
+def part_tasks(model, M, pairs, contacts, patterns, constant, pieces=None):
+    """(dofs, (name, K, M, interface, loads), piece_of) of each part: the arguments of
+    part_basis on the part's free dofs, which sit at dofs; piece_of (None: the part whole)
+    the piece of each of them (reduce.pieces), for a part that pieces (name -> count) cuts. The interface (a PartInterface) holds the
     contact's loads E on the part: with factored rows (a regularized rule, C = L B^T) the
     columns of B on the part, the traces of the (1-eps)-compatible shapes (with friction the
     tangential rows' too), which the part reduces to the fields of its loaded interface
@@ -93,7 +95,16 @@ def part_tasks(model, M, pairs, contacts, patterns, constant):
                                       free_block(support, dofs) if fields else None,
                                       part_rigid_motions(model.points, dofs) if fields
                                       else None)
-        out.append((dofs, (name, Kp, Mp, interface, loads[dofs])))
+        piece_of = None
+        if (pieces or {}).get(name, 1) > 1:
+            coupling = abs(Kp) + abs(Mp)
+            if interface is not None and interface.support is not None:
+                coupling = coupling + abs(interface.support)
+            part = model.parts[name]
+            piece_of = piece_of_dofs(model.points, [c + part.offset for c in
+                                                    part.mesh.cells.values()],
+                                     dofs, pieces[name], coupling)
+        out.append((dofs, (name, Kp, Mp, interface, loads[dofs]), piece_of))
     return out
 
 
@@ -177,13 +188,12 @@ def reduce_parts(case, model, M, pairs, contacts, patterns, constant, engine, sa
     """(dofs, PartBasis) of each part, reduced through engine (a reduce.engine.Engine): the
     components path's first stage, and all a campaign does before its variants fan out
     (reduce.engine.cached then holds the parts they share)."""
-    reduction, solver = case.solver.reduction, case.solver
     say = say or _stages(engine, time.perf_counter())
     check_parts(case, model, engine.budget())
-    tasks = part_tasks(model, M, pairs, contacts, patterns, constant)
+    tasks = part_tasks(model, M, pairs, contacts, patterns, constant,
+                       {name: part.pieces for name, part in case.parts.items()})
     say("part tasks")
-    work = [PartTask(*task, PART_REACH * reduction.modes_fmax, solver.shift_hz,
-                     reduction.statics_tolerance, solver.linear_solver) for _, task in tasks]
+    work = part_work(case, tasks)
     try:
         parts = engine.run(work)
     except PartError as exc:
@@ -191,7 +201,16 @@ def reduce_parts(case, model, M, pairs, contacts, patterns, constant, engine, sa
                         f"on its own ({exc}): is it held by constraints, or free to "
                         "move?") from None
     say("parts")
-    return [d for d, _ in tasks], parts
+    return [d for d, _, _ in tasks], parts
+
+
+def part_work(case, tasks):
+    """The PartTask (a PiecesTask for a part cut in pieces) of each of part_tasks'."""
+    reduction, solver = case.solver.reduction, case.solver
+    settings = (PART_REACH * reduction.modes_fmax, solver.shift_hz,
+                reduction.statics_tolerance, solver.linear_solver)
+    return [PartTask(*task, *settings) if piece_of is None
+            else PiecesTask(*task, *settings, piece_of) for _, task, piece_of in tasks]
 
 
 def _stages(engine, t0):
@@ -240,14 +259,16 @@ def check_parts(case, model, budget):
     if budget is None:
         return
     for name, cells in cells_by_part(model.parts).items():
-        need = part_bytes(cells)
+        pieces = case.parts[name].pieces
+        need = part_bytes(cells, pieces)
         if need > budget:
             mesh = case.parts[name].mesh
             key = f"parts.{name}.mesh." + ("path" if mesh.kind == "file" else "divisions")
             raise CaseError(case.path, key, f"the part's reduction would take about "
-                            f"{need / 1e9:.3g} GB, more than a worker's memory "
-                            f"({budget / 1e9:.3g} GB): workers with more memory, or a coarser "
-                            "mesh of the part")
+                            f"{need / 1e9:.3g} GB {'a piece ' if pieces > 1 else ''}"
+                            f"(parts.{name}.pieces = {pieces}), more than a worker's memory "
+                            f"({budget / 1e9:.3g} GB): more pieces, workers with more memory, "
+                            "or a coarser mesh of the part")
 
 
 def _preload(case, contacts, pairs, X, Kr, rows, constant):

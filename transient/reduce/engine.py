@@ -54,15 +54,24 @@ def serial(tasks, done=None):
 
 
 def on_cluster(client):
-    """A runner of the tasks on a Dask client, one task a part, their results in order;
-    done(task, PartBasis) as each finishes. A task whose worker dies is run again on another
+    """A runner of the tasks on a Dask client, one task a part (a part in pieces, a task a
+    piece and stage: reduce.pieces), their results in order; done(task, PartBasis) as each
+    finishes. A task whose worker dies is run again on another
     (the scheduler's), the same arithmetic on one thread."""
     def run(tasks, done=None):
         from dask.distributed import as_completed
-        futures = [client.submit(_run, task, key=f"part-{task.name}-{task.key()[:16]}",
-                                 pure=False) for task in tasks]
-        index = {f.key: i for i, f in enumerate(futures)}
+        from .pieces import OnCluster, PiecesTask
+        whole = [i for i, task in enumerate(tasks) if not isinstance(task, PiecesTask)]
+        futures = [client.submit(_run, tasks[i], key=f"part-{tasks[i].name}-"
+                                 f"{tasks[i].key()[:16]}", pure=False) for i in whole]
+        index = {f.key: i for i, f in zip(whole, futures)}
         out = [None] * len(tasks)
+        # a part in pieces: its stages fan out over the workers beside the whole parts'
+        for i, task in enumerate(tasks):
+            if i not in index.values():
+                out[i] = task.run(OnCluster(client))
+                if done is not None:
+                    done(task, out[i])
         for future in as_completed(futures):
             i = index[future.key]
             out[i] = future.result()

@@ -1,0 +1,117 @@
+"""A part reduced in pieces (parts.NAME.pieces) against the part reduced whole: each count's
+task pickled, then reduced in a fresh process (one thread, as on a worker), or with
+--workers N its pieces' stages on a LocalCluster of N one-thread workers; its seconds by
+stage, the peak resident memory above the task loaded (and each worker's peak), and its modes
+in the band (the part's reach over 1.5) against the part whole.
+
+    python benchmarks/bench_pieces.py CASE --part disc [--pieces 2,4] [--workers N]
+                                 [--mu 0.4] [--set key=value ...] [--markdown FILE] [--json FILE]
+"""
+import argparse
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from bench_parts import DUMP, ROOT, child  # noqa: E402  (siblings in benchmarks/)
+from tables import publish  # noqa: E402
+
+RUN = """
+import json, pickle, resource, sys, time
+import transient
+transient.configure()
+with open(sys.argv[1], "rb") as f:
+    task, entries = pickle.load(f)
+workers = int(sys.argv[2])
+base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+peaks = []
+t0 = time.perf_counter()
+if workers and getattr(task, "piece_of", None) is not None:
+    from transient.cluster import client_for
+    from transient.reduce.pieces import OnCluster
+
+    def peak():
+        import resource
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e9
+    client, cluster = client_for(None, workers)
+    t0 = time.perf_counter()
+    p = task.run(OnCluster(client))
+    seconds = time.perf_counter() - t0
+    peaks = sorted(client.run(peak).values())
+    client.close()
+    cluster.close()
+else:
+    p = task.run()
+    seconds = time.perf_counter() - t0
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+piece_of = getattr(task, "piece_of", None)
+print(json.dumps(dict(part=task.name, ndof=task.K.shape[0], entries=int(entries),
+                      pieces=1 if piece_of is None else int(piece_of.max()) + 1,
+                      cut=0 if piece_of is None else int((piece_of < 0).sum()),
+                      columns=int(p.T.shape[1]), seconds=seconds, above=(peak - base) / 1e9,
+                      workers=peaks, stages=p.seconds, mode_hz=p.mode_hz.tolist(),
+                      band=task.fmax / 1.5)))
+"""
+
+
+def markdown(rows, load):
+    lines = ["| part | pieces | free dofs | cut dofs | basis columns | workers | seconds | "
+             "stages [s] | above the task [GB] | workers' peaks [GB] | band modes | "
+             "largest error in the band | load |", "|" + "---|" * 13]
+    for r in rows:
+        stages = ", ".join(f"{k} {v:.1f}" for k, v in r["stages"].items())
+        peaks = ", ".join(f"{p:.2f}" for p in r["workers"]) or "-"
+        lines.append(f"| {r['part']} | {r['pieces']} | {r['ndof']:,} | {r['cut']:,} | "
+                     f"{r['columns']} | {r['n_workers']} | {r['seconds']:.1f} | {stages} | "
+                     f"{r['above']:.2f} | {peaks} | {r['band_modes']} | {r['error']:.1e} | "
+                     f"{load:.1f} |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("case")
+    parser.add_argument("--part", required=True)
+    parser.add_argument("--pieces", default="2,4", help="comma-separated counts")
+    parser.add_argument("--workers", type=int, default=0)
+    parser.add_argument("--mu", type=float, default=0.4)
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--markdown")
+    parser.add_argument("--json")
+    args = parser.parse_args(argv)
+    sys.path.insert(0, str(ROOT))
+    from transient.case.loading import load
+    pairs = load(args.case, args.set).contact
+    overrides = (args.set + ['solver.reduction.method="components"']
+                 + [f"contact.{p}.friction.mu={args.mu}" for p, c in pairs.items()
+                    if c.law.kind != "bilateral"])
+    load0, rows = os.getloadavg()[0], []
+    case = str(Path(args.case).resolve())
+    with tempfile.TemporaryDirectory() as folder:
+        for count in [1] + [int(n) for n in args.pieces.split(",")]:
+            sub = Path(folder) / str(count)
+            sub.mkdir()
+            child(DUMP, [str(sub), case, args.part, *overrides,
+                         f"parts.{args.part}.pieces={count}"], str(ROOT), str(sub))
+            workers = args.workers if count > 1 else 0
+            row = json.loads(child(RUN, [f"{sub}/{args.part}.pkl", str(workers)], str(ROOT),
+                                   str(sub)))
+            f = np.array(row.pop("mode_hz"))
+            if count == 1:
+                reference = f
+            band = reference <= row["band"]
+            n = min(len(f), len(reference))
+            error = float(np.max(np.abs(f[:n][band[:n]] - reference[:n][band[:n]])
+                                / reference[:n][band[:n]]))
+            rows.append(dict(row, n_workers=workers, band_modes=int(band.sum()), error=error))
+            print(f"{args.part} in {count}: {row['seconds']:.1f} s, {row['above']:.2f} GB above "
+                  f"the task, workers {row['workers']}, band error {error:.1e}", flush=True)
+    publish(markdown(rows, 0.5 * (load0 + os.getloadavg()[0])), args.markdown, args.json, rows)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,128 @@
+"""A part reduced in pieces (reduce/pieces.py, reduce/piece.py: parts.NAME.pieces on the
+components path): the cut, the pieces' Craig-Bampton reduction and the cut's shapes, against
+the part reduced whole and against the whole model."""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from transient.case.loading import load
+from transient.contact.contactset import stack
+from transient.contact.pair import build_contact
+from transient.errors import CaseError
+from transient.model import build_model, constant_load
+from transient.model.dofs import shifted
+from transient.reduce.components import part_tasks, part_work
+from transient.reduce.pieces import CUT
+from transient.solve.modes import shift_sigma
+from transient.stages import prepare
+
+from small_cases import PAD_DISC
+
+PAD = "cases/pad_disc.toml"
+COMPONENTS = ['solver.reduction.method="components"', "contact.pad_disc.friction.mu=0.4"]
+
+
+def disc_tasks(pieces, extra=()):
+    """(the disc's PartTask reduced whole, the same in pieces) of the small pad_disc."""
+    case = load(PAD, PAD_DISC + COMPONENTS + list(extra))
+    model = build_model(case)
+    pairs = build_contact(case, model)
+    tasks = part_tasks(model, model.M, pairs, stack(pairs, model.ndof),
+                       [model.load_patterns[n] for n in case.loads],
+                       constant_load(case, model), {"disc": pieces})
+    whole, cut = (dict((t.name, t) for t in part_work(case, [(d, task, p if keep else None)
+                                                             for d, task, p in tasks]))
+                  for keep in (False, True))
+    return whole["disc"], cut["disc"]
+
+
+@pytest.mark.parametrize("pieces", [2, 3])
+def test_the_cut_leaves_no_piece_meeting_another(pieces):
+    """Each piece's interior meets the cut alone (K, M and the interface's springs), the
+    pieces are of about one size, and the cut is a small share of the part."""
+    _, task = disc_tasks(pieces)
+    of = task.piece_of
+    assert set(np.unique(of)) == set(range(pieces)) | {CUT}
+    coupling = sp.coo_matrix(abs(task.K) + abs(task.M) + abs(task.interface.support))
+    a, b = of[coupling.row], of[coupling.col]
+    assert not np.any((a >= 0) & (b >= 0) & (a != b))
+    sizes = np.bincount(of[of >= 0])
+    assert sizes.min() >= 0.8 * sizes.max()
+    assert np.sum(of == CUT) < 0.2 * len(of)
+
+
+@pytest.mark.parametrize("pieces", [2, 3])
+def test_a_part_in_pieces_has_the_whole_parts_modes(pieces):
+    """The disc in pieces: its modes in the band (the part's reach over PART_REACH) within
+    1e-5 of the disc reduced whole (with the cut's characteristic constraint modes for its
+    shapes, the condensation's alone, they miss by 2e-4 to 2e-3), as many to its reach; its basis
+    M-orthonormal, Kr its stiffness."""
+    whole, task = disc_tasks(pieces)
+    a, b = whole.run(), task.run()
+    band = a.mode_hz <= task.fmax / 1.5
+    assert band.sum() >= 20 and len(b.mode_hz) == len(a.mode_hz)
+    np.testing.assert_allclose(b.mode_hz[band], a.mode_hz[band], rtol=1e-5)
+    np.testing.assert_allclose(b.T.T @ (task.M @ b.T), np.eye(b.T.shape[1]), atol=1e-9)
+    np.testing.assert_allclose(b.Kr, b.T.T @ (task.K @ b.T), rtol=1e-9,
+                               atol=1e-9 * np.abs(b.Kr).max())
+
+
+@pytest.mark.parametrize("pieces", [2, 3])
+def test_a_part_in_pieces_spans_its_static_responses(pieces):
+    """The tap moved onto the disc, and a band low enough that the traces of its modes do
+    not span the cut: the disc's static responses to its loads lie in its basis to
+    round-off, through the cut's relaxations (without them, 7e-3 of the response is
+    outside)."""
+    _, task = disc_tasks(pieces, ["solver.reduction.fmax=2000.0", 'loads.tap.part="disc"',
+                                  "loads.tap.point=[0.0,-0.12,0.0]"])
+    b = task.run()
+    K = shifted(task.K, task.M, shift_sigma(-task.shift_hz))
+    u = sp.linalg.spsolve(sp.csc_matrix(K), task.loads)
+    u = u.reshape(len(u), -1)
+    left = u - b.T @ (b.T.T @ (task.M @ u))
+    norms = [np.sqrt(x @ (task.M @ x)) for x in u.T]
+    assert max(norms) > 0
+    for j, m in enumerate(norms):
+        assert np.sqrt(left[:, j] @ (task.M @ left[:, j])) <= 1e-10 * m
+
+
+def test_pieces_are_refused_off_the_components_path():
+    with pytest.raises(CaseError, match="components") as refused:
+        load(PAD, PAD_DISC + ["parts.disc.pieces=2"])
+    assert refused.value.key == "parts.disc.pieces"
+
+
+@pytest.mark.slow
+def test_pad_disc_with_its_disc_in_pieces_matches_the_disc_whole():
+    """The coupled, contact-linearized modes below fmax of the small pad_disc at mu 0.4 with
+    its disc in 2 and 3 pieces: within 1e-5 of the disc reduced whole."""
+    fmax = load(PAD).solver.reduction.fmax
+
+    def frequencies(pieces):
+        case = load(PAD, PAD_DISC + COMPONENTS + [f"parts.disc.pieces={pieces}"])
+        setup = prepare(case, analysis=True, unsampled=True)
+        f = np.sqrt(setup.system.omega2) / (2 * np.pi)
+        return f[f <= fmax]
+    whole = frequencies(1)
+    assert len(whole) >= 20
+    for pieces in (2, 3):
+        np.testing.assert_allclose(frequencies(pieces), whole, rtol=1e-5)
+
+
+@pytest.mark.slow
+def test_pieces_on_a_cluster_equal_pieces_here():
+    """The pieces' stages on a LocalCluster of two one-thread workers: the part's basis, its
+    Kr and modes equal those made in this process bit for bit."""
+    pytest.importorskip("dask.distributed")
+    from transient.cluster import client_for
+    from transient.reduce.pieces import OnCluster
+    _, task = disc_tasks(3)
+    here = task.run()
+    client, cluster = client_for(None, 2)
+    try:
+        there = task.run(OnCluster(client))
+    finally:
+        client.close()
+        cluster.close()
+    for name in ("T", "Kr", "mode_hz"):
+        assert np.array_equal(getattr(here, name), getattr(there, name)), name

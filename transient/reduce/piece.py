@@ -1,0 +1,133 @@
+"""One piece of a part reduced in pieces (reduce.pieces): its stages, each run where the piece
+is (a Dask worker, or this process), each with its own factorization of the piece held at the
+cut: a worker keeps nothing between stages but their results.
+
+The piece's interior dofs I are its own; the cut's dofs G it touches are shared with the other
+pieces. Held at the cut it is a Craig-Bampton component: its fixed-cut modes Phi, its
+constraint modes Psi = -(K_II - sigma M_II)^-1 (K_IG - sigma M_IG), and its static responses.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..model.dofs import shifted
+from ..solve.linsolve import FactorizationError, factorize
+from ..solve.lowrank import block_columns
+from ..solve.modes import normal_modes, shift_sigma
+from .basis import MODES_TOL
+from .fields import field_map
+from .parts import PartError, _with_statics
+
+
+@dataclass(frozen=True)
+class Piece:
+    """A piece's operators, sliced from its part's on the free dofs: K, M (I, I), KG, MG
+    (I, G) sparse; G (g,) the cut's dofs it touches (indices into the cut); loads (I, s)
+    sparse its rows of the part's static loads (set once the fields are known); support (I,
+    I), E (I, k) sparse and rigid (I, 6) its share of the part's interface (None: no contact
+    loads on it)."""
+    name: str
+    K: object
+    M: object
+    KG: object
+    MG: object
+    G: np.ndarray
+    shift_hz: float
+    backend: str
+    support: object = None
+    E: object = None
+    rigid: np.ndarray = None
+
+    def solver(self):
+        """(K_II - sigma M_II)^-1, the piece held at the cut (a piece is never free: its cut
+        is a surface), and sigma."""
+        sigma = shift_sigma(-self.shift_hz)
+        try:
+            return factorize(shifted(self.K, self.M, sigma), self.backend, definite=True), sigma
+        except FactorizationError as exc:
+            raise PartError(self.name, str(exc)) from None
+
+    def fields(self, G, shape, block, cutoff):
+        """P (k, f) the interface fields of the piece's loaded interface, held at the cut
+        (reduce.fields.field_map); None where no contact load reaches the piece."""
+        if self.E is None or not self.E.nnz:
+            return None
+        try:
+            return field_map(self.K, self.M, self.support, sp.csc_matrix(self.E), G, shape,
+                             block, self.rigid, cutoff, self.shift_hz, self.backend)
+        except FactorizationError as exc:
+            raise PartError(self.name, str(exc)) from None
+
+    def condensed(self, loads, fmax):
+        """(A, (S, Mh, B, omega2, C)): A (I, a) the fixed-cut modes to fmax and the static
+        responses to loads (I, s) sparse beyond them, M-orthonormal; the piece's condensation
+        on the cut's dofs it touches, S = K_GI Psi (g, g) and Mh = M_GI Psi + Psi^T M_IG +
+        Psi^T M_II Psi (K shifted), B (g, s) the loads carried to the cut, -K_GI K_II^-1
+        loads; the modes' squared frequencies omega2 (m,) and mass coupling with the cut,
+        C = Phi^T (M_II Psi + M_IG) (m, g)."""
+        solve, sigma = self.solver()
+        modes = normal_modes(self.K, self.M, None, count=40, fmax=fmax, shift=-self.shift_hz,
+                             solve=solve, tol=MODES_TOL)
+        KG = (self.KG - sigma * self.MG).tocsc()
+        KGt, MGt = KG.T.tocsr(), self.MG.T.tocsr()
+        g, Phi = KG.shape[1], modes.shapes
+        S, Mh, C = np.empty((g, g)), np.empty((g, g)), np.empty((Phi.shape[1], g))
+        width = block_columns(self.K.shape[0])
+        for start in range(0, g, width):
+            cols = slice(start, start + width)
+            Psi = -solve(KG[:, cols].toarray())
+            S[:, cols] = KGt @ Psi
+            # Psi^T x = -K_GI K_II^-1 x: Psi^T M_IG + Psi^T M_II Psi in one solve
+            Y = self.MG[:, cols].toarray() + self.M @ Psi
+            C[:, cols] = Phi.T @ Y
+            Mh[:, cols] = MGt @ Psi - KGt @ solve(Y)
+        m, s = Phi.shape[1], loads.shape[1]
+        X = np.empty((self.K.shape[0], m + s), order="F")
+        X[:, :m] = Phi
+        for start in range(0, s, width):
+            X[:, m + start:m + start + width] = solve(loads[:, start:start + width].toarray())
+        B = -(KGt @ X[:, m:])
+        omega2 = np.sign(modes.frequencies) * (2 * np.pi * modes.frequencies) ** 2
+        return (_with_statics(X, m, self.M),
+                (0.5 * (S + S.T), 0.5 * (Mh + Mh.T), B, omega2, C))
+
+    def extended(self, A, V, loads):
+        """((A2, ext), blocks): the cut's shapes V (g, c) extended into the interior, ext =
+        Psi V (I, c), and A (I, a) with the interior's first dynamic correction to that
+        motion beyond it, (K_II - sigma M_II)^-1 (M_II ext + M_IG V): the leading term of the
+        fixed-cut modes it truncates (the interior's response at omega is ext + omega^2 times
+        it + O(omega^4)). blocks: the piece's share of the part's K, M and loads on its
+        columns [A2, W], W = [ext; V] (piece_blocks)."""
+        solve, sigma = self.solver()
+        KG = (self.KG - sigma * self.MG).tocsr()
+        n, a, c = self.K.shape[0], A.shape[1], V.shape[1]
+        X = np.empty((n, a + c), order="F")
+        X[:, :a] = A
+        ext = np.empty((n, c), order="F")
+        width = block_columns(n)
+        for start in range(0, c, width):
+            cols = slice(start, start + width)
+            ext[:, cols] = -solve(KG @ V[:, cols])
+            X[:, a + start:a + start + width] = solve(self.M @ ext[:, cols]
+                                                      + self.MG @ V[:, cols])
+        solve = None
+        A2 = _with_statics(X, a, self.M)
+        return (A2, ext), self.blocks(A2, ext, V, loads)
+
+    def blocks(self, A, ext, V, loads):
+        """For X in (K, M): (A^T X A, A^T X W, the piece's share of W^T X W) with W = [ext;
+        V]; then the loads' (A^T F, ext^T F) (the cut's own rows are the caller's)."""
+        out = []
+        for X, XG in ((self.K, self.KG), (self.M, self.MG)):
+            XW = X @ ext + XG @ V
+            out.append((A.T @ (X @ A), A.T @ XW, ext.T @ XW + V.T @ (XG.T @ ext)))
+        Ft = loads.T.tocsr()
+        out.append(((Ft @ A).T, (Ft @ ext).T))
+        return out
+
+    @staticmethod
+    def expanded(held, Ta, Tw):
+        """The part's basis on the piece's rows: A2 Ta + ext Tw (held = (A2, ext))."""
+        A2, ext = held
+        return A2 @ Ta + ext @ Tw

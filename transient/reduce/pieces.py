@@ -1,0 +1,327 @@
+"""A part reduced in pieces (substructures), as AMLS does at its top level, so that no process
+holds the whole part's factors, Lanczos vectors or dense basis.
+
+The part's cells are cut by recursive coordinate bisection; the dofs of the nodes the pieces
+share are the cut. Each piece is reduced with the cut held (Craig-Bampton, reduce.piece): its
+fixed-cut modes, its static responses to its share of the interface fields and loads, and its
+condensation on the cut. The cut is reduced to the traces of the modes of the pieces' fixed-cut
+modes coupled to the whole cut, and to its relaxation under each static load, so that the
+part's static responses lie in the span exactly; each piece extends those shapes into its
+interior with their first dynamic correction. The part's own reduction (parts.part_basis) is
+then made on that model, whose size the reach sets, and expanded piece by piece.
+
+The interface fields (reduce.fields) are each piece's, with its cut held, gathered: the loaded
+modes of the whole part would need its factorization, which is what the pieces avoid.
+"""
+import hashlib
+import operator
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from .. import blas
+from ..model.dofs import restrict
+from ..solve.modes import shift_sigma
+from .fields import FIELD_TOL
+from .parts import PartBasis, PartInterface, PartTask, part_basis
+from .piece import Piece
+
+CUT = -1             # piece_of's value on the cut's dofs
+# the cut's shapes kept: directions whose norm in the cut's condensed mass, beyond those
+# before them, is above this fraction of their own (the rest depend on them)
+RELAXATION_TOL = 1e-10
+# how far beyond the part's own reach its pieces' fixed-cut modes and the cut's modes go: the
+# part's modes in the band to the part reduced whole as tests/test_pieces.py holds them
+# (docs/performance.md, "A part in pieces", the reach's trade)
+PIECE_REACH = 1.5
+
+
+def cut_cells(centroids, weights, n):
+    """(cells,) the piece of each cell, 0..n-1: recursive coordinate bisection of the cells'
+    centroids (cells, 3), each cut across the longest extent at the weighted quantile that
+    splits the pieces' count in proportion."""
+    piece = np.zeros(len(centroids), dtype=np.int64)
+
+    def split(idx, first, count):
+        if count == 1:
+            piece[idx] = first
+            return
+        c = centroids[idx]
+        axis = int(np.argmax(c.max(axis=0) - c.min(axis=0)))
+        order = idx[np.argsort(c[:, axis], kind="stable")]
+        left = count // 2
+        cum = np.cumsum(weights[order])
+        at = int(np.searchsorted(cum, cum[-1] * left / count))
+        split(order[:at], first, left)
+        split(order[at:], first + left, count - left)
+    split(np.arange(len(centroids)), 0, n)
+    return piece
+
+
+def piece_of_dofs(points, cells, dofs, n, coupling):
+    """(len(dofs),) the piece of each of a part's free dofs dofs (global dof ids of nodes
+    dofs // 3, points their coordinates by global node), CUT on the nodes the pieces share.
+    cells: connectivity arrays in global node ids. coupling (len(dofs),)^2 sparse: every
+    operator the pieces are reduced with (K, M, the interface's springs); a dof it couples to
+    another piece's interior is put in the cut too, so that no piece's interior meets
+    another's."""
+    centroids = np.vstack([points[c].mean(axis=1) for c in cells])
+    weights = np.concatenate([np.full(len(c), float(c.shape[1]) ** 2) for c in cells])
+    piece = cut_cells(centroids, weights, n)
+    nodes = np.concatenate([c.ravel() for c in cells])
+    of_cell = np.concatenate([np.repeat(piece[start:start + len(c)], c.shape[1])
+                              for start, c in zip(np.cumsum([0] + [len(c) for c in cells]),
+                                                  cells)])
+    low = np.full(len(points), n, dtype=np.int64)
+    high = np.full(len(points), -1, dtype=np.int64)
+    np.minimum.at(low, nodes, of_cell)
+    np.maximum.at(high, nodes, of_cell)
+    node_piece = np.where(low == high, low, CUT)
+    out = node_piece[dofs // 3]
+    A = sp.coo_matrix(coupling)
+    across = (out[A.row] >= 0) & (out[A.col] >= 0) & (out[A.row] != out[A.col])
+    if across.any():
+        cut_nodes = np.unique(dofs[A.col[across]] // 3)
+        out[np.isin(dofs // 3, cut_nodes)] = CUT
+    return out
+
+
+def cut_basis(S, Mh, B, couplings, fmax, shift_hz):
+    """V (g, c): the cut's shapes, Mh-orthonormal: the traces on the cut of the modes to fmax
+    of the pieces' fixed-cut modes coupled to the whole cut (Craig-Bampton's model with every
+    constraint mode: the characteristic constraint modes of the condensation alone miss the
+    interior's inertia, and converge slowly), then the relaxations S^-1 B beyond them. S, Mh
+    (g, g): the pieces' condensation summed with the cut's own; B (g, s) the loads carried to
+    the cut; couplings: (G, omega2 (m,), C (m, len(G))) of each piece, its modes' squared
+    frequencies and their mass coupling Phi^T (M_II Psi + M_IG) with the cut's dofs G."""
+    sigma = shift_sigma(-shift_hz)
+    top = (2 * np.pi * fmax) ** 2 - sigma
+    m = sum(len(w) for _, w, _ in couplings)
+    g = len(S)
+    Ks, Ms = np.zeros((m + g, m + g)), np.eye(m + g)
+    Ks[m:, m:], Ms[m:, m:] = S, Mh
+    at = 0
+    for G, omega2, C in couplings:
+        rows = np.arange(at, at + len(omega2))
+        Ks[rows, rows] = omega2 - sigma
+        Ms[np.ix_(rows, m + G)] = C
+        Ms[np.ix_(m + G, rows)] = C.T
+        at += len(omega2)
+    _, modes = sla.eigh(Ks, Ms, subset_by_value=(-np.inf, top), driver="gvx")
+    del Ks, Ms
+    traces = _orthonormal(modes[m:], Mh, None)
+    return np.hstack([traces, _orthonormal(sla.solve(S, B, assume_a="pos"), Mh, traces)])
+
+
+def _orthonormal(R, Mh, Phi):
+    """R's directions beyond Phi's (Mh-orthonormal; None: none), Mh-orthonormal, those of a
+    norm below RELAXATION_TOL of their column's dropped."""
+    norms = np.sqrt(np.einsum("ij,ij->j", R, Mh @ R))
+    R = R[:, norms > 0] / norms[norms > 0]
+    if Phi is not None:
+        MPhi = Mh @ Phi
+        for _ in range(2):
+            R -= Phi @ (MPhi.T @ R)
+    G = R.T @ Mh @ R
+    lam, W = np.linalg.eigh(0.5 * (G + G.T))
+    keep = lam > RELAXATION_TOL
+    return R @ (W[:, keep] / np.sqrt(lam[keep]))
+
+
+
+class Here:
+    """The pieces' stages in this process, one after the other."""
+    def put(self, x):
+        return x
+
+    def call(self, fn, *args):
+        return fn(*args)
+
+    def item(self, handle, i):
+        return handle[i]
+
+    def gather(self, handles):
+        return list(handles)
+
+
+class OnCluster:
+    """The pieces' stages on a Dask client's workers: each stage's large result (the piece's
+    columns) stays where it was made, its small ones are gathered; a task whose worker dies
+    is run again from its inputs (none is scattered)."""
+    def __init__(self, client):
+        self.client = client
+
+    def put(self, x):
+        return self.client.submit(_same, x, pure=False)
+
+    def call(self, fn, *args):
+        return self.client.submit(_on_worker, fn, *args, pure=False)
+
+    def item(self, handle, i):
+        return self.client.submit(operator.getitem, handle, i, pure=False)
+
+    def gather(self, handles):
+        return self.client.gather(list(handles))
+
+
+def _same(x):
+    return x
+
+
+def _on_worker(fn, *args):
+    import transient
+    transient.configure()
+    with blas.one_thread():
+        return fn(*args)
+
+
+def _fields(piece, G, shape, block, cutoff):
+    return piece.fields(G, shape, block, cutoff)
+
+
+def _condensed(piece, loads, fmax):
+    return piece.condensed(loads, fmax)
+
+
+def _extended(piece, A, V, loads):
+    return piece.extended(A, V, loads)
+
+
+def pieces_basis(task, where=None):
+    """The PartBasis of a part reduced in pieces (a PiecesTask), its pieces' stages run where
+    says (Here: in this process, OnCluster: on a Dask client's workers), the cut's and the
+    part's own reduction on that model in this process."""
+    where = where or Here()
+    seconds, t0 = {}, time.perf_counter()
+
+    def lap(stage):
+        nonlocal t0
+        seconds[stage], t0 = time.perf_counter() - t0, time.perf_counter()
+    K, M, interface, piece_of = task.K, task.M, task.interface, task.piece_of
+    n = int(piece_of.max()) + 1
+    cut = np.flatnonzero(piece_of == CUT)
+    interior = [np.flatnonzero(piece_of == i) for i in range(n)]
+    fields = interface is not None and interface.support is not None
+    Gs = [np.flatnonzero(np.diff(sp.csc_matrix(abs(restrict(K, I, cut))
+                                               + abs(restrict(M, I, cut))).indptr))
+          for I in interior]
+    pieces = [where.put(_piece(task, I, cut, g, fields)) for I, g in zip(interior, Gs)]
+    E, G = (interface.E, interface.G) if interface is not None else (None, None)
+    if fields:
+        Ps = [P for P in where.gather(where.call(_fields, p, G, interface.shape,
+                                                 interface.block, task.fmax) for p in pieces)
+              if P is not None]
+        P = np.zeros((E.shape[1], 0))
+        if Ps:
+            U, s, _ = np.linalg.svd(np.hstack(Ps), full_matrices=False)
+            P = U[:, s > FIELD_TOL * s[0]]
+        E, G = sp.csc_matrix(E @ P), P.T @ G @ P
+    lap("fields")
+    F = sp.csr_matrix(task.loads) if E is None else sp.hstack(
+        [E, sp.csr_matrix(task.loads)]).tocsr()
+    loads = [F[I] for I in interior]
+    # each piece held at the cut, then the cut condensed, reduced and extended
+    condensed = [where.call(_condensed, p, f, PIECE_REACH * task.fmax)
+                 for p, f in zip(pieces, loads)]
+    A = [where.item(c, 0) for c in condensed]
+    small = where.gather(where.item(c, 1) for c in condensed)
+    Kc, Mc = restrict(K, cut, cut), restrict(M, cut, cut)
+    S = (Kc - shift_sigma(-task.shift_hz) * Mc).toarray()
+    Mh, B = Mc.toarray(), F[cut].toarray()
+    for g, (Sp, Mp, Bp, _, _) in zip(Gs, small):
+        S[np.ix_(g, g)] += Sp
+        Mh[np.ix_(g, g)] += Mp
+        B[g] += Bp
+    lap("pieces")
+    V = cut_basis(S, Mh, B, [(g, sm[3], sm[4]) for g, sm in zip(Gs, small)],
+                  PIECE_REACH * task.fmax, task.shift_hz)
+    del S, Mh, B, small
+    lap("cut")
+    extended = [where.call(_extended, p, a, V[g], f)
+                for p, a, g, f in zip(pieces, A, Gs, loads)]
+    held = [where.item(e, 0) for e in extended]
+    blocks = where.gather(where.item(e, 1) for e in extended)
+    lap("extension")
+    Kcb, Mcb, Fcb, at = _model(blocks, V, Kc, Mc, F[cut])
+    f = 0 if E is None else E.shape[1]
+    cb_interface = None if E is None else PartInterface(
+        sp.csc_matrix(Fcb[:, :f]), G, np.full(f, -1), np.zeros(f, dtype=np.int64))
+    lap("model")
+    # the part's own reduction on that model: its modes, interface shapes and statics
+    red = part_basis(task.name, sp.csr_matrix(Kcb), sp.csr_matrix(Mcb), cb_interface,
+                     Fcb[:, f:], task.fmax, task.shift_hz, task.tol, task.backend)
+    lap("part")
+    T = np.empty((K.shape[0], red.T.shape[1]))
+    Tw = red.T[at[-2]:]
+    T[cut] = V @ Tw
+    rows = where.gather(where.call(Piece.expanded, h, red.T[at[i]:at[i + 1]], Tw)
+                        for i, h in enumerate(held))
+    for I, r in zip(interior, rows):
+        T[I] = r
+    lap("expansion")
+    return PartBasis(task.name, T, red.Kr, red.mode_hz, red.n_shapes, red.n_static, seconds,
+                     red.interface_mu, interface.E.shape[1] if interface is not None else 0)
+
+
+def _piece(task, I, cut, G, fields):
+    """The Piece of the task's part on its interior dofs I, touching the cut's dofs G."""
+    K, M = task.K, task.M
+    KG, MG = restrict(K, I, cut[G]), restrict(M, I, cut[G])
+    interface = task.interface
+    share = {}
+    if interface is not None:
+        E = sp.csr_matrix(interface.E)[I]
+        share = dict(E=E)
+        if fields:
+            share.update(support=restrict(interface.support, I, I), rigid=interface.rigid[I])
+    return Piece(task.name, restrict(K, I, I), restrict(M, I, I), KG, MG, G, task.shift_hz,
+                 task.backend, **share)
+
+
+def _model(blocks, V, Kc, Mc, Fc):
+    """(Kcb, Mcb, Fcb, at): the part's K, M and loads on the columns [A2_1 .. A2_n, W] from
+    the pieces' blocks (Piece.blocks) and the cut's own rows; at: the columns' offsets."""
+    sizes = [b[0][0].shape[0] for b in blocks] + [V.shape[1]]
+    at = np.concatenate([[0], np.cumsum(sizes)])
+    r, w = at[-1], slice(at[-2], at[-1])
+    Kcb, Mcb, Fcb = np.zeros((r, r)), np.zeros((r, r)), np.zeros((r, Fc.shape[1]))
+    Kcb[w, w], Mcb[w, w], Fcb[w] = V.T @ (Kc @ V), V.T @ (Mc @ V), (Fc.T @ V).T
+    for i, b in enumerate(blocks):
+        a = slice(at[i], at[i + 1])
+        for Xcb, (AA, AW, WW) in zip((Kcb, Mcb), b[:2]):
+            Xcb[a, a], Xcb[a, w], Xcb[w, a] = AA, AW, AW.T
+            Xcb[w, w] += WW
+        Fcb[a], Fcb[w] = b[2][0], Fcb[w] + b[2][1]
+    return 0.5 * (Kcb + Kcb.T), 0.5 * (Mcb + Mcb.T), Fcb, at
+
+
+@dataclass(frozen=True)
+class PiecesTask(PartTask):
+    """A part's reduction in pieces: PartTask's, and piece_of (n,) the piece of each free dof
+    (CUT on the cut)."""
+    piece_of: np.ndarray = None
+
+    def run(self, where=None):
+        with blas.one_thread():
+            return pieces_basis(self, where)
+
+    def key(self):
+        h = hashlib.sha256(super().key().encode())
+        for text in _texts():
+            h.update(text)
+        h.update(np.ascontiguousarray(self.piece_of, dtype=np.int64).data)
+        return h.hexdigest()
+
+
+_TEXTS = []
+
+
+def _texts():
+    if not _TEXTS:
+        here = Path(__file__).resolve().parent
+        _TEXTS.extend((here / name).read_bytes() for name in ("pieces.py", "piece.py"))
+    return _TEXTS
