@@ -20,10 +20,10 @@ def sample_step(stored, time):
     """The sample step of the rows [s]: their time difference, checked to be uniform; the run's
     own step times its rows' stride (attributes dt and every) where they agree with it.
 
-    The rows' times are sums of steps, each rounded at the unit in the last place of the time
-    reached: their differences spread by that much, 1e-12 of a microsecond step at 0.1 s,
-    which the frequencies of a spectrum would carry (a lightly damped peak's FRF moves by it
-    over its bandwidth, 1 / damping ratio times as much)."""
+    The rows' times are sums of steps, each rounded to the time reached: their differences
+    are off the step by up to half a unit in the last place of that time (1.4e-12 of a 5 us
+    step at 0.128 s), which the frequencies of a spectrum would carry (a lightly damped
+    peak's FRF by 1 / damping ratio times as much)."""
     if len(time) < 2:
         raise stored.error("time", f"{len(time)} row(s): a spectrum needs a time series")
     dt = np.diff(time)
