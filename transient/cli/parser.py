@@ -215,7 +215,8 @@ def _plot_parser(sub):
                    "half overlapping, or rectangular, end to end (default: rectangular from "
                    "the start of an impulse load, Hann otherwise)")
     p.add_argument("--segment", type=int, metavar="SAMPLES", help="samples per Welch segment "
-                   "(default: the largest power of two up to a quarter of the rows)")
+                   "(default: every row from an impulse load's start; otherwise the largest power of "
+                   "two up to a quarter of the rows)")
     p.add_argument("--fmax", type=float, metavar="HZ", help=FMAX_HELP)
     p = kinds.add_parser("spectrogram", help="time-frequency map of a series of a history: "
                          "short-time amplitude spectra in dB")

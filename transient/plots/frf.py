@@ -36,17 +36,24 @@ class Transfer:
     window: str              # hann or rectangular
     dt: float                # sample step [s]
     t0: float                # time of the first row taken [s]
+    left: float              # from a tap: the response's largest deviation from its first row
+    #                          over the last tenth of the tap's segment, over its largest in it:
+    #                          the ringing the segment cuts (NaN for other inputs)
 
 
 def transfer_data(stored, source, response, segment=None, kind=None, window=None):
     """The H1 transfer function from source to the series `response` (a sensor), by Welch
-    averages of `segment` samples (default: signals.default_segment of the rows taken).
+    averages of `segment` samples (default: every row from an impulse's start, in one
+    rectangular segment; signals.default_segment of the rows otherwise).
 
     source: `loads/NAME`, a load of the run's case, whose amplitude (io.stored.AppliedLoad) is
     the input: H is then the kind asked (default receptance, the displacement per unit of the
     load; mobility, accelerance) and the window defaults to rectangular segments end to end
     for an impulse, taken from its start (a tap: Hann would taper it away at a segment's
-    edge), Hann otherwise. Or a scalar series: H is the ratio of the two, no kind.
+    edge), Hann otherwise. Rectangular segments after the tap's first hold no input and add
+    nothing to H1: one segment of every row resolves a lightly damped peak the record holds,
+    which a shorter one cuts; its coherence, 1 by construction, is NaN, and `left` says how
+    much ringing the record's end cuts. Or a scalar series: H is the ratio of the two, no kind.
     Raises CaseError naming the option at fault.
     """
     stored = stored.uniform()
@@ -86,7 +93,7 @@ def transfer_data(stored, source, response, segment=None, kind=None, window=None
         if n < MIN_SEGMENT:
             raise stored.error("--segment", f"{n} rows: too short for a transfer function "
                                f"(at least {MIN_SEGMENT} rows; run longer)")
-        segment = default_segment(n)
+        segment = n if impulse and window == "rectangular" else default_segment(n)
     if segment > n:
         raise stored.error("--segment", f"the history has {n} rows"
                            + (" from the impulse's start" if impulse else "")
@@ -99,9 +106,15 @@ def transfer_data(stored, source, response, segment=None, kind=None, window=None
     f, H, coherence = transfer_function(x, y, dt, segment, window, oversample)
     if what != "H1":
         H = derived(f, H, kind)
-    return Transfer(f, H, coherence, what, unit, text, segment,
-                    segments_averaged(n, segment, window), window, dt,
-                    float(t[0]) if n else 0.0)
+    averages = segments_averaged(n, segment, window)
+    if averages == 1:
+        coherence = np.full_like(coherence, np.nan)
+    left = np.nan
+    if impulse:
+        motion = np.abs(y[:segment] - y[0])
+        left = float(motion[segment - segment // 10:].max() / max(motion.max(), 1e-300))
+    return Transfer(f, H, coherence, what, unit, text, segment, averages, window, dt,
+                    float(t[0]) if n else 0.0, left)
 
 
 def frf_figure(stored, source, response, path, segment=None, fmax=None, kind=None,
@@ -128,14 +141,23 @@ def frf_figure(stored, source, response, path, segment=None, fmax=None, kind=Non
     bx.plot(f, np.degrees(np.angle(H)), lw=1, color="tab:blue")
     bx.set(ylabel="phase [deg]", ylim=(-185, 185), yticks=(-180, -90, 0, 90, 180))
     cx.plot(f, coherence, lw=1, color="tab:green")
+    if data.averages == 1:
+        cx.text(0.5, 0.5, "one segment: no coherence (1 by construction)", ha="center",
+                va="center", transform=cx.transAxes)
     cx.set(ylabel="coherence", ylim=(-0.02, 1.05), xlabel="frequency [kHz]")
     cx.set_xlim(0, top / 1e3)
     for a in (ax, bx, cx):
         a.grid(alpha=0.3)
     how = ("half overlapping" if data.window == "hann" else "end to end, from t = "
            f"{data.t0 * 1e3:.4g} ms")
+    segments = (f"one {data.window} segment" if data.averages == 1 else
+                f"{data.averages} {data.window} segments")
+    if data.averages == 1:
+        how = how.replace("end to end, ", "")
+    if np.isfinite(data.left):
+        how += f"; the tap's segment ends at {data.left:.2g} of its largest motion"
     _suptitle(fig, f"{_title(stored)}: {data.what} from {data.source} to {response} "
-              f"({data.averages} {data.window} segments of {data.segment} samples, {how}; "
+              f"({segments} of {data.segment} samples, {how}; "
               f"resolution {1e-3 / (data.segment * data.dt):.3g} kHz; to {top / 1e3:.4g} "
               f"kHz, {why})")
     fig.savefig(path, dpi=110)
