@@ -199,7 +199,17 @@ def test_a_part_larger_than_a_worker_is_refused_naming_its_key():
     check_parts(case, model, 1e12)
     with pytest.raises(CaseError, match="worker's memory") as refused:
         check_parts(case, model, 1e6)
-    assert refused.value.key in ("parts.disc.mesh.divisions", "parts.pad.mesh.divisions")
+    assert refused.value.key in ("parts.disc.pieces", "parts.pad.pieces")
+    # a worker that a piece of the disc would fit: the count that does is named
+    from transient.case.sizes import cells_by_part, part_bytes
+    cells = cells_by_part(model.parts)["disc"]
+    budget = 0.5 * (part_bytes(cells, 2) + part_bytes(cells, 3))
+    assert part_bytes(cells_by_part(model.parts)["pad"]) <= budget
+    with pytest.raises(CaseError, match="parts.disc.pieces = 3") as refused:
+        check_parts(case, model, budget)
+    assert refused.value.key == "parts.disc.pieces"
+    check_parts(load(PAD, PAD_DISC + ['solver.reduction.method="components"',
+                                      "parts.disc.pieces=3"]), model, budget)
 
 
 def test_the_memory_bound_takes_the_model_and_its_largest_part():

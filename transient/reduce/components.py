@@ -262,13 +262,13 @@ def check_parts(case, model, budget):
         pieces = case.parts[name].pieces
         need = part_bytes(cells, pieces)
         if need > budget:
-            mesh = case.parts[name].mesh
-            key = f"parts.{name}.mesh." + ("path" if mesh.kind == "file" else "divisions")
-            raise CaseError(case.path, key, f"the part's reduction would take about "
-                            f"{need / 1e9:.3g} GB {'a piece ' if pieces > 1 else ''}"
-                            f"(parts.{name}.pieces = {pieces}), more than a worker's memory "
-                            f"({budget / 1e9:.3g} GB): more pieces, workers with more memory, "
-                            "or a coarser mesh of the part")
+            fits = next((k for k in range(pieces + 1, 65) if part_bytes(cells, k) <= budget),
+                        None)
+            more = (f"parts.{name}.pieces = {fits}" if fits else "workers with more memory")
+            raise CaseError(case.path, f"parts.{name}.pieces", f"the part's reduction would "
+                            f"take about {need / 1e9:.3g} GB{' a piece' if pieces > 1 else ''}, "
+                            f"more than a worker's memory ({budget / 1e9:.3g} GB): {more}, or "
+                            "a coarser mesh of the part")
 
 
 def _preload(case, contacts, pairs, X, Kr, rows, constant):
