@@ -4,6 +4,7 @@ each other part alone (the pad on its abutments) its motion there resembles: whi
 and which pad mode couple."""
 import numpy as np
 
+from ..solve.realmaps import real_times
 from .diameters import disc_motion
 from .rigid import RIGID_RTOL
 
@@ -14,24 +15,6 @@ def part_shares(model, M, U):
     total = np.maximum(energy.sum(axis=0), 1e-300)
     parts = {name: energy[model.part_dofs(name)].sum(axis=0) / total for name in model.parts}
     return [{name: float(share[k]) for name, share in parts.items()} for k in range(U.shape[1])]
-
-
-def real_times(R, Z):
-    """R Z for a real R (dense or sparse) and a complex Z (n, k), as one real product with
-    [Re Z, Im Z]: NumPy and SciPy make a complex copy of R otherwise (the size of the whole
-    basis X), and two products read R twice."""
-    return real_apply(R.__matmul__, Z)
-
-
-def real_apply(f, Z):
-    """f(Z) for a real linear map f (one array, or a tuple of them, out) and a complex Z
-    (n, k), by one call on [Re Z, Im Z]: a contact set's dense factors would otherwise be
-    copied complex, as real_times's R."""
-    k = Z.shape[1]
-    Y = f(np.hstack([Z.real, Z.imag]))
-    if isinstance(Y, tuple):
-        return tuple(y[:, :k] + 1j * y[:, k:] for y in Y)
-    return Y[:, :k] + 1j * Y[:, k:]
 
 
 def still_parts(case, model):
