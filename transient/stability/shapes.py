@@ -4,6 +4,7 @@ each other part alone (the pad on its abutments) its motion there resembles: whi
 and which pad mode couple."""
 import numpy as np
 
+from ..solve.mac import mac
 from ..solve.realmaps import real_times
 from .diameters import disc_motion
 from .rigid import RIGID_RTOL
@@ -46,8 +47,8 @@ def describe(case, model, basis, modes, which, fmax, own=None):
             row["nodal_diameters"] = {part: found[k] for part, found in rotations.items()}
         if matched:
             row["part_modes"] = {part: {"mode": int(i[k] + 1), "frequency_hz": float(f[k]),
-                                        "mac": float(mac[k])}
-                                 for part, (i, f, mac) in matched.items()}
+                                        "mac": float(alike[k])}
+                                 for part, (i, f, alike) in matched.items()}
         out.append(row)
     return out
 
@@ -95,12 +96,7 @@ def matched_part_modes(model, U, parts, fmax, own=None):
         f, Phi = f[keep], Phi[:, keep]
         if Phi.shape[1] == 0:
             continue
-        Up = U[dofs]
-        MUp = real_times(M, Up)
-        cross = np.abs(real_times(Phi.T, MUp)) ** 2
-        norms = np.einsum("ij,ij->j", Phi, M @ Phi)[:, None] * np.real(
-            np.einsum("ij,ij->j", Up.conj(), MUp))[None, :]
-        mac = cross / np.maximum(norms, 1e-300)
-        best = np.argmax(mac, axis=0)
-        out[part] = (keep[best], f[best], mac[best, np.arange(U.shape[1])])
+        alike = mac(Phi, U[dofs], M)
+        best = np.argmax(alike, axis=0)
+        out[part] = (keep[best], f[best], alike[best, np.arange(U.shape[1])])
     return out
