@@ -11,7 +11,7 @@ from .codes import OK
 from .layout import A_ROW, Q_ROW, TIME_ROW, V_ROW
 from .contact import block_buffers, contact_pass
 from .stepping import _external
-from .woodbury import coupled_rows, coupled_solve, friction_move, newton_update
+from .woodbury import coupled_buffers, friction_move, move_start, newton_coupled
 
 IMPLICIT_TOL = 1e-3     # the implicit corrector's residual, relative to the step's motion
 
@@ -175,14 +175,12 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
     uz = np.empty(n)
     x_prev = np.empty(n)
     delta = np.empty(n)
+    move = (x, x_prev, delta)
     start = (q0, v0, fext0)
     ones = np.ones(n)
     Dq = np.ascontiguousarray(coef[:, 6])
     Dv = np.ascontiguousarray(coef[:, 7])
-    stride = 3 if friction else 1
-    cu = np.empty((stride * m, 3))
-    size = np.empty(stride * m)
-    active = np.empty(stride * m, np.int64)
+    coupled = coupled_buffers((3 if friction else 1) * m)
     fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
     svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
                                                                 fr[0].shape[0])
@@ -201,9 +199,7 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
             vb[k] = v[k] - Dv[k] * x[k]
         converged = False
         passed = (0.0, 0.0, 0.0)
-        rprev = np.inf
-        alpha = 1.0
-        newton = not friction
+        rprev, alpha, newton = move_start(friction)
         for it in range(max_iter):
             passed = contact_pass(contact, q, fr, v, rem, ff, gap, press, slip, blocks, fbuf,
                                   ffbuf)
@@ -233,12 +229,8 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
             solve, newton, rprev, alpha = friction_move(x, x_prev, delta, y, rf, rprev,
                                                         newton, alpha, friction)
             if solve:
-                n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu,
-                                        size, active)
-                if n_active > 0:
-                    coupled_solve(y, Dq, Dv, ones, C, fr[0], fr[1], GQ, GV, cu, active,
-                                  n_active, uz)
-                newton_update(x, x_prev, delta, y)
+                newton_coupled(y, Dq, Dv, ones, contact, fr, gap, press, slip, GQ, GV, coupled,
+                               uz, move)
                 rprev = rf
                 alpha = 1.0
             for k in range(n):

@@ -22,8 +22,8 @@ from .layout import A_ROW, Q_ROW, TIME_ROW, V_ROW
 from .contact import block_buffers, contact_pass
 from .friction import friction_pass_sparse, friction_work
 from .stepping import _external, remainder_sparse
-from .woodbury import (active_rows, coupled_rows, coupled_solve, coupled_solve_sparse,
-                       friction_move, newton_update, woodbury)
+from .woodbury import (active_rows, coupled_buffers, coupled_rows, coupled_solve_sparse,
+                       friction_move, move_start, newton_coupled, newton_update, woodbury)
 
 
 @njit_fast
@@ -79,11 +79,9 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
     uz = np.empty(n)
     a_prev = np.empty(n)
     delta = np.empty(n)
+    move = (a, a_prev, delta)
     start = (q_old, v_old, fext_old)
-    stride = 3 if friction else 1
-    cu = np.empty((stride * m, 3))
-    size = np.empty(stride * m)
-    active = np.empty(stride * m, np.int64)
+    coupled = coupled_buffers((3 if friction else 1) * m)
     fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
     svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
                                                                 fr[0].shape[0])
@@ -102,9 +100,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
         t += dt
         _external(t, patterns, sig, svals, fext)
         converged = False
-        rprev = np.inf
-        alpha = 1.0
-        newton = not friction
+        rprev, alpha, newton = move_start(friction)
         for it in range(max_iter):
             _corrected(qp, vp, a, dt, q, v)
             passed = contact_pass(contact, q, fr, v, rem, ff, gap, press, slip, blocks, fbuf,
@@ -124,11 +120,8 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
                                                         newton, alpha, friction)
             if not solve:
                 continue
-            n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu,
-                                    size, active)
-            if n_active:
-                coupled_solve(y, Dq, Dv, op, C, fr[0], fr[1], GQ, GV, cu, active, n_active, uz)
-            newton_update(a, a_prev, delta, y)
+            newton_coupled(y, Dq, Dv, op, contact, fr, gap, press, slip, GQ, GV, coupled, uz,
+                           move)
             rprev = rnorm
             alpha = 1.0
         _corrected(qp, vp, a, dt, q, v)
@@ -188,9 +181,7 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
                                                                 fr[0][0].shape[0] - 1)
     a_prev = np.empty(n)
     delta = np.empty(n)
-    cu = np.empty((3 * m if friction else 0, 3))
-    size = np.empty(3 * m if friction else 0)
-    coupled = np.empty(3 * m if friction else 0, np.int64)
+    cu, size, coupled = coupled_buffers(3 * m if friction else 0)
     h2 = 0.25 * dt * dt
     v_scale = 2.0 / dt if dt > 0.0 else 0.0     # momentum over a step: a force scale in flight
     _external(t, patterns, sig, svals, fext_old)
@@ -209,9 +200,7 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
         t += dt
         _external(t, patterns, sig, svals, fext)
         converged = False
-        rprev = np.inf
-        frac = 1.0
-        newton = not friction
+        rprev, frac, newton = move_start(friction)
         for it in range(max_iter):
             _corrected(qp, vp, a, dt, q, v)
             phi, lin = remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, rem, gap, press)
