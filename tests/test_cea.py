@@ -181,7 +181,8 @@ def test_reduced_complex_modes_match_the_full_model_mode_by_mode():
     # the shapes a mu map links its values by (stability.branches): X (A z) at a sample of
     # the model's dofs, from each kind of basis (the full model's injection, the assembled
     # path's, the parts' synthesis), and alike across them for a mode the analyses share
-    from transient.stability.branches import mac_matrix, observed
+    from transient.stability.branches import observed
+    from transient.solve.mac import mac
     unstable = np.flatnonzero(full.modes.unstable & (full.modes.frequency_hz <= fmax))
     for analysis in (full, reduced, parts):
         dofs, shapes = observed(analysis)
@@ -191,8 +192,8 @@ def test_reduced_complex_modes_match_the_full_model_mode_by_mode():
         if analysis is not full:
             nearest = [int(np.argmin(np.abs(analysis.modes.eigenvalues - lam)))
                        for lam in full.modes.eigenvalues[unstable]]
-            mac = mac_matrix(observed(full)[1][:, unstable], shapes[:, nearest])
-            assert np.diag(mac).min() > 0.9
+            alike = mac(observed(full)[1][:, unstable], shapes[:, nearest])
+            assert np.diag(alike).min() > 0.9
 
 
 @pytest.mark.parametrize("reduced", [True, False])

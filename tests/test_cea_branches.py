@@ -10,7 +10,8 @@ import pytest
 
 import transient
 from transient.cli import main
-from transient.stability.branches import MAC_LINK, Step, mac_matrix, shapes_record, track
+from transient.solve.mac import mac
+from transient.stability.branches import MAC_LINK, Step, shapes_record, track
 from transient.stability.modes import complex_modes
 
 from test_cea_mode_coupling import (A_XX, D_YY, MASS, delta, lambda_growing_undamped, modes,
@@ -125,16 +126,16 @@ def test_two_modes_crossing_in_frequency_without_coupling_keep_their_branches():
         cm = complex_modes(*three_dof(p))
         steps.append(Step(p, cm.eigenvalues, cm.unstable, 0.0, cm.vectors, np.arange(3)))
     # the shapes differ but are not orthogonal: their MAC is neither 0 nor 1
-    assert 0.05 < mac_matrix(PHI[:, [0]], PHI[:, [1]])[0, 0] < 0.5
+    assert 0.05 < mac(PHI[:, [0]], PHI[:, [1]])[0, 0] < 0.5
 
     def shapes_along(found, b):
         """The mode shape (column of PHI) branch b holds at each value."""
         out = []
         for k, s in enumerate(steps):
             j = np.flatnonzero(found.branch[k] == b)[0]
-            mac = mac_matrix(PHI, s.shapes[:, [j]])[:, 0]
-            assert mac.max() > 1 - 1e-10
-            out.append(int(np.argmax(mac)))
+            alike = mac(PHI, s.shapes[:, [j]])[:, 0]
+            assert alike.max() > 1 - 1e-10
+            out.append(int(np.argmax(alike)))
         return out
     found = track("p", steps)
     assert found.count == 3 and found.linked_by == "shapes"
@@ -143,13 +144,13 @@ def test_two_modes_crossing_in_frequency_without_coupling_keep_their_branches():
         along = shapes_along(found, b)
         assert along == [along[0]] * len(ps)
     # sorted by frequency: the lower of the two is mode 0 before the crossing, 1 after
-    assert [int(np.argmax(mac_matrix(PHI, s.shapes[:, [0]])[:, 0])) for s in steps] == [
+    assert [int(np.argmax(mac(PHI, s.shapes[:, [0]])[:, 0])) for s in steps] == [
         0, 0, 0, 1, 1, 1]
     # by the eigenvalue alone: the branch that starts on mode 0 ends on mode 1
     blind = track("p", [Step(s.value, s.eigenvalues, s.unstable) for s in steps])
     assert blind.linked_by == "eigenvalues" and blind.count == 3
-    starts = int(blind.branch[0][np.argmax(mac_matrix(PHI[:, [0]], steps[0].shapes)[0])])
-    ends = [int(np.argmax(mac_matrix(PHI, s.shapes[:, blind.branch[k] == starts])[:, 0]))
+    starts = int(blind.branch[0][np.argmax(mac(PHI[:, [0]], steps[0].shapes)[0])])
+    ends = [int(np.argmax(mac(PHI, s.shapes[:, blind.branch[k] == starts])[:, 0]))
             for k, s in enumerate(steps)]
     assert ends == [0, 0, 0, 1, 1, 1]
 
@@ -177,7 +178,7 @@ def test_a_degenerate_pair_continues_whatever_shapes_the_solver_gave_it():
     e = np.eye(3)
     y = np.stack([e[0], (e[0] + 0.8 * e[1]) / np.sqrt(1.64)], axis=1)
     x = np.stack([e[1], (e[0] - e[1]) / np.sqrt(2.0)], axis=1)
-    plain = mac_matrix(x, y)
+    plain = mac(x, y)
     assert min(plain[0, 1], plain[1, 0]) < MAC_LINK and plain[0, 0] < MAC_LINK
     lam0 = np.array([50j, 50j * (1 + 1e-6)])
     lam1 = np.array([-0.1 + 49.5j, -0.2 + 50.5j])

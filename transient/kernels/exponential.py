@@ -6,12 +6,12 @@ for by Newton (exponential_implicit)."""
 import numpy as np
 
 from ..jit import njit_fast
-from .codes import NO_CONVERGENCE, NOT_FINITE, OK
-from .layout import A_ROW, FRICTION_ROW, Q_ROW, TIME_ROW, V_ROW
+from .bookkeeping import close_step, modal_step_end, step_buffers
+from .codes import OK
+from .layout import A_ROW, Q_ROW, TIME_ROW, V_ROW
 from .contact import block_buffers, contact_pass
-from .friction import friction_energy
-from .stepping import _external, _finite, _store, modal_step_energies
-from .woodbury import coupled_rows, coupled_solve, friction_move, newton_update
+from .stepping import _external
+from .woodbury import coupled_buffers, friction_move, move_start, newton_coupled
 
 IMPLICIT_TOL = 1e-3     # the implicit corrector's residual, relative to the step's motion
 
@@ -23,6 +23,24 @@ def _propagate(coef, q0, v0, f0, f1, q, v):
         dF = f1[k] - f0[k]
         q[k] = coef[k, 0] * q0[k] + coef[k, 1] * v0[k] + coef[k, 4] * f0[k] + coef[k, 6] * dF
         v[k] = coef[k, 2] * q0[k] + coef[k, 3] * v0[k] + coef[k, 5] * f0[k] + coef[k, 7] * dF
+
+
+@njit_fast
+def _predicted(q, v, f0, fprev, q0, v0, f1):
+    """A step's start kept (q0, v0) and the forces at its end predicted, extrapolated linearly
+    from those at its start (f0) and at the previous step's (fprev)."""
+    for k in range(q.shape[0]):
+        q0[k] = q[k]
+        v0[k] = v[k]
+        f1[k] = 2.0 * f0[k] - fprev[k]
+
+
+@njit_fast
+def _carried(fprev, f0, f1):
+    """The forces handed on at a step's end: the previous step's start, and the next one's."""
+    for k in range(f0.shape[0]):
+        fprev[k] = f0[k]
+        f0[k] = f1[k]
 
 
 @njit_fast
@@ -65,67 +83,47 @@ def exponential_reduced(state, acc, n_steps, every, dt, modal, contact, fr, sign
     patterns, sig, S = signals
     corrections, propagate = corrector
     fprev, fstart = carry
-    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v = state[Q_ROW], state[V_ROW]
     t = state[TIME_ROW, 0]
     n = q.shape[0]
     m = C.shape[0]
     rem = np.empty(n)
     fext = np.empty(n)
+    fext0 = np.empty(n)
     f0 = np.empty(n)
     f1 = np.empty(n)
     q0 = np.empty(n)
     v0 = np.empty(n)
-    svals = np.empty(patterns.shape[0])
-    gap = np.empty(m)
-    press = np.empty(m)
+    start = (q0, v0, fext0)
     fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
-    energy = np.empty(5)
-    fext0 = np.empty(n)
-    ff = np.empty(n)
-    slip = np.empty((2, fr[0].shape[0]))
-    dq = np.empty(n)
-    # the friction force at the step's start, carried in the state (with friction only: a
-    # frictionless state may have fewer rows)
-    ff0 = state[FRICTION_ROW] if fr[0].shape[0] > 0 else np.empty(n)
+    svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
+                                                                fr[0].shape[0])
     _external(t, patterns, sig, svals, fext0)
     for k in range(n):
         f0[k] = fstart[k]
     row = 0
+    status, step = OK, 0
     for step in range(1, n_steps + 1):
-        for k in range(n):
-            q0[k] = q[k]
-            v0[k] = v[k]
-            f1[k] = 2.0 * f0[k] - fprev[k]          # linear extrapolation of the forces
+        _predicted(q, v, f0, fprev, q0, v0, f1)
         t += dt
         _external(t, patterns, sig, svals, fext)
-        p_in = 0.0
+        passed = (0.0, 0.0, 0.0)
         for it in range(corrections + 1):
             _propagate(coef, q0, v0, f0, f1, q, v)
-            phi, lin, p_in = contact_pass(contact, q, fr, v, rem, ff, gap,
-                                          press, slip, blocks, fbuf, ffbuf)
+            passed = contact_pass(contact, q, fr, v, rem, ff, gap, press, slip, blocks, fbuf,
+                                  ffbuf)
             for k in range(n):
                 f1[k] = fext[k] + rem[k]
         if propagate:
             _propagate(coef, q0, v0, f0, f1, q, v)
-        modal_step_energies(q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt, acc,
-                            energy)
-        for k in range(n):
-            dq[k] = q[k] - q0[k]
-        friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
-        for k in range(n):
-            fprev[k] = f0[k]
-            f0[k] = f1[k]
-            fext0[k] = fext[k]
-        if not (_finite(q) and _finite(v) and _finite(energy)):
-            _finish(state, t, f0, fstart, omega2, damp)
-            return NOT_FINITE, step
-        if step % every == 0:
-            _store(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v,
-                   out_e)
-            row += 1
+        modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq, acc, energy)
+        _carried(fprev, f0, f1)
+        status, row = close_step(step, every, row, t, q, v, S, gap, press, slip, energy, True,
+                                 out)
+        if status != OK:
+            break
     _finish(state, t, f0, fstart, omega2, damp)
-    return OK, n_steps
+    return status, step
 
 
 @njit_fast
@@ -158,13 +156,11 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
     patterns, sig, S = signals
     GQ, GV, max_iter = iteration
     fprev, fstart = carry
-    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v = state[Q_ROW], state[V_ROW]
     t = state[TIME_ROW, 0]
     n = q.shape[0]
     m = C.shape[0]
     friction = fr[0].shape[0] > 0
-    stride = 3 if friction else 1
     rem = np.empty(n)
     fext = np.empty(n)
     fext0 = np.empty(n)
@@ -179,30 +175,22 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
     uz = np.empty(n)
     x_prev = np.empty(n)
     delta = np.empty(n)
+    move = (x, x_prev, delta)
+    start = (q0, v0, fext0)
     ones = np.ones(n)
     Dq = np.ascontiguousarray(coef[:, 6])
     Dv = np.ascontiguousarray(coef[:, 7])
-    svals = np.empty(patterns.shape[0])
-    gap = np.empty(m)
-    press = np.empty(m)
-    cu = np.empty((stride * m, 3))
-    size = np.empty(stride * m)
-    active = np.empty(stride * m, np.int64)
+    coupled = coupled_buffers((3 if friction else 1) * m)
     fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
-    energy = np.empty(5)
-    ff = np.empty(n)
-    slip = np.empty((2, fr[0].shape[0]))
-    dq = np.empty(n)
-    ff0 = state[FRICTION_ROW] if friction else np.empty(n)
+    svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
+                                                                fr[0].shape[0])
     _external(t, patterns, sig, svals, fext0)
     for k in range(n):
         f0[k] = fstart[k]
     row = 0
+    status, step = OK, 0
     for step in range(1, n_steps + 1):
-        for k in range(n):
-            q0[k] = q[k]
-            v0[k] = v[k]
-            x[k] = 2.0 * f0[k] - fprev[k]          # predictor: forces extrapolated
+        _predicted(q, v, f0, fprev, q0, v0, x)
         t += dt
         _external(t, patterns, sig, svals, fext)
         _propagate(coef, q0, v0, f0, x, q, v)
@@ -210,13 +198,11 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
             qb[k] = q[k] - Dq[k] * x[k]
             vb[k] = v[k] - Dv[k] * x[k]
         converged = False
-        p_in = 0.0
-        rprev = np.inf
-        alpha = 1.0
-        newton = not friction
+        passed = (0.0, 0.0, 0.0)
+        rprev, alpha, newton = move_start(friction)
         for it in range(max_iter):
-            phi, lin, p_in = contact_pass(contact, q, fr, v, rem, ff, gap,
-                                          press, slip, blocks, fbuf, ffbuf)
+            passed = contact_pass(contact, q, fr, v, rem, ff, gap, press, slip, blocks, fbuf,
+                                  ffbuf)
             rf = 0.0
             rq = 0.0
             rv = 0.0
@@ -243,12 +229,8 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
             solve, newton, rprev, alpha = friction_move(x, x_prev, delta, y, rf, rprev,
                                                         newton, alpha, friction)
             if solve:
-                n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu,
-                                        size, active)
-                if n_active > 0:
-                    coupled_solve(y, Dq, Dv, ones, C, fr[0], fr[1], GQ, GV, cu, active,
-                                  n_active, uz)
-                newton_update(x, x_prev, delta, y)
+                newton_coupled(y, Dq, Dv, ones, contact, fr, gap, press, slip, GQ, GV, coupled,
+                               uz, move)
                 rprev = rf
                 alpha = 1.0
             for k in range(n):
@@ -257,24 +239,11 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
         # v from the forces found; q stays the state they were evaluated at (within the
         # tolerance of the propagated one), so a chunk restarting from it finds the same forces
         _propagate(coef, q0, v0, f0, f1, qb, v)
-        modal_step_energies(q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt, acc,
-                            energy)
-        for k in range(n):
-            dq[k] = q[k] - q0[k]
-        friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
-        for k in range(n):
-            fprev[k] = f0[k]
-            f0[k] = f1[k]
-            fext0[k] = fext[k]
-        if not (_finite(q) and _finite(v) and _finite(energy)):
-            _finish(state, t, f0, fstart, omega2, damp)
-            return NOT_FINITE, step
-        if not converged:
-            _finish(state, t, f0, fstart, omega2, damp)
-            return NO_CONVERGENCE, step
-        if step % every == 0:
-            _store(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v,
-                   out_e)
-            row += 1
+        modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq, acc, energy)
+        _carried(fprev, f0, f1)
+        status, row = close_step(step, every, row, t, q, v, S, gap, press, slip, energy,
+                                 converged, out)
+        if status != OK:
+            break
     _finish(state, t, f0, fstart, omega2, damp)
-    return OK, n_steps
+    return status, step

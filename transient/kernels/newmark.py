@@ -15,15 +15,15 @@ are left to the fixed-operator iteration, which they slow by at most that factor
 import numpy as np
 
 from ..jit import njit_fast
+from .bookkeeping import close_step, energies, modal_step_end, step_buffers
 from .sparse import csr_abs_matvec, csr_matvec, factor_solve
-from .codes import NO_CONVERGENCE, NOT_FINITE, OK
-from .layout import A_ROW, FRICTION_ROW, Q_ROW, TIME_ROW, V_ROW
+from .codes import OK
+from .layout import A_ROW, Q_ROW, TIME_ROW, V_ROW
 from .contact import block_buffers, contact_pass
-from .friction import friction_energy, friction_pass_sparse, friction_work
-from .stepping import (_energies, _external, _finite, _store, _store_sparse, modal_step_energies,
-                       remainder_sparse)
-from .woodbury import (active_rows, coupled_rows, coupled_solve, coupled_solve_sparse,
-                       friction_move, newton_update, woodbury)
+from .friction import friction_pass_sparse, friction_work
+from .stepping import _external, remainder_sparse
+from .woodbury import (active_rows, coupled_buffers, coupled_rows, coupled_solve_sparse,
+                       friction_move, move_start, newton_coupled, newton_update, woodbury)
 
 
 @njit_fast
@@ -32,6 +32,16 @@ def _corrected(qp, vp, a, dt, q, v):
     for k in range(q.shape[0]):
         q[k] = qp[k] + 0.25 * dt * dt * a[k]
         v[k] = vp[k] + 0.5 * dt * a[k]
+
+
+@njit_fast
+def _predicted(q, v, a, dt, h2, q_old, v_old, qp, vp):
+    """A step's start kept (q_old, v_old) and Newmark's predictors from it (h2 = dt^2 / 4)."""
+    for k in range(q.shape[0]):
+        q_old[k] = q[k]
+        v_old[k] = v[k]
+        qp[k] = q[k] + dt * v[k] + h2 * a[k]
+        vp[k] = v[k] + 0.5 * dt * a[k]
 
 
 @njit_fast
@@ -52,13 +62,11 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
     C, g0, w, kt0, code, params = contact
     patterns, sig, S = signals
     GQ, GV, tol, max_iter = iteration
-    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     t = state[TIME_ROW, 0]
     n = q.shape[0]
     m = C.shape[0]
     friction = fr[0].shape[0] > 0
-    stride = 3 if friction else 1
     rem = np.empty(n)
     fext = np.empty(n)
     fext_old = np.empty(n)
@@ -71,18 +79,12 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
     uz = np.empty(n)
     a_prev = np.empty(n)
     delta = np.empty(n)
-    svals = np.empty(patterns.shape[0])
-    gap = np.empty(m)
-    press = np.empty(m)
-    cu = np.empty((stride * m, 3))
-    size = np.empty(stride * m)
-    active = np.empty(stride * m, np.int64)
+    move = (a, a_prev, delta)
+    start = (q_old, v_old, fext_old)
+    coupled = coupled_buffers((3 if friction else 1) * m)
     fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
-    energy = np.empty(5)
-    ff = np.empty(n)
-    slip = np.empty((2, fr[0].shape[0]))
-    dq = np.empty(n)
-    ff0 = state[FRICTION_ROW] if friction else np.empty(n)
+    svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
+                                                                fr[0].shape[0])
     h2 = 0.25 * dt * dt
     Dq = np.full(n, h2)
     Dv = np.full(n, 0.5 * dt)
@@ -91,25 +93,18 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
         op[k] = 1.0 + 0.5 * dt * damp[k] + h2 * omega2[k]
     _external(t, patterns, sig, svals, fext_old)
     row = 0
-    phi = 0.0
-    lin = 0.0
+    passed = (0.0, 0.0, 0.0)
+    status, step = OK, 0
     for step in range(1, n_steps + 1):
-        for k in range(n):
-            q_old[k] = q[k]
-            v_old[k] = v[k]
-            qp[k] = q[k] + dt * v[k] + h2 * a[k]
-            vp[k] = v[k] + 0.5 * dt * a[k]
+        _predicted(q, v, a, dt, h2, q_old, v_old, qp, vp)
         t += dt
         _external(t, patterns, sig, svals, fext)
         converged = False
-        p_in = 0.0
-        rprev = np.inf
-        alpha = 1.0
-        newton = not friction
+        rprev, alpha, newton = move_start(friction)
         for it in range(max_iter):
             _corrected(qp, vp, a, dt, q, v)
-            phi, lin, p_in = contact_pass(contact, q, fr, v, rem, ff, gap,
-                                          press, slip, blocks, fbuf, ffbuf)
+            passed = contact_pass(contact, q, fr, v, rem, ff, gap, press, slip, blocks, fbuf,
+                                  ffbuf)
             rnorm = 0.0
             fnorm = 0.0
             for k in range(n):
@@ -125,32 +120,18 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
                                                         newton, alpha, friction)
             if not solve:
                 continue
-            n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu,
-                                    size, active)
-            if n_active:
-                coupled_solve(y, Dq, Dv, op, C, fr[0], fr[1], GQ, GV, cu, active, n_active, uz)
-            newton_update(a, a_prev, delta, y)
+            newton_coupled(y, Dq, Dv, op, contact, fr, gap, press, slip, GQ, GV, coupled, uz,
+                           move)
             rprev = rnorm
             alpha = 1.0
         _corrected(qp, vp, a, dt, q, v)
-        modal_step_energies(q, v, q_old, v_old, fext_old, fext, damp, omega2, lin, phi, dt,
-                            acc, energy)
-        for k in range(n):
-            fext_old[k] = fext[k]
-            dq[k] = q[k] - q_old[k]
-        friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
-        if not (_finite(q) and _finite(v) and _finite(energy)):
-            state[TIME_ROW, 0] = t
-            return NOT_FINITE, step
-        if not converged:
-            state[TIME_ROW, 0] = t
-            return NO_CONVERGENCE, step
-        if step % every == 0:
-            _store(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v,
-                   out_e)
-            row += 1
+        modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq, acc, energy)
+        status, row = close_step(step, every, row, t, q, v, S, gap, press, slip, energy,
+                                 converged, out)
+        if status != OK:
+            break
     state[TIME_ROW, 0] = t
-    return OK, n_steps
+    return status, step
 
 
 @njit_fast
@@ -166,7 +147,6 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
     C, g0, w, kt0, code, params = contact
     patterns, sig, S = signals
     factor, Z, G, GV, tol, max_iter = iteration
-    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     t = state[TIME_ROW, 0]
     n = q.shape[0]
@@ -181,6 +161,7 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
     qp = np.empty(n)
     vp = np.empty(n)
     q_old = np.empty(n)
+    v_old = np.empty(n)
     ku = np.empty(n)
     kabs = np.empty(n)
     kv = np.empty(n)
@@ -189,26 +170,18 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
     r = np.empty(n)
     y = np.empty(n)
     work_n = np.empty(n)
-    svals = np.empty(patterns.shape[0])
-    gap = np.empty(m)
-    press = np.empty(m)
     e = np.empty(m)
     u = np.empty(m)
     active = np.empty(m, np.int64)
     Gd = np.empty(m)
     for i in range(m):
         Gd[i] = G[i, i]
-    energy = np.empty(5)
     friction = fr[0][0].shape[0] > 1
-    ff = np.empty(n)
-    slip = np.empty((2, fr[0][0].shape[0] - 1))
-    ff0 = state[FRICTION_ROW] if friction else np.empty(n)
-    dq = np.empty(n)
+    svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
+                                                                fr[0][0].shape[0] - 1)
     a_prev = np.empty(n)
     delta = np.empty(n)
-    cu = np.empty((3 * m if friction else 0, 3))
-    size = np.empty(3 * m if friction else 0)
-    coupled = np.empty(3 * m if friction else 0, np.int64)
+    cu, size, coupled = coupled_buffers(3 * m if friction else 0)
     h2 = 0.25 * dt * dt
     v_scale = 2.0 / dt if dt > 0.0 else 0.0     # momentum over a step: a force scale in flight
     _external(t, patterns, sig, svals, fext_old)
@@ -220,18 +193,14 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
     row = 0
     phi = 0.0
     lin = 0.0
+    p_in = 0.0
+    status, step = OK, 0
     for step in range(1, n_steps + 1):
-        for k in range(n):
-            q_old[k] = q[k]
-            qp[k] = q[k] + dt * v[k] + h2 * a[k]
-            vp[k] = v[k] + 0.5 * dt * a[k]
+        _predicted(q, v, a, dt, h2, q_old, v_old, qp, vp)
         t += dt
         _external(t, patterns, sig, svals, fext)
         converged = False
-        p_in = 0.0
-        rprev = np.inf
-        frac = 1.0
-        newton = not friction
+        rprev, frac, newton = move_start(friction)
         for it in range(max_iter):
             _corrected(qp, vp, a, dt, q, v)
             phi, lin = remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, rem, gap, press)
@@ -298,22 +267,16 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
             if beta != 0.0:
                 power += beta * v[k] * kv[k]
             fext_old[k] = fext[k]
-        _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
+        energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
         power_old = power
         if friction:
             friction_work(acc, energy, ff0, ff, dq, p_in, dt)
-        if not (_finite(q) and _finite(v) and _finite(energy)):
-            state[TIME_ROW, 0] = t
-            return NOT_FINITE, step
-        if not converged:
-            state[TIME_ROW, 0] = t
-            return NO_CONVERGENCE, step
-        if step % every == 0:
-            _store_sparse(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g,
-                          out_p, out_v, out_e)
-            row += 1
+        status, row = close_step(step, every, row, t, q, v, S, gap, press, slip, energy,
+                                 converged, out)
+        if status != OK:
+            break
     state[TIME_ROW, 0] = t
-    return OK, n_steps
+    return status, step
 
 
 @njit_fast

@@ -6,9 +6,7 @@ where K_lin = K + C^T diag(w k_t*) C is the stiffness linearized at the preload 
 tangent there), so the contact rows only carry the nonlinear remainder, which vanishes to first
 order around the preload. F(t) = sum_j patterns_j s_j(t).
 
-Energies (stored per output row): kinetic, strain (structure only: 1/2 q^T K q), contact
-(sum w Phi(g)), external work, dissipated; their balance kinetic + strain + contact - work +
-dissipated is constant.
+The energies stored per output row, and a step's close, are bookkeeping.py's.
 
 Contact points carry their own law: code (m,) and params (m, 4) (see laws.py), so pairs with
 different laws share one set of rows.
@@ -18,10 +16,10 @@ The exponential kernels are in exponential.py, the implicit Newmark ones in newm
 """
 import numpy as np
 
-from ..jit import njit, njit_fast
-from .codes import CONTACT, DISSIPATED, KINETIC, NOT_FINITE, OK, STRAIN, WORK
-from .layout import (A_ROW, DAMPING_ACC, DISSIPATED_ACC, FRICTION_ROW, Q_ROW, TIME_ROW, V_ROW,
-                     WORK_ACC)
+from ..jit import njit_fast
+from .bookkeeping import close_step, energies, step_buffers
+from .codes import OK
+from .layout import A_ROW, DAMPING_ACC, Q_ROW, TIME_ROW, V_ROW
 from .contact import block_buffers, contact_pass
 from .friction import friction_energy, friction_pass_sparse, friction_work
 from .laws import pressure_potential
@@ -42,56 +40,11 @@ def _external(t, patterns, sig, svals, fext):
                 fext[k] += s * patterns[j, k]
 
 
-EXPONENT = np.int64(0x7FF0000000000000)
-
-
-@njit
-def _finite(x):
-    """All entries finite, read from the bits (exponent all ones: NaN or Inf). Fastmath lets the
-    compiler assume floats are never NaN or Inf and fold np.isfinite to true, even inlined from
-    a function compiled without it; integer operations it leaves alone."""
-    bits = x.view(np.int64)
-    for k in range(bits.shape[0]):
-        if bits[k] & EXPONENT == EXPONENT:
-            return False
-    return True
-
-
 @njit_fast
 def _track_min(gap, gmin):
     for i in range(gap.shape[0]):
         if gap[i] < gmin[i]:
             gmin[i] = gap[i]
-
-
-@njit_fast
-def _energies(energy, kin, strain, phi, acc, work, dissipated):
-    """Adds a step's external work and dissipation to acc, and fills the energy terms."""
-    acc[WORK_ACC] += work
-    acc[DISSIPATED_ACC] += dissipated
-    energy[KINETIC] = kin
-    energy[STRAIN] = strain
-    energy[CONTACT] = phi
-    energy[WORK] = acc[WORK_ACC]
-    energy[DISSIPATED] = acc[DISSIPATED_ACC]
-
-
-@njit_fast
-def _store(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v, out_e):
-    """An output row of a reduced kernel: the sensors S q, and the contact points' gaps,
-    pressures and (with friction) slip velocities when stored (out_v (r, 2, m), or none)."""
-    out_t[row] = t
-    for k in range(S.shape[0]):
-        s = 0.0
-        for j in range(q.shape[0]):
-            s += S[k, j] * q[j]
-        out_s[row, k] = s
-    if out_g.shape[1] > 0:
-        out_g[row] = gap
-        out_p[row] = press
-    if out_v.shape[2] > 0:
-        out_v[row] = slip
-    out_e[row] = energy
 
 
 @njit_fast
@@ -107,7 +60,6 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, contact, fr, 
     (friction_energy). Returns (status, steps done)."""
     C, g0, w, kt0, code, params = contact
     patterns, sig, S = signals
-    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     t = state[TIME_ROW, 0]
     n = q.shape[0]
@@ -115,19 +67,12 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, contact, fr, 
     f = np.empty(n)
     fext = np.empty(n)
     fext_old = np.empty(n)
-    svals = np.empty(patterns.shape[0])
-    gap = np.empty(m)
-    press = np.empty(m)
+    svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
+                                                                fr[0].shape[0])
     fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
-    energy = np.empty(5)
-    dq = np.empty(n)
-    ff = np.empty(n)
-    slip = np.empty((2, fr[0].shape[0]))
-    # the friction force at the step's start, carried in the state (with friction only: a
-    # frictionless state may have fewer rows)
-    ff0 = state[FRICTION_ROW] if fr[0].shape[0] > 0 else np.empty(n)
     _external(t, patterns, sig, svals, fext_old)
     row = 0
+    status, step = OK, 0
     for step in range(1, n_steps + 1):
         power = 0.0
         for k in range(n):
@@ -155,17 +100,14 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, contact, fr, 
             kin += 0.5 * vn * vn
             strain += 0.5 * omega2[k] * q[k] * q[k]
             power += damp[k] * vn * vn
-        _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
+        energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
         friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
-        if not (_finite(q) and _finite(v) and _finite(energy)):
-            state[TIME_ROW, 0] = t
-            return NOT_FINITE, step
-        if step % every == 0:
-            _store(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v,
-                   out_e)
-            row += 1
+        status, row = close_step(step, every, row, t, q, v, S, gap, press, slip, energy, True,
+                                 out)
+        if status != OK:
+            break
     state[TIME_ROW, 0] = t
-    return OK, n_steps
+    return status, step
 
 
 @njit_fast
@@ -201,7 +143,6 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, contact,
     damping power at the end of the last step."""
     C, g0, w, kt0, code, params = contact
     patterns, sig, S = signals
-    out_t, out_s, out_g, out_p, out_v, out_e = out
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     t = state[TIME_ROW, 0]
     n = q.shape[0]
@@ -213,20 +154,15 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, contact,
     kv = np.empty(n)
     fext = np.empty(n)
     fext_old = np.empty(n)
-    dq = np.empty(n)
-    svals = np.empty(patterns.shape[0])
-    gap = np.empty(m)
-    press = np.empty(m)
-    energy = np.empty(5)
     friction = fr[0][0].shape[0] > 1
-    ff = np.empty(n)
-    slip = np.empty((2, fr[0][0].shape[0] - 1))
-    ff0 = state[FRICTION_ROW] if friction else np.empty(n)
+    svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
+                                                                fr[0][0].shape[0] - 1)
     _external(t, patterns, sig, svals, fext_old)
     # the damping power at the end of the last step, carried (it takes K at the half-step
     # velocity, which a chunk's start does not have)
     power_old = acc[DAMPING_ACC]
     row = 0
+    status, step = OK, 0
     for step in range(1, n_steps + 1):
         for k in range(n):
             vh = v[k] + 0.5 * dt * a[k]
@@ -259,53 +195,14 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, contact,
             power += alpha * mass[k] * vn * vn
             if beta != 0.0:
                 power += beta * vn * kv[k]
-        _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
+        energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
         power_old = power
         acc[DAMPING_ACC] = power
         if friction:
             friction_work(acc, energy, ff0, ff, dq, p_in, dt)
-        if not (_finite(q) and _finite(v) and _finite(energy)):
-            state[TIME_ROW, 0] = t
-            return NOT_FINITE, step
-        if step % every == 0:
-            _store_sparse(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p,
-                          out_v, out_e)
-            row += 1
+        status, row = close_step(step, every, row, t, q, v, S, gap, press, slip, energy, True,
+                                 out)
+        if status != OK:
+            break
     state[TIME_ROW, 0] = t
-    return OK, n_steps
-
-
-@njit_fast
-def _store_sparse(row, t, q, S, gap, press, slip, energy, out_t, out_s, out_g, out_p, out_v,
-                  out_e):
-    Sp, Si, Sd = S
-    out_t[row] = t
-    for k in range(Sp.shape[0] - 1):
-        s = 0.0
-        for j in range(Sp[k], Sp[k + 1]):
-            s += Sd[j] * q[Si[j]]
-        out_s[row, k] = s
-    if out_g.shape[1] > 0:
-        out_g[row] = gap
-        out_p[row] = press
-    if out_v.shape[2] > 0:
-        out_v[row] = slip
-    out_e[row] = energy
-
-
-@njit_fast
-def modal_step_energies(q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt, acc, energy):
-    """The energies after a step of a modal system (M = I, diagonal damping and K_lin) from
-    (q0, v0) to (q, v): external work and dissipation by the trapezoidal rule, kinetic and
-    strain (K_lin's, less the contact's linear part lin) at the end; phi the contact
-    potential."""
-    work = 0.0
-    power = 0.0
-    kin = 0.0
-    strain = -lin
-    for k in range(q.shape[0]):
-        work += 0.5 * (fext0[k] + fext[k]) * (q[k] - q0[k])
-        power += damp[k] * (v0[k] * v0[k] + v[k] * v[k])
-        kin += 0.5 * v[k] * v[k]
-        strain += 0.5 * omega2[k] * q[k] * q[k]
-    _energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
+    return status, step

@@ -274,6 +274,33 @@ def friction_move(x, x_prev, delta, y, rnorm2, rprev2, newton, frac, friction):
 
 
 @njit_fast
+def move_start(friction):
+    """friction_move's (rprev2, frac, newton) at a step's start: with friction the fixed point
+    first, without it Newton at once."""
+    return np.inf, 1.0, not friction
+
+
+@njit_fast
+def coupled_buffers(rows):
+    """coupled_rows' buffers (cu, size, active) for up to rows terms."""
+    return np.empty((rows, 3)), np.empty(rows), np.empty(rows, np.int64)
+
+
+@njit_fast
+def newton_coupled(y, Dq, Dv, P, contact, fr, gap, press, slip, GQ, GV, coupled, uz, move):
+    """The Newton step of a reduced implicit kernel: y = J^-1 r with the exact terms of
+    coupled_rows (coupled: its buffers), then move = (x, x_prev, delta) by newton_update;
+    contact as contact.contact_pass takes it."""
+    C, g0, w, kt0, code, params = contact
+    cu, size, active = coupled
+    x, x_prev, delta = move
+    n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu, size, active)
+    if n_active > 0:
+        coupled_solve(y, Dq, Dv, P, C, fr[0], fr[1], GQ, GV, cu, active, n_active, uz)
+    newton_update(x, x_prev, delta, y)
+
+
+@njit_fast
 def newton_update(x, x_prev, delta, y):
     """The full Newton step x -= y, kept (x_prev, delta) for friction_move's halving."""
     for k in range(x.shape[0]):

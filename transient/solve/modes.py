@@ -10,6 +10,7 @@ import scipy.sparse.linalg as spla
 
 from ..model.dofs import free_block, shifted
 from .lanczos import TOL, NotConverged, block_lanczos
+from .mac import mac
 from .linsolve import factorize
 
 DENSE_LIMIT = 600   # below this many free dofs a dense eigensolver is faster and exact
@@ -130,12 +131,8 @@ def mac_pairs(shapes_a, shapes_b, M):
     the mass (one to one, the assignment that maximizes the summed MAC), and the MAC:
     (partner index or -1, MAC) arrays of len(a). Shapes mass-normalized on the same dofs."""
     from scipy.optimize import linear_sum_assignment
-    Mb = M @ shapes_b
-    cross = shapes_a.T @ Mb
-    norm_a = np.einsum("ij,ij->j", shapes_a, M @ shapes_a)
-    norm_b = np.einsum("ij,ij->j", shapes_b, Mb)
-    mac = cross ** 2 / np.outer(norm_a, norm_b)
-    rows, cols = linear_sum_assignment(-mac)
+    alike = mac(shapes_a, shapes_b, M)
+    rows, cols = linear_sum_assignment(-alike)
     partner = np.full(shapes_a.shape[1], -1)
     partner[rows] = cols
-    return partner, np.where(partner >= 0, mac[np.arange(len(partner)), partner], 0.0)
+    return partner, np.where(partner >= 0, alike[np.arange(len(partner)), partner], 0.0)

@@ -47,6 +47,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..io.tables import write_csv
+from ..solve.mac import mac
 from .modes import UNSTABLE_RTOL
 
 MAC_LINK = 0.5          # a mode resembling the one at the previous value less is another mode
@@ -132,17 +133,6 @@ class Branches:
         return [unstable_path, coupling_path]
 
 
-
-def mac_matrix(X, Y):
-    """(n, m) complex MAC |x_i^H y_j|^2 / (|x_i|^2 |y_j|^2) of the columns of X (p, n) and Y
-    (p, m); 0 for a column of zeros."""
-    cross = np.abs(X.conj().T @ Y) ** 2
-    nx = np.real(np.einsum("ij,ij->j", X.conj(), X))
-    ny = np.real(np.einsum("ij,ij->j", Y.conj(), Y))
-    norms = np.outer(nx, ny)
-    return np.where(norms > 0, cross / np.where(norms > 0, norms, 1.0), 0.0)
-
-
 def _alike(a, b):
     """(n, m) MAC of the modes at Step a with those at Step b, a mode of a degenerate pair
     (DEGENERATE) taken as the span of the pair: the largest MAC a combination of its shapes
@@ -154,7 +144,7 @@ def _alike(a, b):
 def _span_mac(lam, X, Y):
     """(n, m) the share of each column of Y in the span of the columns of X whose eigenvalues
     (lam) lie within DEGENERATE of each one's: its MAC with that column alone if none."""
-    out = mac_matrix(X, Y)
+    out = mac(X, Y)
     close = np.abs(lam[:, None] - lam[None, :]) <= DEGENERATE * np.abs(lam)[:, None]
     norms = np.real(np.einsum("ij,ij->j", Y.conj(), Y))
     for i in np.flatnonzero(close.sum(axis=1) > 1):
@@ -171,7 +161,7 @@ def track(parameter, steps):
     by_shapes = all(s.shapes is not None for s in steps) and all(
         np.array_equal(s.dofs, steps[0].dofs) for s in steps)
     first = len(steps[0].eigenvalues) if steps else 0
-    branch, mac = [np.arange(first)], [np.full(first, np.nan)]
+    branch, links = [np.arange(first)], [np.full(first, np.nan)]
     count = first
     for a, b in zip(steps[:-1], steps[1:]):
         la, lb = a.eigenvalues, b.eigenvalues
@@ -187,9 +177,9 @@ def track(parameter, steps):
         ids[new] = count + np.arange(len(new))
         count += len(new)
         branch.append(ids)
-        mac.append(link)
+        links.append(link)
     return Branches(parameter, np.array([s.value for s in steps], float), steps, tuple(branch),
-                    tuple(mac), "shapes" if by_shapes else "eigenvalues",
+                    tuple(links), "shapes" if by_shapes else "eigenvalues",
                     _coupling(parameter, steps, branch))
 
 

@@ -14,8 +14,8 @@ against the full model).
 """
 import numpy as np
 
+from ..solve.realmaps import real_apply, real_times
 from .linearize import preload_pressure
-from .shapes import real_apply, real_times
 
 
 def mode_residuals(model, M, system, state, basis, modes, which):

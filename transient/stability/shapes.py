@@ -4,6 +4,8 @@ each other part alone (the pad on its abutments) its motion there resembles: whi
 and which pad mode couple."""
 import numpy as np
 
+from ..solve.mac import mac
+from ..solve.realmaps import real_times
 from .diameters import disc_motion
 from .rigid import RIGID_RTOL
 
@@ -14,24 +16,6 @@ def part_shares(model, M, U):
     total = np.maximum(energy.sum(axis=0), 1e-300)
     parts = {name: energy[model.part_dofs(name)].sum(axis=0) / total for name in model.parts}
     return [{name: float(share[k]) for name, share in parts.items()} for k in range(U.shape[1])]
-
-
-def real_times(R, Z):
-    """R Z for a real R (dense or sparse) and a complex Z (n, k), as one real product with
-    [Re Z, Im Z]: NumPy and SciPy make a complex copy of R otherwise (the size of the whole
-    basis X), and two products read R twice."""
-    return real_apply(R.__matmul__, Z)
-
-
-def real_apply(f, Z):
-    """f(Z) for a real linear map f (one array, or a tuple of them, out) and a complex Z
-    (n, k), by one call on [Re Z, Im Z]: a contact set's dense factors would otherwise be
-    copied complex, as real_times's R."""
-    k = Z.shape[1]
-    Y = f(np.hstack([Z.real, Z.imag]))
-    if isinstance(Y, tuple):
-        return tuple(y[:, :k] + 1j * y[:, k:] for y in Y)
-    return Y[:, :k] + 1j * Y[:, k:]
 
 
 def still_parts(case, model):
@@ -63,8 +47,8 @@ def describe(case, model, basis, modes, which, fmax, own=None):
             row["nodal_diameters"] = {part: found[k] for part, found in rotations.items()}
         if matched:
             row["part_modes"] = {part: {"mode": int(i[k] + 1), "frequency_hz": float(f[k]),
-                                        "mac": float(mac[k])}
-                                 for part, (i, f, mac) in matched.items()}
+                                        "mac": float(alike[k])}
+                                 for part, (i, f, alike) in matched.items()}
         out.append(row)
     return out
 
@@ -112,12 +96,7 @@ def matched_part_modes(model, U, parts, fmax, own=None):
         f, Phi = f[keep], Phi[:, keep]
         if Phi.shape[1] == 0:
             continue
-        Up = U[dofs]
-        MUp = real_times(M, Up)
-        cross = np.abs(real_times(Phi.T, MUp)) ** 2
-        norms = np.einsum("ij,ij->j", Phi, M @ Phi)[:, None] * np.real(
-            np.einsum("ij,ij->j", Up.conj(), MUp))[None, :]
-        mac = cross / np.maximum(norms, 1e-300)
-        best = np.argmax(mac, axis=0)
-        out[part] = (keep[best], f[best], mac[best, np.arange(U.shape[1])])
+        alike = mac(Phi, U[dofs], M)
+        best = np.argmax(alike, axis=0)
+        out[part] = (keep[best], f[best], alike[best, np.arange(U.shape[1])])
     return out
