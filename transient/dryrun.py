@@ -14,7 +14,7 @@ from .model.placement import check_motions
 
 def measure(case, command):
     """A dict of what `command` ("run", "modes" or "cea") would take on the case: parts
-    (dofs, free dofs, cells), pairs (fine points, initial gaps), memory (the estimate, the
+    (dofs, free dofs, cells, the pieces the components path reduces it in), pairs (fine points, initial gaps), memory (the estimate, the
     limit and the part that sets it on the components path), for a run its steps (exact
     where the step is known before the setup, else a bound or None) and its setup's seconds
     (the modes' for `modes`) as estimated from those timed on this machine
@@ -24,7 +24,8 @@ def measure(case, command):
     cells = cells_by_part(model.parts)
     parts = {name: {"dofs": int(len(model.part_dofs(name))),
                      "free_dofs": int(free[model.part_dofs(name)].sum()),
-                     "cells": int(sum(n for n, _ in cells[name]))} for name in model.parts}
+                     "cells": int(sum(n for n, _ in cells[name])),
+                     "pieces": case.parts[name].pieces} for name in model.parts}
     check_motions(case, model.parts)
     pairs = {}
     for name in case.contact:

@@ -262,7 +262,9 @@ def _dry(case, command, as_json):
         return 0
     print(f"{case.path}: {command} would take {d['dofs']} dofs ({d['free_dofs']} free)")
     for name, p in d["parts"].items():
-        print(f"  part {name}: {p['dofs']} dofs ({p['free_dofs']} free), {p['cells']} cells")
+        pieces = f", in {p['pieces']} pieces" if p["pieces"] > 1 else ""
+        print(f"  part {name}: {p['dofs']} dofs ({p['free_dofs']} free), {p['cells']} cells"
+              f"{pieces}")
     for name, p in d["pairs"].items():
         print(f"  contact {name}: {p['fine_points']} fine points" + _gap_text(p["gap0"]))
     m = d["memory"]
