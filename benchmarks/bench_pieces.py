@@ -4,8 +4,8 @@ task pickled, then reduced in a fresh process (one thread, as on a worker), or w
 stage, the peak resident memory above the task loaded (and each worker's peak), and its modes
 in the band (the part's reach over 1.5) against the part whole.
 
-    python benchmarks/bench_pieces.py CASE --part disc [--pieces 2,4] [--workers N]
-                                 [--mu 0.4] [--set key=value ...] [--markdown FILE] [--json FILE]
+    python benchmarks/bench_pieces.py CASE --part disc [--pieces 2,4] [--reach 1,1.5]
+                                 [--workers N] [--mu 0.4] [--set key=value ...] [--markdown FILE] [--json FILE]
 """
 import argparse
 import json
@@ -22,10 +22,14 @@ from tables import publish  # noqa: E402
 RUN = """
 import json, pickle, resource, sys, time
 import transient
+import transient.reduce.pieces
 transient.configure()
 with open(sys.argv[1], "rb") as f:
     task, entries = pickle.load(f)
-workers = int(sys.argv[2])
+workers, reach = int(sys.argv[2]), float(sys.argv[3])
+if reach:
+    import transient.reduce.pieces
+    transient.reduce.pieces.PIECE_REACH = reach
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 peaks = []
 t0 = time.perf_counter()
@@ -53,18 +57,19 @@ print(json.dumps(dict(part=task.name, ndof=task.K.shape[0], entries=int(entries)
                       cut=0 if piece_of is None else int((piece_of < 0).sum()),
                       columns=int(p.T.shape[1]), seconds=seconds, above=(peak - base) / 1e9,
                       workers=peaks, stages=p.seconds, mode_hz=p.mode_hz.tolist(),
-                      band=task.fmax / 1.5)))
+                      band=task.fmax / 1.5, reach=transient.reduce.pieces.PIECE_REACH)))
 """
 
 
 def markdown(rows, load):
-    lines = ["| part | pieces | free dofs | cut dofs | basis columns | workers | seconds | "
-             "stages [s] | above the task [GB] | workers' peaks [GB] | band modes | "
-             "largest error in the band | load |", "|" + "---|" * 13]
+    lines = ["| part | pieces | reach | free dofs | cut dofs | basis columns | workers | "
+             "seconds | stages [s] | above the task [GB] | workers' peaks [GB] | band modes | "
+             "largest error in the band | load |", "|" + "---|" * 14]
     for r in rows:
         stages = ", ".join(f"{k} {v:.1f}" for k, v in r["stages"].items())
         peaks = ", ".join(f"{p:.2f}" for p in r["workers"]) or "-"
-        lines.append(f"| {r['part']} | {r['pieces']} | {r['ndof']:,} | {r['cut']:,} | "
+        reach = f"{r['reach']:g}" if r["pieces"] > 1 else "-"
+        lines.append(f"| {r['part']} | {r['pieces']} | {reach} | {r['ndof']:,} | {r['cut']:,} | "
                      f"{r['columns']} | {r['n_workers']} | {r['seconds']:.1f} | {stages} | "
                      f"{r['above']:.2f} | {peaks} | {r['band_modes']} | {r['error']:.1e} | "
                      f"{load:.1f} |")
@@ -77,6 +82,8 @@ def main(argv=None):
     parser.add_argument("--part", required=True)
     parser.add_argument("--pieces", default="2,4", help="comma-separated counts")
     parser.add_argument("--workers", type=int, default=0)
+    parser.add_argument("--reach", default="0", help="comma-separated PIECE_REACH values for "
+                        "each count (0: the package's)")
     parser.add_argument("--mu", type=float, default=0.4)
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     parser.add_argument("--markdown")
@@ -91,14 +98,17 @@ def main(argv=None):
     load0, rows = os.getloadavg()[0], []
     case = str(Path(args.case).resolve())
     with tempfile.TemporaryDirectory() as folder:
-        for count in [1] + [int(n) for n in args.pieces.split(",")]:
+        runs = [(1, 0.0)] + [(int(n), float(r)) for n in args.pieces.split(",")
+                             for r in args.reach.split(",")]
+        for count, reach in runs:
             sub = Path(folder) / str(count)
-            sub.mkdir()
-            child(DUMP, [str(sub), case, args.part, *overrides,
-                         f"parts.{args.part}.pieces={count}"], str(ROOT), str(sub))
+            if not sub.exists():
+                sub.mkdir()
+                child(DUMP, [str(sub), case, args.part, *overrides,
+                             f"parts.{args.part}.pieces={count}"], str(ROOT), str(sub))
             workers = args.workers if count > 1 else 0
-            row = json.loads(child(RUN, [f"{sub}/{args.part}.pkl", str(workers)], str(ROOT),
-                                   str(sub)))
+            row = json.loads(child(RUN, [f"{sub}/{args.part}.pkl", str(workers), str(reach)],
+                                   str(ROOT), str(sub)))
             f = np.array(row.pop("mode_hz"))
             if count == 1:
                 reference = f
@@ -107,7 +117,7 @@ def main(argv=None):
             error = float(np.max(np.abs(f[:n][band[:n]] - reference[:n][band[:n]])
                                 / reference[:n][band[:n]]))
             rows.append(dict(row, n_workers=workers, band_modes=int(band.sum()), error=error))
-            print(f"{args.part} in {count}: {row['seconds']:.1f} s, {row['above']:.2f} GB above "
+            print(f"{args.part} in {count} (reach {row['reach']:g}): {row['seconds']:.1f} s, {row['above']:.2f} GB above "
                   f"the task, workers {row['workers']}, band error {error:.1e}", flush=True)
     publish(markdown(rows, 0.5 * (load0 + os.getloadavg()[0])), args.markdown, args.json, rows)
     return 0

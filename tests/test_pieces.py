@@ -126,3 +126,23 @@ def test_pieces_on_a_cluster_equal_pieces_here():
         cluster.close()
     for name in ("T", "Kr", "mode_hz"):
         assert np.array_equal(getattr(here, name), getattr(there, name)), name
+
+
+@pytest.mark.slow
+def test_the_pieces_benchmark_measures_the_part_against_it_whole(tmp_path):
+    """benchmarks/bench_pieces.py on the small pad_disc: a row for the disc whole and one in
+    2 pieces, its band's error against the whole's, the table written."""
+    import json
+    import bench_pieces
+    out = tmp_path / "rows.json"
+    args = [PAD, "--part", "disc", "--pieces", "2", "--json", str(out),
+            "--markdown", str(tmp_path / "table.md")]
+    for s in PAD_DISC:
+        args += ["--set", s]
+    assert bench_pieces.main(args) == 0
+    data = json.loads(out.read_text())
+    rows = data["rows"] if isinstance(data, dict) else data
+    assert [r["pieces"] for r in rows] == [1, 2]
+    assert rows[0]["error"] == 0.0 and 0.0 < rows[1]["error"] < 1e-5
+    assert rows[1]["cut"] > 0 and rows[1]["band_modes"] >= 20
+    assert "| disc | 2 |" in (tmp_path / "table.md").read_text()
