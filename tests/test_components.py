@@ -361,11 +361,11 @@ def test_a_lining_campaign_reduces_the_disc_once(tmp_path):
 def test_a_part_with_no_static_direction_keeps_its_modes():
     """A part with no load on it and no interface direction kept (a coarse statics tolerance)
     has its modes alone as basis, not an error."""
-    from transient.reduce.parts import _with_statics
+    from transient.reduce.parts import with_statics
     rng = np.random.default_rng(0)
     Phi = np.linalg.qr(rng.standard_normal((12, 3)))[0]
     X = np.asfortranarray(np.hstack([Phi, np.zeros((12, 2))]))
-    T = _with_statics(X, 3, sp.identity(12, format="csr"))
+    T = with_statics(X, 3, sp.identity(12, format="csr"))
     assert np.array_equal(T, Phi)
 
 

@@ -12,6 +12,7 @@ import numpy as np
 from ..cluster import WHERE
 from ..errors import CaseError
 from .parts import PartBasis
+from .pieces import OnCluster, PiecesTask
 
 # what a part's cache file holds of its PartBasis
 _FIELDS = ("T", "Kr", "mode_hz", "n_shapes", "n_static", "interface_mu", "interface_loads")
@@ -60,7 +61,6 @@ def on_cluster(client):
     (the scheduler's), the same arithmetic on one thread."""
     def run(tasks, done=None):
         from dask.distributed import as_completed
-        from .pieces import OnCluster, PiecesTask
         whole = [i for i, task in enumerate(tasks) if not isinstance(task, PiecesTask)]
         futures = [client.submit(_run, tasks[i], key=f"part-{tasks[i].name}-"
                                  f"{tasks[i].key()[:16]}", pure=False) for i in whole]

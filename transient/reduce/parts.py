@@ -164,7 +164,7 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
     # the factors past their last solve: given back before the basis is formed beside them
     getattr(solve, "free", lambda: None)()
     solve = beyond = None
-    T = _with_statics(X[:, :end], m, M)
+    T = with_statics(X[:, :end], m, M)
     del X
     Kr = np.empty((T.shape[1], T.shape[1]))
     for start in range(0, T.shape[1], width):     # no n x r product of K beside T
@@ -192,7 +192,7 @@ class PartError(RuntimeError):
         return PartError, (self.part, str(self))
 
 
-def _with_statics(X, m, M):
+def with_statics(X, m, M):
     """The basis [Phi, S W] in place of X = [Phi, S] (its first m columns the modes, the
     rest S the static responses), returned as X's first columns: S without what the modes
     hold (twice, for round-off: on a floating part they are dominated by its rigid motion),

@@ -17,7 +17,7 @@ from ..solve.lowrank import block_columns
 from ..solve.modes import normal_modes, shift_sigma
 from .basis import MODES_TOL
 from .fields import field_map
-from .parts import PartError, _with_statics
+from .parts import PartError, with_statics
 
 
 @dataclass(frozen=True)
@@ -89,7 +89,7 @@ class Piece:
             X[:, m + start:m + start + width] = solve(loads[:, start:start + width].toarray())
         B = -(KGt @ X[:, m:])
         omega2 = np.sign(modes.frequencies) * (2 * np.pi * modes.frequencies) ** 2
-        return (_with_statics(X, m, self.M),
+        return (with_statics(X, m, self.M),
                 (0.5 * (S + S.T), 0.5 * (Mh + Mh.T), B, omega2, C))
 
     def extended(self, A, V, loads):
@@ -112,7 +112,7 @@ class Piece:
             X[:, a + start:a + start + width] = solve(self.M @ ext[:, cols]
                                                       + self.MG @ V[:, cols])
         solve = None
-        A2 = _with_statics(X, a, self.M)
+        A2 = with_statics(X, a, self.M)
         return (A2, ext), self.blocks(A2, ext, V, loads)
 
     def blocks(self, A, ext, V, loads):
