@@ -80,6 +80,17 @@ def child(code, args, pythonpath, folder):
     return out.stdout.strip().splitlines()[-1]
 
 
+def components_overrides(case, sets, mu):
+    """The overrides that reduce the case by its parts at friction mu on every sliding pair
+    (after the caller's sets)."""
+    sys.path.insert(0, str(ROOT))
+    from transient.case.loading import load
+    pairs = load(case, sets).contact
+    return (list(sets) + ['solver.reduction.method="components"']
+            + [f"contact.{p}.friction.mu={mu}" for p, c in pairs.items()
+               if c.law.kind != "bilateral"])
+
+
 def markdown(rows, load):
     lines = ["| part | package | free dofs | K entries | element-matrix entries | basis columns "
              "| seconds | stages [s] | above the task [GB] | bytes per entry | load |",
@@ -102,12 +113,7 @@ def main(argv=None):
     parser.add_argument("--markdown")
     parser.add_argument("--json")
     args = parser.parse_args(argv)
-    sys.path.insert(0, str(ROOT))
-    from transient.case.loading import load
-    pairs = load(args.case, args.set).contact
-    overrides = (args.set + ['solver.reduction.method="components"']
-                 + [f"contact.{p}.friction.mu={args.mu}" for p, c in pairs.items()
-                    if c.law.kind != "bilateral"])
+    overrides = components_overrides(args.case, args.set, args.mu)
     load0, rows = os.getloadavg()[0], []
     packages = [("HEAD", str(ROOT))] + ([("base", args.base)] if args.base else [])
     with tempfile.TemporaryDirectory() as folder:

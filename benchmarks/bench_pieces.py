@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bench_parts import DUMP, ROOT, child  # noqa: E402  (siblings in benchmarks/)
-from tables import publish  # noqa: E402
+from bench_parts import DUMP, ROOT, child, components_overrides  # noqa: E402  (siblings)
+from tables import publish, table  # noqa: E402
 
 RUN = """
 import json, pickle, resource, sys, time
@@ -62,18 +62,16 @@ print(json.dumps(dict(part=task.name, ndof=task.K.shape[0], entries=int(entries)
 
 
 def markdown(rows, load):
-    lines = ["| part | pieces | reach | free dofs | cut dofs | basis columns | workers | "
-             "seconds | stages [s] | above the task [GB] | workers' peaks [GB] | band modes | "
-             "largest error in the band | load |", "|" + "---|" * 14]
-    for r in rows:
-        stages = ", ".join(f"{k} {v:.1f}" for k, v in r["stages"].items())
-        peaks = ", ".join(f"{p:.2f}" for p in r["workers"]) or "-"
-        reach = f"{r['reach']:g}" if r["pieces"] > 1 else "-"
-        lines.append(f"| {r['part']} | {r['pieces']} | {reach} | {r['ndof']:,} | {r['cut']:,} | "
-                     f"{r['columns']} | {r['n_workers']} | {r['seconds']:.1f} | {stages} | "
-                     f"{r['above']:.2f} | {peaks} | {r['band_modes']} | {r['error']:.1e} | "
-                     f"{load:.1f} |")
-    return "\n".join(lines)
+    header = ["part", "pieces", "reach", "free dofs", "cut dofs", "basis columns", "workers",
+              "seconds", "stages [s]", "above the task [GB]", "workers' peaks [GB]",
+              "band modes", "largest error in the band", "load"]
+    return table(header, [[r["part"], r["pieces"], f"{r['reach']:g}" if r["pieces"] > 1 else "-",
+                           f"{r['ndof']:,}", f"{r['cut']:,}", r["columns"], r["n_workers"],
+                           f"{r['seconds']:.1f}",
+                           ", ".join(f"{k} {v:.1f}" for k, v in r["stages"].items()),
+                           f"{r['above']:.2f}",
+                           ", ".join(f"{p:.2f}" for p in r["workers"]) or "-",
+                           r["band_modes"], f"{r['error']:.1e}", f"{load:.1f}"] for r in rows])
 
 
 def main(argv=None):
@@ -89,12 +87,7 @@ def main(argv=None):
     parser.add_argument("--markdown")
     parser.add_argument("--json")
     args = parser.parse_args(argv)
-    sys.path.insert(0, str(ROOT))
-    from transient.case.loading import load
-    pairs = load(args.case, args.set).contact
-    overrides = (args.set + ['solver.reduction.method="components"']
-                 + [f"contact.{p}.friction.mu={args.mu}" for p, c in pairs.items()
-                    if c.law.kind != "bilateral"])
+    overrides = components_overrides(args.case, args.set, args.mu)
     load0, rows = os.getloadavg()[0], []
     case = str(Path(args.case).resolve())
     with tempfile.TemporaryDirectory() as folder:
@@ -117,8 +110,9 @@ def main(argv=None):
             error = float(np.max(np.abs(f[:n][band[:n]] - reference[:n][band[:n]])
                                 / reference[:n][band[:n]]))
             rows.append(dict(row, n_workers=workers, band_modes=int(band.sum()), error=error))
-            print(f"{args.part} in {count} (reach {row['reach']:g}): {row['seconds']:.1f} s, {row['above']:.2f} GB above "
-                  f"the task, workers {row['workers']}, band error {error:.1e}", flush=True)
+            print(f"{args.part} in {count} (reach {row['reach']:g}): {row['seconds']:.1f} s, "
+                  f"{row['above']:.2f} GB above the task, workers {row['workers']}, band error "
+                  f"{error:.1e}", flush=True)
     publish(markdown(rows, 0.5 * (load0 + os.getloadavg()[0])), args.markdown, args.json, rows)
     return 0
 

@@ -12,3 +12,9 @@ def publish(table, markdown=None, json_path=None, rows=None):
             f.write(table + "\n")
     if json_path:
         Path(json_path).write_text(json.dumps(rows, indent=1))
+
+
+def table(header, rows):
+    """A markdown table of the header's columns and rows (lists of cells, formatted)."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return "\n".join(lines + ["| " + " | ".join(str(c) for c in r) + " |" for r in rows])
