@@ -5,7 +5,8 @@ stage, the peak resident memory above the task loaded (and each worker's peak), 
 in the band (the part's reach over 1.5) against the part whole.
 
     python benchmarks/bench_pieces.py CASE --part disc [--pieces 2,4] [--reach 1,1.5]
-                                 [--workers N] [--mu 0.4] [--set key=value ...] [--markdown FILE] [--json FILE]
+                                 [--workers N] [--mu 0.4] [--set key=value ...]
+                                 [--markdown FILE] [--json FILE]
 """
 import argparse
 import json
