@@ -43,13 +43,14 @@ PART_REACH = 1.5
 
 def part_tasks(model, M, pairs, contacts, patterns, constant, pieces=None):
     """(dofs, (name, K, M, interface, loads), piece_of) of each part: the arguments of
-    part_basis on the part's free dofs, which sit at dofs; piece_of (None: the part whole)
-    the piece of each of them (reduce.pieces), for a part that pieces (name -> count) cuts.
-    The interface (a PartInterface) holds the contact's loads E on the part: with factored rows (a regularized rule, C = L B^T) the
-    columns of B on the part, the traces of the (1-eps)-compatible shapes (with friction the
-    tangential rows' too), which the part reduces to the fields of its loaded interface
-    (reduce.fields); else a unit load on each dof the rows touch, kept whole. The rows reach
-    the task as their gram in E's coordinates (k x k), not point by point."""
+    part_basis on the part's free dofs, which sit at dofs; piece_of (None: the part whole) the
+    piece of each of them (reduce.pieces), for a part that pieces (name -> count) cuts. The
+    interface (a PartInterface) holds the contact's loads E on the part: with factored rows (a
+    regularized rule, C = L B^T) the columns of B on the part, the traces of the
+    (1-eps)-compatible shapes (with friction the tangential rows' too), which the part reduces
+    to the fields of its loaded interface (reduce.fields); else a unit load on each dof the rows
+    touch, kept whole. The rows reach the task as their gram in E's coordinates (k x k), not
+    point by point."""
     free = ~model.fixed
     f = contacts.friction
     scale = contacts.weights * law_tangent(pairs, contacts)
