@@ -82,12 +82,18 @@ class Piece:
             Y = self.MG[:, cols].toarray() + self.M @ Psi
             C[:, cols] = Phi.T @ Y
             Mh[:, cols] = MGt @ Psi - KGt @ solve(Y)
-        m, s = Phi.shape[1], loads.shape[1]
-        X = np.empty((self.K.shape[0], m + s), order="F")
+        # only the loads that reach the piece: one away from the contact has no field's rows,
+        # and its responses to them, and their relaxations on the cut, are zero
+        loads = sp.csc_matrix(loads)
+        loaded = np.flatnonzero(np.diff(loads.indptr))
+        m = Phi.shape[1]
+        X = np.empty((self.K.shape[0], m + len(loaded)), order="F")
         X[:, :m] = Phi
-        for start in range(0, s, width):
-            X[:, m + start:m + start + width] = solve(loads[:, start:start + width].toarray())
-        B = -(KGt @ X[:, m:])
+        for start in range(0, len(loaded), width):
+            cols = loaded[start:start + width]
+            X[:, m + start:m + start + len(cols)] = solve(loads[:, cols].toarray())
+        B = np.zeros((g, loads.shape[1]))
+        B[:, loaded] = -(KGt @ X[:, m:])
         omega2 = np.sign(modes.frequencies) * (2 * np.pi * modes.frequencies) ** 2
         return (with_statics(X, m, self.M),
                 (0.5 * (S + S.T), 0.5 * (Mh + Mh.T), B, omega2, C))
