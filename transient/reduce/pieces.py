@@ -243,8 +243,12 @@ def pieces_basis(task, where=None):
     lap("cut")
     extended = [where.call(_extended, p, a, V[g], f)
                 for p, a, g, f in zip(pieces, A, Gs, loads)]
+    # each piece's first columns are in its extended ones: let them go (on a worker, once
+    # its extension has run)
+    del A, condensed
     held = [where.item(e, 0) for e in extended]
     blocks = where.gather(where.item(e, 1) for e in extended)
+    del extended
     lap("extension")
     Kcb, Mcb, Fcb, at = _model(blocks, V, Kc, Mc, F[cut])
     f = 0 if E is None else E.shape[1]
@@ -258,10 +262,11 @@ def pieces_basis(task, where=None):
     T = np.empty((K.shape[0], red.T.shape[1]))
     Tw = red.T[at[-2]:]
     T[cut] = V @ Tw
-    rows = where.gather(where.call(Piece.expanded, h, red.T[at[i]:at[i + 1]], Tw)
-                        for i, h in enumerate(held))
-    for I, r in zip(interior, rows):
-        T[I] = r
+    rows = [where.call(Piece.expanded, h, red.T[at[i]:at[i + 1]], Tw)
+            for i, h in enumerate(held)]
+    del held
+    for I in interior:     # a piece's rows at a time, each let go once in T
+        T[I] = where.gather([rows.pop(0)])[0]
     lap("expansion")
     return PartBasis(task.name, T, red.Kr, red.mode_hz, red.n_shapes, red.n_static, seconds,
                      red.interface_mu, interface.E.shape[1] if interface is not None else 0)
