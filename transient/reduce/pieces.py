@@ -134,18 +134,26 @@ def _orthonormal(R, Mh, Phi):
 
 
 class Here:
-    """The pieces' stages in this process, one after the other."""
+    """The pieces' stages in this process, a piece after the other: each stage's arguments
+    taken as it comes to them, so that what a piece's stage lets go is freed before the
+    next piece's."""
     def put(self, x):
         return x
 
-    def call(self, fn, *args):
-        return fn(*args)
+    def split(self, fn, arguments):
+        """([fn(*a)[0]], [fn(*a)[1]]) for a in arguments: the large results held, the small
+        ones gathered."""
+        held, small = [], []
+        for args in arguments:
+            h, m = fn(*args)
+            held.append(h)
+            small.append(m)
+        return held, small
 
-    def item(self, handle, i):
-        return handle[i]
-
-    def gather(self, handles):
-        return list(handles)
+    def each(self, fn, arguments):
+        """fn(*a) for a in arguments, one at a time."""
+        for args in arguments:
+            yield fn(*args)
 
 
 class OnCluster:
@@ -158,14 +166,21 @@ class OnCluster:
     def put(self, x):
         return self.client.submit(_same, x, pure=False)
 
-    def call(self, fn, *args):
+    def _call(self, fn, args):
         return self.client.submit(_on_worker, fn, *args, pure=False)
 
-    def item(self, handle, i):
-        return self.client.submit(operator.getitem, handle, i, pure=False)
+    def split(self, fn, arguments):
+        futures = [self._call(fn, args) for args in arguments]
+        held = [self.client.submit(operator.getitem, f, 0, pure=False) for f in futures]
+        small = self.client.gather([self.client.submit(operator.getitem, f, 1, pure=False)
+                                    for f in futures])
+        return held, small
 
-    def gather(self, handles):
-        return self.client.gather(list(handles))
+    def each(self, fn, arguments):
+        """fn(*a) for a in arguments, all submitted, gathered one at a time and let go."""
+        futures = [self._call(fn, args) for args in arguments]
+        while futures:
+            yield futures.pop(0).result()
 
 
 def _same(x):
@@ -212,8 +227,8 @@ def pieces_basis(task, where=None):
     pieces = [where.put(_piece(task, I, cut, g, fields)) for I, g in zip(interior, Gs)]
     E, G = (interface.E, interface.G) if interface is not None else (None, None)
     if fields:
-        Ps = [P for P in where.gather(where.call(_fields, p, G, interface.shape,
-                                                 interface.block, task.fmax) for p in pieces)
+        Ps = [P for P in where.each(_fields, ((p, G, interface.shape, interface.block,
+                                               task.fmax) for p in pieces))
               if P is not None]
         P = np.zeros((E.shape[1], 0))
         if Ps:
@@ -225,10 +240,8 @@ def pieces_basis(task, where=None):
         [E, sp.csr_matrix(task.loads)]).tocsr()
     loads = [F[I] for I in interior]
     # each piece held at the cut, then the cut condensed, reduced and extended
-    condensed = [where.call(_condensed, p, f, PIECE_REACH * task.fmax)
-                 for p, f in zip(pieces, loads)]
-    A = [where.item(c, 0) for c in condensed]
-    small = where.gather(where.item(c, 1) for c in condensed)
+    A, small = where.split(_condensed, ((p, f, PIECE_REACH * task.fmax)
+                                        for p, f in zip(pieces, loads)))
     Kc, Mc = restrict(K, cut, cut), restrict(M, cut, cut)
     S = (Kc - shift_sigma(-task.shift_hz) * Mc).toarray()
     Mh, B = Mc.toarray(), F[cut].toarray()
@@ -241,14 +254,10 @@ def pieces_basis(task, where=None):
                   PIECE_REACH * task.fmax, task.shift_hz)
     del S, Mh, B, small
     lap("cut")
-    extended = [where.call(_extended, p, a, V[g], f)
-                for p, a, g, f in zip(pieces, A, Gs, loads)]
-    # each piece's first columns are in its extended ones: let them go (on a worker, once
-    # its extension has run)
-    del A, condensed
-    held = [where.item(e, 0) for e in extended]
-    blocks = where.gather(where.item(e, 1) for e in extended)
-    del extended
+    # each piece's first columns are in its extended ones: taken from the list as its
+    # extension starts, they go once it has run
+    held, blocks = where.split(_extended, ((p, A.pop(0), V[g], f)
+                                           for p, g, f in zip(pieces, Gs, loads)))
     lap("extension")
     Kcb, Mcb, Fcb, at = _model(blocks, V, Kc, Mc, F[cut])
     f = 0 if E is None else E.shape[1]
@@ -262,11 +271,10 @@ def pieces_basis(task, where=None):
     T = np.empty((K.shape[0], red.T.shape[1]))
     Tw = red.T[at[-2]:]
     T[cut] = V @ Tw
-    rows = [where.call(Piece.expanded, h, red.T[at[i]:at[i + 1]], Tw)
-            for i, h in enumerate(held)]
-    del held
-    for I in interior:     # a piece's rows at a time, each let go once in T
-        T[I] = where.gather([rows.pop(0)])[0]
+    rows = where.each(Piece.expanded, ((held.pop(0), red.T[at[i]:at[i + 1]], Tw)
+                                       for i in range(n)))
+    for I, r in zip(interior, rows):     # a piece's rows at a time, each let go once in T
+        T[I] = r
     lap("expansion")
     return PartBasis(task.name, T, red.Kr, red.mode_hz, red.n_shapes, red.n_static, seconds,
                      red.interface_mu, interface.E.shape[1] if interface is not None else 0)
