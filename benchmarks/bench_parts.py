@@ -80,6 +80,17 @@ def child(code, args, pythonpath, folder):
     return out.stdout.strip().splitlines()[-1]
 
 
+def parsed(parser, argv):
+    """(args, overrides): the parser's arguments with --mu, --set, --markdown and --json
+    added, and the overrides that reduce the case by its parts (components_overrides)."""
+    parser.add_argument("--mu", type=float, default=0.4)
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--markdown")
+    parser.add_argument("--json")
+    args = parser.parse_args(argv)
+    return args, components_overrides(args.case, args.set, args.mu)
+
+
 def components_overrides(case, sets, mu):
     """The overrides that reduce the case by its parts at friction mu on every sliding pair
     (after the caller's sets)."""
@@ -106,14 +117,9 @@ def markdown(rows, load):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("case")
-    parser.add_argument("--mu", type=float, default=0.4)
     parser.add_argument("--parts", default="", help="comma-separated names (default: all)")
     parser.add_argument("--base", help="another package's folder, reduced in turn")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
-    parser.add_argument("--markdown")
-    parser.add_argument("--json")
-    args = parser.parse_args(argv)
-    overrides = components_overrides(args.case, args.set, args.mu)
+    args, overrides = parsed(parser, argv)
     load0, rows = os.getloadavg()[0], []
     packages = [("HEAD", str(ROOT))] + ([("base", args.base)] if args.base else [])
     with tempfile.TemporaryDirectory() as folder:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench_parts import DUMP, ROOT, child, components_overrides  # noqa: E402  (siblings)
+from bench_parts import DUMP, ROOT, child, parsed  # noqa: E402  (siblings)
 from tables import publish, table  # noqa: E402
 
 RUN = """
@@ -83,12 +83,7 @@ def main(argv=None):
     parser.add_argument("--workers", type=int, default=0)
     parser.add_argument("--reach", default="0", help="comma-separated PIECE_REACH values for "
                         "each count (0: the package's)")
-    parser.add_argument("--mu", type=float, default=0.4)
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
-    parser.add_argument("--markdown")
-    parser.add_argument("--json")
-    args = parser.parse_args(argv)
-    overrides = components_overrides(args.case, args.set, args.mu)
+    args, overrides = parsed(parser, argv)
     load0, rows = os.getloadavg()[0], []
     case = str(Path(args.case).resolve())
     with tempfile.TemporaryDirectory() as folder:
