@@ -10,30 +10,20 @@ of pad_disc (setup included) within 1.5x of `transient modes`, the complex modes
 import argparse
 import json
 import os
-import resource
-import subprocess
-import sys
-import time
 from pathlib import Path
+
+from bench_long import timed_child  # a sibling in benchmarks/
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def timed(command, case, overrides):
-    args = [sys.executable, "-m", "transient", command, str(case), "--json"]
-    for o in overrides:
-        args += ["--set", o]
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.perf_counter()
-    done = subprocess.run(args, cwd=ROOT, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
-    if done.returncode != 0:
-        sys.exit(f"transient {command} failed ({done.returncode}): {done.stderr.strip()}")
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    """(wall seconds, the command's JSON with its CPU seconds) of `transient COMMAND CASE
+    --json` in a child process (bench_long.timed_child)."""
+    out, figures = timed_child([command, str(case), "--json"], overrides)
     # the system's CPU seconds are mostly page faults (benchmarks/bench_long.py: run_timed)
-    cpu = {"user_s": after.ru_utime - before.ru_utime,
-           "system_s": after.ru_stime - before.ru_stime}
-    return wall, dict(json.loads(done.stdout), cpu=cpu)
+    cpu = {"user_s": figures["user_s"], "system_s": figures["system_s"]}
+    return figures["wall_s"], dict(json.loads(out), cpu=cpu)
 
 
 def main(argv=None):

@@ -30,7 +30,13 @@ def run_timed(case, overrides, out):
     """`transient run` in a child process: its wall seconds, peak RSS bytes and CPU seconds in
     user and system mode. The system's share is mostly page faults: on this VM a first touch
     of memory is zeroed through the host, so it tells a machine's state from the code's."""
-    args = [sys.executable, "-m", "transient", "run", str(case), "-o", str(out), "--quiet"]
+    return timed_child(["run", str(case), "-o", str(out), "--quiet"], overrides)[1]
+
+
+def timed_child(words, overrides):
+    """(stdout, figures) of `transient WORDS --set ...` in a child process: figures its wall
+    seconds, peak RSS bytes and CPU seconds in user and system mode (run_timed)."""
+    args = [sys.executable, "-m", "transient", *words]
     for o in overrides:
         args += ["--set", o]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -38,12 +44,13 @@ def run_timed(case, overrides, out):
     done = subprocess.run(args, cwd=ROOT, capture_output=True, text=True)
     wall = time.perf_counter() - t0
     if done.returncode != 0:
-        sys.exit(f"transient run failed ({done.returncode}): {done.stderr.strip()}")
+        sys.exit(f"transient {words[0]} failed ({done.returncode}): {done.stderr.strip()}")
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     # ru_maxrss of children is the largest child so far: meaningful when this run is the largest
-    return {"wall_s": wall, "peak_rss_bytes": max(after.ru_maxrss, before.ru_maxrss) * 1024,
-            "user_s": after.ru_utime - before.ru_utime,
-            "system_s": after.ru_stime - before.ru_stime}
+    return done.stdout, {"wall_s": wall,
+                         "peak_rss_bytes": max(after.ru_maxrss, before.ru_maxrss) * 1024,
+                         "user_s": after.ru_utime - before.ru_utime,
+                         "system_s": after.ru_stime - before.ru_stime}
 
 
 def main(argv=None):
