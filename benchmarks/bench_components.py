@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tables import publish  # noqa: E402  (a sibling in benchmarks/)
+from tables import publish, table  # noqa: E402  (a sibling in benchmarks/)
 
 ROOT = Path(__file__).resolve().parent.parent
 METHODS = ("assembled", "components")
@@ -104,15 +104,14 @@ def compared(ref, other):
 
 
 def markdown(case, mu, rows, load):
-    lines = ["| case | mu | method | dofs | reduced | cea [s] | peak [GB] | unstable | "
-             "linearized below fmax | worst frequency error | worst real error / (2% or 5 1/s) | "
-             "load |", "|" + "---|" * 12]
-    for r in rows:
-        lines.append(f"| {Path(case).name} | {mu} | {r['method']} | {r['ndof']} | "
-                     f"{r['reduced']} | {r['seconds']:.1f} | {r['peak_gb']:.2f} | "
-                     f"{r['count']} | {len(r['linearized_hz'])} modes, {r['worst_k']:.1e} | "
-                     f"{r['worst_f']:.1e} | {r['worst_r']:.2f} | {load:.1f} |")
-    return "\n".join(lines)
+    header = ["case", "mu", "method", "dofs", "reduced", "cea [s]", "peak [GB]", "unstable",
+              "linearized below fmax", "worst frequency error",
+              "worst real error / (2% or 5 1/s)", "load"]
+    return table(header, [[Path(case).name, mu, r["method"], r["ndof"], r["reduced"],
+                           f"{r['seconds']:.1f}", f"{r['peak_gb']:.2f}", r["count"],
+                           f"{len(r['linearized_hz'])} modes, {r['worst_k']:.1e}",
+                           f"{r['worst_f']:.1e}", f"{r['worst_r']:.2f}", f"{load:.1f}"]
+                          for r in rows])
 
 
 def main(argv=None):

@@ -26,7 +26,7 @@ import numpy as np
 import scipy.linalg as sla
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
-from tables import publish  # noqa: E402  (benchmarks/tables.py)
+from tables import publish, table  # noqa: E402  (benchmarks/tables.py)
 from transient.case.loading import load
 from transient.stability.compare import pair_modes
 from transient.stability.linearize import linearized
@@ -135,14 +135,12 @@ def study(case_path, overrides, mus, factors, out, spans, reduced_overrides=()):
 
 
 def markdown(case_path, rows):
-    lines = ["| case | mu | cutoff | reduced dofs | cea [s] | unstable (full) | worst frequency "
-             "error | worst real error / allowed | failing |", "|" + "---|" * 9]
-    for r in rows:
-        lines.append(f"| {Path(case_path).name} | {r['mu']} | {r['factor']:g} fmax | "
-                     f"{r['reduced']} | {r['seconds']:.1f} | {r['unstable_full']} | "
-                     f"{r['worst_frequency']:.1e} | {r['worst_real_over_allowed']:.2f} | "
-                     f"{r['failing']} |")
-    return "\n".join(lines)
+    header = ["case", "mu", "cutoff", "reduced dofs", "cea [s]", "unstable (full)",
+              "worst frequency error", "worst real error / allowed", "failing"]
+    return table(header, [[Path(case_path).name, r["mu"], f"{r['factor']:g} fmax",
+                           r["reduced"], f"{r['seconds']:.1f}", r["unstable_full"],
+                           f"{r['worst_frequency']:.1e}", f"{r['worst_real_over_allowed']:.2f}",
+                           r["failing"]] for r in rows])
 
 
 def main(argv=None):
