@@ -194,18 +194,6 @@ def _on_worker(fn, *args):
         return fn(*args)
 
 
-def _fields(piece, G, shape, block, cutoff):
-    return piece.fields(G, shape, block, cutoff)
-
-
-def _condensed(piece, loads, fmax):
-    return piece.condensed(loads, fmax)
-
-
-def _extended(piece, A, V, loads):
-    return piece.extended(A, V, loads)
-
-
 def pieces_basis(task, where=None):
     """The PartBasis of a part reduced in pieces (a PiecesTask), its pieces' stages run where
     says (Here: in this process, OnCluster: on a Dask client's workers), the cut's and the
@@ -221,14 +209,15 @@ def pieces_basis(task, where=None):
     cut = np.flatnonzero(piece_of == CUT)
     interior = [np.flatnonzero(piece_of == i) for i in range(n)]
     fields = interface is not None and interface.support is not None
-    Gs = [np.flatnonzero(np.diff(sp.csc_matrix(abs(restrict(K, I, cut))
-                                               + abs(restrict(M, I, cut))).indptr))
-          for I in interior]
-    pieces = [where.put(_piece(task, I, cut, g, fields)) for I, g in zip(interior, Gs)]
+    built = [_piece(task, I, cut, fields) for I in interior]
+    Gs = [b.G for b in built]
+    pieces = [where.put(b) for b in built]
+    del built
     E, G = (interface.E, interface.G) if interface is not None else (None, None)
     if fields:
-        Ps = [P for P in where.each(_fields, ((p, G, interface.shape, interface.block,
-                                               task.fmax) for p in pieces))
+        Ps = [P for P in where.each(Piece.fields, ((p, G, interface.shape,
+                                                    interface.block, task.fmax)
+                                                   for p in pieces))
               if P is not None]
         P = np.zeros((E.shape[1], 0))
         if Ps:
@@ -240,7 +229,7 @@ def pieces_basis(task, where=None):
         [E, sp.csr_matrix(task.loads)]).tocsr()
     loads = [F[I] for I in interior]
     # each piece held at the cut, then the cut condensed, reduced and extended
-    A, small = where.split(_condensed, ((p, f, PIECE_REACH * task.fmax)
+    A, small = where.split(Piece.condensed, ((p, f, PIECE_REACH * task.fmax)
                                         for p, f in zip(pieces, loads)))
     Kc, Mc = restrict(K, cut, cut), restrict(M, cut, cut)
     S = (Kc - shift_sigma(-task.shift_hz) * Mc).toarray()
@@ -256,7 +245,7 @@ def pieces_basis(task, where=None):
     lap("cut")
     # each piece's first columns are in its extended ones: taken from the list as its
     # extension starts, they go once it has run
-    held, blocks = where.split(_extended, ((p, A.pop(0), V[g], f)
+    held, blocks = where.split(Piece.extended, ((p, A.pop(0), V[g], f)
                                            for p, g, f in zip(pieces, Gs, loads)))
     lap("extension")
     Kcb, Mcb, Fcb, at = _model(blocks, V, Kc, Mc, F[cut])
@@ -280,10 +269,12 @@ def pieces_basis(task, where=None):
                      red.interface_mu, interface.E.shape[1] if interface is not None else 0)
 
 
-def _piece(task, I, cut, G, fields):
-    """The Piece of the task's part on its interior dofs I, touching the cut's dofs G."""
+def _piece(task, I, cut, fields):
+    """The Piece of the task's part on its interior dofs I, with the cut's dofs it touches."""
     K, M = task.K, task.M
-    KG, MG = restrict(K, I, cut[G]), restrict(M, I, cut[G])
+    KG, MG = restrict(K, I, cut), restrict(M, I, cut)
+    G = np.flatnonzero(np.diff(sp.csc_matrix(abs(KG) + abs(MG)).indptr))
+    KG, MG = KG[:, G].tocsr(), MG[:, G].tocsr()
     interface = task.interface
     share = {}
     if interface is not None:
