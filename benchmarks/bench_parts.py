@@ -1,7 +1,8 @@
 """Each part's reduction alone, as a worker of the components path runs it: the case's part
 tasks pickled, then each reduced in a fresh process from its pickle (one thread, as on a
-worker), its seconds by stage and its peak resident memory above the task loaded, against the
-part's element-matrix entries (the unit case/sizes.py bounds a part by). With --base DIR, the
+worker), its seconds by stage and its peak resident memory above the task loaded (its K and M
+assembled from its cells included, as on a worker), against the part's element-matrix entries
+(the unit case/sizes.py bounds a part by). With --base DIR, the
 same pickles also reduced by the package at DIR (a `git worktree` of another commit) in turn,
 A B A B, so that a change of the machine's load shows in both.
 
@@ -29,19 +30,16 @@ from transient.contact.contactset import stack
 from transient.contact.pair import build_contact
 from transient.model import build_model, constant_load
 from transient.reduce.components import part_tasks, part_work
-from transient.reduce.stage import reduction_mass
 from transient.stability.stage import analysed_case
 from transient.case.sizes import entries
 folder, path, wanted, overrides = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
 case = analysed_case(load(path, overrides))
 m = build_model(case)
 pairs = build_contact(case, m)
-M = reduction_mass(case, m, None)[0]
 names = []
-for t in part_work(case, part_tasks(m, M, pairs, stack(pairs, m.ndof),
+for t in part_work(case, part_tasks(case, m, pairs, stack(pairs, m.ndof),
                                     [m.load_patterns[n] for n in case.loads],
-                                    constant_load(case, m),
-                                    {n: p.pieces for n, p in case.parts.items()})):
+                                    constant_load(case, m))):
     if wanted and t.name not in wanted.split(","):
         continue
     cells = [(len(c), c.shape[1]) for c in m.parts[t.name].mesh.cells.values()]
@@ -62,7 +60,8 @@ t0 = time.perf_counter()
 p = task.run()
 seconds = time.perf_counter() - t0
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-print(json.dumps(dict(part=task.name, ndof=task.K.shape[0], k_nnz=int(task.K.nnz),
+k_nnz = task.cells.matrices()[0].nnz     # after the peak: the task assembles its own
+print(json.dumps(dict(part=task.name, ndof=task.n, k_nnz=int(k_nnz),
                       entries=int(entries), columns=int(p.T.shape[1]), seconds=seconds,
                       above=(peak - base) / 1e9, per_entry=(peak - base) / entries,
                       stages=p.seconds)))

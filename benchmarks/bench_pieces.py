@@ -53,7 +53,7 @@ else:
     seconds = time.perf_counter() - t0
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 piece_of = getattr(task, "piece_of", None)
-print(json.dumps(dict(part=task.name, ndof=task.K.shape[0], entries=int(entries),
+print(json.dumps(dict(part=task.name, ndof=task.n, entries=int(entries),
                       pieces=1 if piece_of is None else int(piece_of.max()) + 1,
                       cut=0 if piece_of is None else int((piece_of < 0).sum()),
                       columns=int(p.T.shape[1]), seconds=seconds, above=(peak - base) / 1e9,

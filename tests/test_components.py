@@ -410,12 +410,11 @@ def test_the_coupling_rows_a_pair_at_a_time_are_the_whole_rows(regularized):
     np.testing.assert_allclose(rows.gram(wd), expected, rtol=1e-11,
                                atol=1e-12 * np.abs(expected).max())
     # the part tasks' gram of the rows on each part's loads E: C = Cc E^T
-    M = model.M
     constant = np.zeros(model.ndof)
     scale = np.tile(contacts.weights * law_tangent(pairs, contacts), 3)
     stacked = sp.vstack([contacts.C] + list(contacts.tangential())).tocsr()
-    for (part_dofs, (name, _, _, interface, _), _) in part_tasks(model, M, pairs, contacts, [],
-                                                              constant):
+    for (part_dofs, (name, _, interface, _), _) in part_tasks(case, model, pairs, contacts, [],
+                                                           constant):
         # with C = Cc E^T the part's rows, E G E^T = C^T diag(scale) C on the part
         Cp = stacked[:, part_dofs]
         touched = np.flatnonzero(np.diff(Cp.tocsc().indptr))

@@ -10,7 +10,7 @@ from transient.contact.contactset import stack
 from transient.contact.pair import build_contact
 from transient.errors import CaseError
 from transient.model import build_model, constant_load
-from transient.model.dofs import shifted
+from transient.model.dofs import free_block, restrict, shifted
 from transient.reduce.components import part_tasks, part_work
 from transient.reduce.pieces import CUT
 from transient.solve.modes import shift_sigma
@@ -22,28 +22,55 @@ PAD = "cases/pad_disc.toml"
 COMPONENTS = ['solver.reduction.method="components"', "contact.pad_disc.friction.mu=0.4"]
 
 
-def disc_tasks(pieces, extra=()):
-    """(the disc's PartTask reduced whole, the same in pieces) of the small pad_disc."""
-    case = load(PAD, PAD_DISC + COMPONENTS + list(extra))
+def disc_tasks(pieces, extra=(), matrices=False):
+    """(the disc's PartTask reduced whole, the same in pieces) of the small pad_disc, and with
+    matrices the disc's K and M on its free dofs as the whole model holds them."""
+    case = load(PAD, PAD_DISC + COMPONENTS + list(extra) + [f"parts.disc.pieces={pieces}"])
     model = build_model(case)
     pairs = build_contact(case, model)
-    tasks = part_tasks(model, model.M, pairs, stack(pairs, model.ndof),
-                       [model.load_patterns[n] for n in case.loads],
-                       constant_load(case, model), {"disc": pieces})
+    tasks = part_tasks(case, model, pairs, stack(pairs, model.ndof),
+                       [model.load_patterns[n] for n in case.loads], constant_load(case, model))
     whole, cut = (dict((t.name, t) for t in part_work(case, [(d, task, p if keep else None)
                                                              for d, task, p in tasks]))
                   for keep in (False, True))
-    return whole["disc"], cut["disc"]
+    if not matrices:
+        return whole["disc"], cut["disc"]
+    dofs = next(d for d, task, _ in tasks if task[0] == "disc")
+    return whole["disc"], cut["disc"], free_block(model.K, dofs), free_block(model.M, dofs)
+
+
+def same(A, B):
+    """A and B the same CSR matrix, entry for entry."""
+    A, B = sp.csr_matrix(A), sp.csr_matrix(B)
+    return (A.shape == B.shape and np.array_equal(A.indptr, B.indptr)
+            and np.array_equal(A.indices, B.indices) and np.array_equal(A.data, B.data))
+
+
+def test_a_parts_cells_give_its_block_of_the_model_and_a_piece_its_rows():
+    """The disc's K and M assembled from its own cells (where a worker reduces it) are the
+    whole model's block bit for bit, and each piece's cells give its interior's rows, with
+    the cut, bit for bit: no other piece's cell touches an interior dof."""
+    _, task, K, M = disc_tasks(3, matrices=True)
+    Kp, Mp = task.cells.matrices()
+    assert same(Kp, K) and same(Mp, M)
+    cut = np.flatnonzero(task.piece_of == CUT)
+    for i in range(3):
+        I = np.flatnonzero(task.piece_of == i)
+        (KI, MI), (KG, MG) = task.cells.subset(task.cell_piece == i).on([(I, I), (I, cut)])
+        for A, B in ((KI, restrict(K, I, I)), (MI, restrict(M, I, I)),
+                     (KG, restrict(K, I, cut)), (MG, restrict(M, I, cut))):
+            assert same(A, B), i
+    assert same(task.Kc, restrict(K, cut, cut)) and same(task.Mc, restrict(M, cut, cut))
 
 
 @pytest.mark.parametrize("pieces", [2, 3])
 def test_the_cut_leaves_no_piece_meeting_another(pieces):
     """Each piece's interior meets the cut alone (K, M and the interface's springs), the
     pieces are of about one size, and the cut is a small share of the part."""
-    _, task = disc_tasks(pieces)
+    _, task, K, M = disc_tasks(pieces, matrices=True)
     of = task.piece_of
     assert set(np.unique(of)) == set(range(pieces)) | {CUT}
-    coupling = sp.coo_matrix(abs(task.K) + abs(task.M) + abs(task.interface.support))
+    coupling = sp.coo_matrix(abs(K) + abs(M) + abs(task.interface.support))
     a, b = of[coupling.row], of[coupling.col]
     assert not np.any((a >= 0) & (b >= 0) & (a != b))
     sizes = np.bincount(of[of >= 0])
@@ -57,13 +84,13 @@ def test_a_part_in_pieces_has_the_whole_parts_modes(pieces):
     1e-5 of the disc reduced whole (with the cut's characteristic constraint modes for its
     shapes, the condensation's alone, they miss by 2e-4 to 2e-3), as many to its reach; its basis
     M-orthonormal, Kr its stiffness."""
-    whole, task = disc_tasks(pieces)
+    whole, task, K, M = disc_tasks(pieces, matrices=True)
     a, b = whole.run(), task.run()
     band = a.mode_hz <= task.fmax / 1.5
     assert band.sum() >= 20 and len(b.mode_hz) == len(a.mode_hz)
     np.testing.assert_allclose(b.mode_hz[band], a.mode_hz[band], rtol=1e-5)
-    np.testing.assert_allclose(b.T.T @ (task.M @ b.T), np.eye(b.T.shape[1]), atol=1e-9)
-    np.testing.assert_allclose(b.Kr, b.T.T @ (task.K @ b.T), rtol=1e-9,
+    np.testing.assert_allclose(b.T.T @ (M @ b.T), np.eye(b.T.shape[1]), atol=1e-9)
+    np.testing.assert_allclose(b.Kr, b.T.T @ (K @ b.T), rtol=1e-9,
                                atol=1e-9 * np.abs(b.Kr).max())
 
 
@@ -73,17 +100,18 @@ def test_a_part_in_pieces_spans_its_static_responses(pieces):
     not span the cut: the disc's static responses to its loads lie in its basis to
     round-off, through the cut's relaxations (without them, 7e-3 of the response is
     outside)."""
-    _, task = disc_tasks(pieces, ["solver.reduction.fmax=2000.0", 'loads.tap.part="disc"',
-                                  "loads.tap.point=[0.0,-0.12,0.0]"])
+    _, task, K0, M = disc_tasks(pieces, ["solver.reduction.fmax=2000.0",
+                                         'loads.tap.part="disc"',
+                                         "loads.tap.point=[0.0,-0.12,0.0]"], matrices=True)
     b = task.run()
-    K = shifted(task.K, task.M, shift_sigma(-task.shift_hz))
+    K = shifted(K0, M, shift_sigma(-task.shift_hz))
     u = sp.linalg.spsolve(sp.csc_matrix(K), task.loads)
     u = u.reshape(len(u), -1)
-    left = u - b.T @ (b.T.T @ (task.M @ u))
-    norms = [np.sqrt(x @ (task.M @ x)) for x in u.T]
+    left = u - b.T @ (b.T.T @ (M @ u))
+    norms = [np.sqrt(x @ (M @ x)) for x in u.T]
     assert max(norms) > 0
     for j, m in enumerate(norms):
-        assert np.sqrt(left[:, j] @ (task.M @ left[:, j])) <= 1e-10 * m
+        assert np.sqrt(left[:, j] @ (M @ left[:, j])) <= 1e-10 * m
 
 
 def test_pieces_are_refused_off_the_components_path():

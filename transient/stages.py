@@ -77,9 +77,9 @@ def prepare_parts(case, parts):
     with blas.one_thread():
         model = build_model(case)
         pairs = build_contact(case, model) if case.contact else []
-        reduce_parts(case, model, reduction_mass(case, model, None)[0], pairs,
-                     stack(pairs, model.ndof), [model.load_patterns[n] for n in case.loads],
-                     constant_load(case, model), parts)
+        reduce_parts(case, model, pairs, stack(pairs, model.ndof),
+                     [model.load_patterns[n] for n in case.loads], constant_load(case, model),
+                     parts)
 
 
 def _band_keys(case, analysis):

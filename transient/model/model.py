@@ -48,6 +48,8 @@ class Model:
     timings: dict                # stage -> seconds
     loss: sp.csr_matrix = None   # H = sum_m eta_m K_m, the materials' loss factors times
     #                              their cells' stiffness [N/m]; None: no material has one
+    cells: tuple = ()            # (part name, assembly.CellBlock in global node ids): what K
+    #                              and M were assembled from, a part's again where it is reduced
 
     @property
     def ndof(self):
@@ -286,7 +288,8 @@ def build_model(case, structure=None):
     if structure is not None:
         s = structure
         check_points(case, s.parts)
-        return _loaded(case, s.points, s.parts, s.K, s.M, s.lumped_mass, s.fixed, {}, s.loss)
+        return _loaded(case, s.points, s.parts, s.K, s.M, s.lumped_mass, s.fixed, {}, s.loss,
+                       s.cells)
     timings = {}
     t0 = time.perf_counter()
     parts, offset = {}, 0
@@ -316,16 +319,17 @@ def build_model(case, structure=None):
     check_points(case, parts)
 
     fixed = _fixed(case, parts, 3 * len(points))
-    return _loaded(case, points, parts, ops.K, ops.M, ops.lumped_mass, fixed, timings, ops.H)
+    return _loaded(case, points, parts, ops.K, ops.M, ops.lumped_mass, fixed, timings, ops.H,
+                   tuple((name, b) for name, _, b in blocks))
 
 
-def _loaded(case, points, parts, K, M, lumped_mass, fixed, timings, loss):
+def _loaded(case, points, parts, K, M, lumped_mass, fixed, timings, loss, cells):
     """The Model of a structure with the case's loads and sensors."""
     patterns = _loads(case, parts, points, M)
     load = sum(patterns.values(), np.zeros(3 * len(points)))
     names, sensors = _sensors(case, parts, 3 * len(points))
     return Model(points, parts, K, M, lumped_mass, fixed, load, patterns, names, sensors,
-                 timings, loss)
+                 timings, loss, cells)
 
 
 def constant_load(case, model):

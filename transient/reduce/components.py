@@ -22,14 +22,15 @@ from ..contact.blocks import points_gram
 from ..contact.contactset import first_tangent
 from ..dynamics.critical import critical_tangent
 from ..errors import CaseError
-from ..model.dofs import free_block
+from ..model.dofs import free_block, restricted
+from ..model.partcells import PartCells
 from .. import blas
 from ..solve.preload import Preload
 from .basis import Basis, flexible_shapes
 from .fields import part_rigid_motions, support_stiffness
 from .engine import Engine
 from .parts import PartError, PartInterface, PartTask
-from .pieces import PiecesTask, piece_of_dofs
+from .pieces import CUT, PiecesTask, piece_of_dofs
 from .coupling import ALONG, PairRows
 from .sampling import ReducedPreloadError, reduced_preload
 from .synthesis import Synthesis
@@ -41,10 +42,12 @@ from .synthesis import Synthesis
 PART_REACH = 1.5
 
 
-def part_tasks(model, M, pairs, contacts, patterns, constant, pieces=None):
-    """(dofs, (name, K, M, interface, loads), piece_of) of each part: the arguments of
-    part_basis on the part's free dofs, which sit at dofs; piece_of (None: the part whole) the
-    piece of each of them (reduce.pieces), for a part that pieces (name -> count) cuts. The
+def part_tasks(case, model, pairs, contacts, patterns, constant):
+    """(dofs, (name, cells, interface, loads), pieces) of each part: the arguments of
+    part_basis on the part's free dofs, which sit at dofs, its K and M to be assembled from
+    its cells (model.partcells.PartCells) where it is reduced. pieces (None: the part whole)
+    for a part parts.NAME.pieces cuts: (piece_of, cell_piece, Kc, Mc), the piece of each free
+    dof and of each cell (reduce.pieces) and K and M on the cut, which the pieces share. The
     interface (a PartInterface) holds the contact's loads E on the part: with factored rows (a
     regularized rule, C = L B^T) the columns of B on the part, the traces of the
     (1-eps)-compatible shapes (with friction the tangential rows' too), which the part reduces
@@ -71,11 +74,14 @@ def part_tasks(model, M, pairs, contacts, patterns, constant, pieces=None):
                                                       else [])).tocsc()
         scale = np.tile(scale, kinds)
     loads = np.stack([constant] + list(patterns), axis=1)
+    quadrature = case.solver.quadrature
+    degrees = (quadrature.stiffness or None, quadrature.mass or None)
+    lumped = case.solver.mass == "lumped"
     out = []
     for name in model.parts:
         dofs = model.part_dofs(name)
         dofs = dofs[free[dofs]]
-        Kp, Mp = free_block(model.K, dofs), free_block(M, dofs)
+        cells = PartCells.of(model, name, dofs, degrees, lumped)
         if E_all is None:
             # the dofs the rows touch, each loaded alone
             Rp = rows[:, dofs].tocsc()
@@ -96,17 +102,28 @@ def part_tasks(model, M, pairs, contacts, patterns, constant, pieces=None):
                                       free_block(support, dofs) if fields else None,
                                       part_rigid_motions(model.points, dofs) if fields
                                       else None)
-        piece_of = None
-        if (pieces or {}).get(name, 1) > 1:
-            coupling = abs(Kp) + abs(Mp)
-            if interface is not None and interface.support is not None:
-                coupling = coupling + abs(interface.support)
-            part = model.parts[name]
-            piece_of = piece_of_dofs(model.points, [c + part.offset for c in
-                                                    part.mesh.cells.values()],
-                                     dofs, pieces[name], coupling)
-        out.append((dofs, (name, Kp, Mp, interface, loads[dofs]), piece_of))
+        count = case.parts[name].pieces
+        out.append((dofs, (name, cells, interface, loads[dofs]),
+                    None if count <= 1 else _pieces(model, name, dofs, count, interface,
+                                                    lumped)))
     return out
+
+
+def _pieces(model, name, dofs, count, interface, lumped):
+    """(piece_of, cell_piece, Kc, Mc) of the part name cut in count pieces (part_tasks'). K
+    and M couple no two cells' nodes but through a cell, which the cut's nodes already part;
+    the interface's springs may, and put the dofs they join across pieces in the cut."""
+    part = model.parts[name]
+    coupling = None
+    if interface is not None and interface.support is not None:
+        coupling = interface.support
+    piece_of, cell_piece = piece_of_dofs(
+        model.points, [c + part.offset for c in part.mesh.cells.values()], dofs, count,
+        coupling)
+    cut = dofs[piece_of == CUT]
+    M = sp.diags(model.lumped_mass).tocsr() if lumped else model.M
+    Kc, Mc = restricted((model.K, M), cut, cut)
+    return piece_of, cell_piece, Kc, Mc
 
 
 def _pair_grams(pairs, contacts, scale):
@@ -149,8 +166,7 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
     engine = engine or Engine()
     t0 = time.perf_counter()
     say = _stages(engine, t0)
-    dofs, parts = reduce_parts(case, model, M, pairs, contacts, patterns, constant, engine,
-                               say)
+    dofs, parts = reduce_parts(case, model, pairs, contacts, patterns, constant, engine, say)
     t_parts = time.perf_counter() - t0
     X = Synthesis(model.ndof, dofs, [p.T for p in parts])
     Kr = sla.block_diag(*[p.Kr for p in parts])
@@ -185,14 +201,13 @@ def components_basis(case, model, M, pairs, contacts, patterns, constant, engine
     return basis, preload
 
 
-def reduce_parts(case, model, M, pairs, contacts, patterns, constant, engine, say=None):
+def reduce_parts(case, model, pairs, contacts, patterns, constant, engine, say=None):
     """(dofs, PartBasis) of each part, reduced through engine (a reduce.engine.Engine): the
     components path's first stage, and all a campaign does before its variants fan out
     (reduce.engine.cached then holds the parts they share)."""
     say = say or _stages(engine, time.perf_counter())
     check_parts(case, model, engine.budget())
-    tasks = part_tasks(model, M, pairs, contacts, patterns, constant,
-                       {name: part.pieces for name, part in case.parts.items()})
+    tasks = part_tasks(case, model, pairs, contacts, patterns, constant)
     say("part tasks")
     work = part_work(case, tasks)
     try:
@@ -210,8 +225,8 @@ def part_work(case, tasks):
     reduction, solver = case.solver.reduction, case.solver
     settings = (PART_REACH * reduction.modes_fmax, solver.shift_hz,
                 reduction.statics_tolerance, solver.linear_solver)
-    return [PartTask(*task, *settings) if piece_of is None
-            else PiecesTask(*task, *settings, piece_of) for _, task, piece_of in tasks]
+    return [PartTask(*task, *settings) if pieces is None
+            else PiecesTask(*task, *settings, *pieces) for _, task, pieces in tasks]
 
 
 def _stages(engine, t0):

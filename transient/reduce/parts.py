@@ -16,6 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..model.dofs import shifted
+from ..model.partcells import PartCells
 from .. import blas, progress
 from ..solve.linsolve import FactorizationError, factorize
 from ..solve.lowrank import block_columns
@@ -25,7 +26,9 @@ from .fields import field_map
 
 # the modules whose arithmetic makes a part's reduction: their source is in its key
 _SOURCES = ("reduce/parts.py", "reduce/basis.py", "reduce/fields.py", "solve/modes.py",
-            "solve/lanczos.py", "solve/linsolve.py", "solve/lowrank.py", "model/dofs.py")
+            "solve/lanczos.py", "solve/linsolve.py", "solve/lowrank.py", "model/dofs.py",
+            "model/partcells.py", "model/assembly.py", "model/elasticity.py",
+            "kernels/assembly.py", "mesh/elements.py")
 ROW_BLOCK = 8192     # rows of the basis formed at a time in place
 
 
@@ -231,10 +234,10 @@ def with_statics(X, m, M):
 
 @dataclass(frozen=True)
 class PartTask:
-    """One part's reduction to make: part_basis' arguments."""
+    """One part's reduction to make: part_basis' arguments, the part's K and M as its cells
+    (model.partcells.PartCells), assembled by the process that runs it."""
     name: str
-    K: object                # (n, n) sparse, the part's free dofs
-    M: object
+    cells: PartCells
     interface: PartInterface  # or None
     loads: np.ndarray        # (n, s)
     fmax: float              # the cutoff its modes reach [Hz]
@@ -242,10 +245,16 @@ class PartTask:
     tol: float
     backend: str
 
+    @property
+    def n(self):
+        """The part's free dofs."""
+        return len(self.cells.free)
+
     def run(self):
         with blas.one_thread():
-            return part_basis(self.name, self.K, self.M, self.interface, self.loads,
-                              self.fmax, self.shift_hz, self.tol, self.backend)
+            K, M = self.cells.matrices()
+            return part_basis(self.name, K, M, self.interface, self.loads, self.fmax,
+                              self.shift_hz, self.tol, self.backend)
 
     def key(self):
         """The hex digest of what the reduction is made from (not the part's name: two equal
@@ -254,8 +263,8 @@ class PartTask:
         for text in _source_texts():
             h.update(text)
         h.update(repr((self.fmax, self.shift_hz, self.tol, self.backend)).encode())
-        arrays = [self.K.data, self.K.indices, self.K.indptr, self.M.data, self.M.indices,
-                  self.M.indptr, self.loads]
+        self.cells.digest(h)
+        arrays = [self.loads]
         if self.interface is not None:
             arrays += self.interface.arrays()
         for a in arrays:

@@ -62,13 +62,13 @@ def cut_cells(centroids, weights, n):
     return piece
 
 
-def piece_of_dofs(points, cells, dofs, n, coupling):
-    """(len(dofs),) the piece of each of a part's free dofs dofs (global dof ids of nodes
-    dofs // 3, points their coordinates by global node), CUT on the nodes the pieces share.
-    cells: connectivity arrays in global node ids. coupling (len(dofs),)^2 sparse: every
-    operator the pieces are reduced with (K, M, the interface's springs); a dof it couples to
-    another piece's interior is put in the cut too, so that no piece's interior meets
-    another's."""
+def piece_of_dofs(points, cells, dofs, n, coupling=None):
+    """((len(dofs),), (cells,)): the piece of each of a part's free dofs dofs (global dof ids
+    of nodes dofs // 3, points their coordinates by global node), CUT on the nodes the pieces
+    share, and the piece of each cell. cells: connectivity arrays in global node ids.
+    coupling (len(dofs),)^2 sparse or None: an operator the pieces are reduced with beyond
+    their cells' (the interface's springs); a dof it couples to another piece's interior is
+    put in the cut too, so that no piece's interior meets another's."""
     centroids = np.vstack([points[c].mean(axis=1) for c in cells])
     weights = np.concatenate([np.full(len(c), float(c.shape[1]) ** 2) for c in cells])
     piece = cut_cells(centroids, weights, n)
@@ -82,12 +82,13 @@ def piece_of_dofs(points, cells, dofs, n, coupling):
     np.maximum.at(high, nodes, of_cell)
     node_piece = np.where(low == high, low, CUT)
     out = node_piece[dofs // 3]
-    A = sp.coo_matrix(coupling)
-    across = (out[A.row] >= 0) & (out[A.col] >= 0) & (out[A.row] != out[A.col])
-    if across.any():
-        cut_nodes = np.unique(dofs[A.col[across]] // 3)
-        out[np.isin(dofs // 3, cut_nodes)] = CUT
-    return out
+    if coupling is not None:
+        A = sp.coo_matrix(coupling)
+        across = (out[A.row] >= 0) & (out[A.col] >= 0) & (out[A.row] != out[A.col])
+        if across.any():
+            cut_nodes = np.unique(dofs[A.col[across]] // 3)
+            out[np.isin(dofs // 3, cut_nodes)] = CUT
+    return out, piece
 
 
 def cut_basis(S, Mh, B, couplings, fmax, shift_hz):
@@ -137,9 +138,6 @@ class Here:
     """The pieces' stages in this process, a piece after the other: each stage's arguments
     taken as it comes to them, so that what a piece's stage lets go is freed before the
     next piece's."""
-    def put(self, x):
-        return x
-
     def split(self, fn, arguments):
         """([fn(*a)[0]], [fn(*a)[1]]) for a in arguments: the large results held, the small
         ones gathered."""
@@ -163,9 +161,6 @@ class OnCluster:
     def __init__(self, client):
         self.client = client
 
-    def put(self, x):
-        return self.client.submit(_same, x, pure=False)
-
     def _call(self, fn, args):
         return self.client.submit(_on_worker, fn, *args, pure=False)
 
@@ -181,10 +176,6 @@ class OnCluster:
         futures = [self._call(fn, args) for args in arguments]
         while futures:
             yield futures.pop(0).result()
-
-
-def _same(x):
-    return x
 
 
 def _on_worker(fn, *args):
@@ -204,15 +195,15 @@ def pieces_basis(task, where=None):
     def lap(stage):
         nonlocal t0
         seconds[stage], t0 = time.perf_counter() - t0, time.perf_counter()
-    K, M, interface, piece_of = task.K, task.M, task.interface, task.piece_of
+    interface, piece_of = task.interface, task.piece_of
     n = int(piece_of.max()) + 1
     cut = np.flatnonzero(piece_of == CUT)
     interior = [np.flatnonzero(piece_of == i) for i in range(n)]
     fields = interface is not None and interface.support is not None
-    built = [_piece(task, I, cut, fields) for I in interior]
-    Gs = [b.G for b in built]
-    pieces = [where.put(b) for b in built]
-    del built
+    # each piece assembled from its own cells where it is reduced
+    pieces, Gs = where.split(_piece, ((task.name, task.cells.subset(task.cell_piece == i), I,
+                                       cut, _share(interface, I, fields), task.shift_hz,
+                                       task.backend) for i, I in enumerate(interior)))
     E, G = (interface.E, interface.G) if interface is not None else (None, None)
     if fields:
         Ps = [P for P in where.each(Piece.fields, ((p, G, interface.shape,
@@ -231,7 +222,7 @@ def pieces_basis(task, where=None):
     # each piece held at the cut, then the cut condensed, reduced and extended
     A, small = where.split(Piece.condensed, ((p, f, PIECE_REACH * task.fmax)
                                         for p, f in zip(pieces, loads)))
-    Kc, Mc = restrict(K, cut, cut), restrict(M, cut, cut)
+    Kc, Mc = task.Kc, task.Mc
     S = (Kc - shift_sigma(-task.shift_hz) * Mc).toarray()
     Mh, B = Mc.toarray(), F[cut].toarray()
     for g, (Sp, Mp, Bp, _, _) in zip(Gs, small):
@@ -257,7 +248,7 @@ def pieces_basis(task, where=None):
     red = part_basis(task.name, sp.csr_matrix(Kcb), sp.csr_matrix(Mcb), cb_interface,
                      Fcb[:, f:], task.fmax, task.shift_hz, task.tol, task.backend)
     lap("part")
-    T = np.empty((K.shape[0], red.T.shape[1]))
+    T = np.empty((len(piece_of), red.T.shape[1]))
     Tw = red.T[at[-2]:]
     T[cut] = V @ Tw
     rows = where.each(Piece.expanded, ((held.pop(0), red.T[at[i]:at[i + 1]], Tw)
@@ -269,21 +260,25 @@ def pieces_basis(task, where=None):
                      red.interface_mu, interface.E.shape[1] if interface is not None else 0)
 
 
-def _piece(task, I, cut, fields):
-    """The Piece of the task's part on its interior dofs I, with the cut's dofs it touches."""
-    K, M = task.K, task.M
-    KG, MG = restrict(K, I, cut), restrict(M, I, cut)
+def _piece(name, cells, I, cut, share, shift_hz, backend):
+    """(Piece, G) of a part's piece on its interior dofs I (positions among the part's free
+    dofs) from its cells alone (model.partcells.PartCells: their K and M are the part's on
+    the interior's rows, no other piece's cell touching them), with G the cut's dofs (positions
+    in cut) it couples to. share: its part of the interface (_share)."""
+    (K, M), (KG, MG) = cells.on([(I, I), (I, cut)])
     G = np.flatnonzero(np.diff(sp.csc_matrix(abs(KG) + abs(MG)).indptr))
     KG, MG = KG[:, G].tocsr(), MG[:, G].tocsr()
-    interface = task.interface
-    share = {}
-    if interface is not None:
-        E = sp.csr_matrix(interface.E)[I]
-        share = dict(E=E)
-        if fields:
-            share.update(support=restrict(interface.support, I, I), rigid=interface.rigid[I])
-    return Piece(task.name, restrict(K, I, I), restrict(M, I, I), KG, MG, G, task.shift_hz,
-                 task.backend, **share)
+    return Piece(name, K, M, KG, MG, G, shift_hz, backend, **share), G
+
+
+def _share(interface, I, fields):
+    """The interface's loads (and with fields its springs and rigid motions) on the dofs I."""
+    if interface is None:
+        return {}
+    share = dict(E=sp.csr_matrix(interface.E)[I])
+    if fields:
+        share.update(support=restrict(interface.support, I, I), rigid=interface.rigid[I])
+    return share
 
 
 def _model(blocks, V, Kc, Mc, Fc):
@@ -306,8 +301,12 @@ def _model(blocks, V, Kc, Mc, Fc):
 @dataclass(frozen=True)
 class PiecesTask(PartTask):
     """A part's reduction in pieces: PartTask's, and piece_of (n,) the piece of each free dof
-    (CUT on the cut)."""
+    (CUT on the cut), cell_piece the piece of each of its cells (cells' order), Kc and Mc its
+    K and M on the cut (the pieces' cells' sum there)."""
     piece_of: np.ndarray = None
+    cell_piece: np.ndarray = None
+    Kc: object = None
+    Mc: object = None
 
     def run(self, where=None):
         with blas.one_thread():
@@ -317,7 +316,8 @@ class PiecesTask(PartTask):
         h = hashlib.sha256(super().key().encode())
         for text in _texts():
             h.update(text)
-        h.update(np.ascontiguousarray(self.piece_of, dtype=np.int64).data)
+        for a in (self.piece_of, self.cell_piece):
+            h.update(np.ascontiguousarray(a, dtype=np.int64).data)
         return h.hexdigest()
 
 

@@ -1,0 +1,103 @@
+"""A command's resident memory, every process it starts counted (a Dask cluster's workers and
+nanny processes too): sampled every --every seconds, each process's peak and the peak of
+their sum, which is what a machine's memory must hold. With --limit GB the command's
+processes are stopped once their sum passes it (a run that would exhaust a shared machine is
+cut short and says so). With --base DIR the same command also runs on the package at DIR (a
+`git worktree` of another commit), A B A B, --rounds times.
+
+    python benchmarks/bench_processes.py [--every 1] [--limit 22] [--base DIR] [--rounds 1]
+                                  [--markdown FILE] [--json FILE] -- transient cea CASE ...
+"""
+import argparse
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import psutil
+
+from tables import publish, table  # noqa: E402  (a sibling in benchmarks/)
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def sampled(command, pythonpath, every, limit_gb):
+    """{"seconds", "sum_gb", "peaks_gb" (the largest first), "killed", "returncode"} of the
+    command run on the package at pythonpath."""
+    env = dict(os.environ, PYTHONPATH=str(pythonpath))
+    if command[0] == "transient":
+        command = [sys.executable, "-m", "transient"] + command[1:]
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    root, peaks, top, killed = psutil.Process(proc.pid), {}, 0.0, False
+    while proc.poll() is None:
+        total = 0
+        try:
+            tree = [root] + root.children(recursive=True)
+        except psutil.NoSuchProcess:
+            break
+        for p in tree:
+            try:
+                rss = p.memory_info().rss
+            except psutil.NoSuchProcess:
+                continue
+            total += rss
+            peaks[p.pid] = max(peaks.get(p.pid, 0), rss)
+        top = max(top, total)
+        if limit_gb and total > limit_gb * 1e9:
+            killed = True
+            for p in reversed(tree):
+                try:
+                    p.kill()
+                except psutil.NoSuchProcess:
+                    pass
+            break
+        time.sleep(every)
+    err = proc.communicate()[1]
+    seconds = time.perf_counter() - t0
+    if proc.returncode and not killed:
+        sys.stderr.write(err)
+    return {"seconds": seconds, "sum_gb": top / 1e9,
+            "peaks_gb": sorted((v / 1e9 for v in peaks.values() if v > 50e6), reverse=True),
+            "killed": killed, "returncode": proc.returncode}
+
+
+def markdown(rows, load):
+    return table(["package", "seconds", "all processes' peak [GB]",
+                  "each process's peak [GB] (above 0.05)", "ended", "load"],
+                 [[r["package"], f"{r['seconds']:.1f}", f"{r['sum_gb']:.2f}",
+                   ", ".join(f"{p:.2f}" for p in r["peaks_gb"]),
+                   "stopped at the limit" if r["killed"] else f"exit {r['returncode']}",
+                   f"{load:.1f}"] for r in rows])
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--every", type=float, default=1.0)
+    parser.add_argument("--limit", type=float, default=0.0, help="GB (0: none)")
+    parser.add_argument("--base")
+    parser.add_argument("--rounds", type=int, default=1)
+    parser.add_argument("--markdown")
+    parser.add_argument("--json")
+    parser.add_argument("command", nargs=argparse.REMAINDER)
+    args = parser.parse_args(argv)
+    command = args.command[1:] if args.command[:1] == ["--"] else args.command
+    if not command:
+        parser.error("the command to measure comes after --")
+    packages = [("this", ROOT)] + ([("base", Path(args.base).resolve())] if args.base else [])
+    load0, rows = os.getloadavg()[0], []
+    for _ in range(args.rounds):
+        for name, path in packages:
+            row = dict(sampled(command, path, args.every, args.limit), package=name)
+            rows.append(row)
+            print(f"{name}: {row['seconds']:.1f} s, all {row['sum_gb']:.2f} GB, each "
+                  f"{[round(p, 2) for p in row['peaks_gb']]}"
+                  f"{', stopped at the limit' if row['killed'] else ''}", flush=True)
+    publish(markdown(rows, 0.5 * (load0 + os.getloadavg()[0])), args.markdown, args.json, rows)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
