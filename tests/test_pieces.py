@@ -174,3 +174,25 @@ def test_the_pieces_benchmark_measures_the_part_against_it_whole(tmp_path):
     assert rows[0]["error"] == 0.0 and 0.0 < rows[1]["error"] < 1e-5
     assert rows[1]["cut"] > 0 and rows[1]["band_modes"] >= 20
     assert "| disc | 2 |" in (tmp_path / "table.md").read_text()
+
+
+@pytest.mark.slow
+def test_a_task_carrying_its_cells_is_submitted_without_dasks_warning():
+    """A part's or piece's task carries its inputs on purpose (a lost worker's task reruns
+    from them): cluster.submitted sends one above Dask's large-graph threshold without the
+    warning a user would read as a fault, where a plain submit warns."""
+    import warnings
+    pytest.importorskip("dask.distributed")
+    from transient.cluster import client_for, submitted
+    client, cluster = client_for(None, 1)
+    big = np.ones(2_000_000)
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            assert submitted(client, np.sum, big, pure=False).result() == big.size
+        assert not [w for w in caught if "large graph" in str(w.message)]
+        with pytest.warns(UserWarning, match="large graph"):
+            client.submit(np.sum, big, pure=False).result()
+    finally:
+        client.close()
+        cluster.close()

@@ -3,6 +3,8 @@ LocalCluster of N one-thread worker processes (BLAS, MKL, OpenMP and Numba at on
 in their environment before they start, so that N of them share the cores), or an existing
 scheduler's (dask-jobqueue on SLURM: docs/commands.md).
 """
+import warnings
+
 from .errors import CaseError
 
 WHERE = "command line"
@@ -48,3 +50,12 @@ def client_for(scheduler, workers):
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                            env=THREAD_ENV, dashboard_address=":0", silence_logs=50)
     return Client(cluster), cluster
+
+
+def submitted(client, fn, *args, **kwargs):
+    """client.submit without Dask's warning of a large graph: a part's or a piece's task
+    carries its inputs (its cells) on purpose, so that a lost worker's task runs again from
+    them, where data scattered to that worker would be lost with it."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Sending large graph", category=UserWarning)
+        return client.submit(fn, *args, **kwargs)

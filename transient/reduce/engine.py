@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cluster import WHERE
+from ..cluster import WHERE, submitted
 from ..errors import CaseError
 from .parts import PartBasis
 from .pieces import OnCluster, PiecesTask
@@ -62,8 +62,8 @@ def on_cluster(client):
     def run(tasks, done=None):
         from dask.distributed import as_completed
         whole = [i for i, task in enumerate(tasks) if not isinstance(task, PiecesTask)]
-        futures = [client.submit(_run, tasks[i], key=f"part-{tasks[i].name}-"
-                                 f"{tasks[i].key()[:16]}", pure=False) for i in whole]
+        futures = [submitted(client, _run, tasks[i], key=f"part-{tasks[i].name}-"
+                             f"{tasks[i].key()[:16]}", pure=False) for i in whole]
         index = {f.key: i for i, f in zip(whole, futures)}
         out = [None] * len(tasks)
         # a part in pieces: its stages fan out over the workers beside the whole parts'

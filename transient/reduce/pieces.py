@@ -24,6 +24,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from .. import blas
+from ..cluster import submitted
 from ..model.dofs import restrict
 from ..solve.modes import shift_sigma
 from .fields import FIELD_TOL
@@ -162,7 +163,7 @@ class OnCluster:
         self.client = client
 
     def _call(self, fn, args):
-        return self.client.submit(_on_worker, fn, *args, pure=False)
+        return submitted(self.client, _on_worker, fn, *args, pure=False)
 
     def split(self, fn, arguments):
         futures = [self._call(fn, args) for args in arguments]
