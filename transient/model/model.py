@@ -13,7 +13,7 @@ from ..mesh import generators
 from .assembly import CellBlock, assemble
 from .elasticity import anisotropy
 from ..mesh.elements import ALIASES, ELEMENTS
-from ..case.sizes import cells_by_part, check_memory
+from ..case.sizes import cells_by_part, check_memory, dofs_by_part
 from ..errors import CaseError
 from .loads import nearest_node, pressure_forces
 from .placement import check_points, check_scale
@@ -301,7 +301,8 @@ def build_model(case, structure=None):
     files = [n for n in case.parts if case.parts[n].mesh.kind == "file"]
     if files:
         # the cells read: the memory bound before any matrix is assembled
-        check_memory(case, cells_by_part(parts), {n: f"parts.{n}.mesh.path" for n in files})
+        check_memory(case, cells_by_part(parts), {n: f"parts.{n}.mesh.path" for n in files},
+                     dofs_by_part(parts))
 
     t0 = time.perf_counter()
     blocks = _cell_blocks(case, parts)
