@@ -48,13 +48,16 @@ def _memory(case, cells, dofs):
     """The memory estimate of each process (case.sizes.memory_need) against its bound."""
     need = memory_need(case, cells, dofs)
     budget = worker_budget(case, need)
+    reduction = case.solver.reduction
     return {"estimate_gb": need.here / 1e9, "limit_gb": case.limits.memory_bytes / 1e9,
             "largest_part": need.part, "client": need.worker is not None,
             "worker_gb": None if need.worker is None else need.worker / 1e9,
             "worker_part": need.worker_part,
             "worker_pieces": case.parts[need.worker_part].pieces if need.worker_part else 1,
             "budget_gb": None if budget is None else budget / 1e9,
-            "terms_gb": {what: b / 1e9 for what, b in need.terms}}
+            "terms_gb": {what: b / 1e9 for what, b in need.terms},
+            "method": reduction.method if reduction.enabled else None,
+            "auto": case.reduction_auto or None}
 
 
 def _steps(case):

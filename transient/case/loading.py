@@ -35,6 +35,8 @@ class Case:
     limits: LimitsSpec
     # where the components path reduces its parts, as the command says (its memory bounds)
     cluster: Cluster = Cluster()
+    # why solver.reduction.method is what it is where the case says "auto" ('' otherwise)
+    reduction_auto: str = ""
 
     @property
     def directory(self):
@@ -113,9 +115,7 @@ def parse(text, path, overrides=(), cluster=Cluster()):
         raise CaseError(path, "", f"invalid TOML: {exc}") from None
     except RecursionError:
         raise CaseError(path, "", "tables or arrays nested too deeply") from None
-    case = Case(path, text, tuple(overrides), **build(data), cluster=cluster)
-    check(case)
-    return case
+    return check(Case(path, text, tuple(overrides), **build(data), cluster=cluster))
 
 
 def on_cluster(case, cluster):

@@ -171,6 +171,7 @@ def check_memory(case, cells, keys, dofs=None):
     need = memory_need(case, cells, dofs)
     named = [keys[need.part]] if need.part in keys else list(keys.values())
     if need.here > have and named:
+        auto = f" ({case.reduction_auto})" if case.reduction_auto else ""
         fix = ("coarsen the mesh, raise limits.memory, or reduce the parts on workers "
                "(--workers, --scheduler)" if need.part is not None
                else "coarsen the mesh, or raise limits.memory")
@@ -179,7 +180,7 @@ def check_memory(case, cells, keys, dofs=None):
         terms = f": {need.said()}" if need.terms else ""
         raise CaseError(case.path, named[0], f"{what} would take about {need.here / 1e9:.3g} "
                         f"GB (set by {', '.join(named)}{terms}), more than limits.memory "
-                        f"allows ({have / 1e9:.3g} GB): {fix}")
+                        f"allows ({have / 1e9:.3g} GB): {fix}{auto}")
     if worker_budget(case, need) is not None:
         pieces = {name: case.parts[name].pieces for name in cells}
 

@@ -66,8 +66,14 @@ def _interactive():
 
 
 def _load_for_parts(args):
-    """The case, its memory bounded for where --workers and --scheduler reduce the parts."""
-    return api.load(args.case, args.overrides, args.workers, args.scheduler)
+    """The case, its memory bounded for where --workers and --scheduler reduce the parts; a
+    line on standard error where "auto" chose the assembled path and they go unused."""
+    case = api.load(args.case, args.overrides, args.workers, args.scheduler)
+    given = [o for o, v in (("--workers", args.workers), ("--scheduler", args.scheduler),
+                            ("--cache", args.cache)) if v]
+    if given and case.reduction_auto and not case.solver.reduction.components:
+        print(f"{', '.join(given)}: not used: {case.reduction_auto}", file=sys.stderr)
+    return case
 
 
 def cmd_cea(args):
@@ -172,6 +178,8 @@ def _basis_notes(meta):
     notes = []
     if meta.get("modes_fmax_hz"):
         notes.append(f"its modes to {meta['modes_fmax_hz']:g} Hz")
+    if meta.get("reduction_auto"):
+        notes.append(meta["reduction_auto"])
     if meta.get("reduction_method") == "components":
         notes.append("each part reduced on its own")
         interfaces = (meta.get("basis_timings") or {}).get("part_interfaces") or {}
@@ -294,8 +302,9 @@ def _dry(case, command, as_json, args=None):
 
 
 def _memory_lines(m):
-    """What the dry run says of the memory: each process's estimate against its bound."""
-    lines = []
+    """What the dry run says of the memory: the path "auto" chose, and each process's
+    estimate against its bound."""
+    lines = [m["auto"]] if m["auto"] else []
     terms = ", ".join(f"{what} {gb:.3g} GB" for what, gb in m["terms_gb"].items())
     who = " this process, the cluster's client," if m["client"] else ""
     lines.append(f"memory:{who} about {m['estimate_gb']:.3g} GB"
