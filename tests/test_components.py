@@ -152,13 +152,13 @@ def _shape_error(case, setup, fmax):
 
 def test_a_basis_at_another_friction_is_refused_with_components():
     """The part bases do not depend on the friction: contact.<pair>.friction.basis_mu, which
-    shares a basis across a friction sweep, has nothing to share there, and is refused before
-    the model is built."""
-    case = load(PAD, PAD_DISC + ['solver.reduction.method="components"',
+    shares a basis across a friction sweep, has nothing to share there, and is refused at
+    load, before the model is built."""
+    with pytest.raises(CaseError, match="basis_mu") as refused:
+        load(PAD, PAD_DISC + ['solver.reduction.method="components"',
                               "contact.pad_disc.friction.mu=0.4",
                               "contact.pad_disc.friction.basis_mu=0.3"])
-    with pytest.raises(CaseError, match="basis_mu"):
-        prepare(case)
+    assert refused.value.key == "contact.pad_disc.friction.basis_mu"
 
 
 def _reduced(case, engine):
@@ -229,7 +229,7 @@ def test_the_memory_bound_takes_the_model_and_its_largest_part():
     assert parts < 0.8 * assembled
     bound = [f"limits.memory={0.5 * (parts + assembled) / 1e9}"]
     with pytest.raises(CaseError, match="limits.memory") as refused:
-        load(PAD, halves + bound)
+        load(PAD, halves + bound + ['solver.reduction.method="assembled"'])
     assert refused.value.key.endswith(".mesh.divisions")
     load(PAD, halves + bound + ['solver.reduction.method="components"',
                                 "solver.reduction.enabled=true"])
@@ -331,7 +331,8 @@ def test_the_commands_reduce_the_parts_through_a_cache_and_refuse_it_when_assemb
         "part disc: read back from the cache", "part pad: read back from the cache"]
     # the same modes, to the last digit printed (the stages' seconds aside)
     assert second.out.splitlines()[:-1] == first.out.splitlines()[:-1]
-    assert main(["cea", PAD, "--workers", "2"]) == 2
+    assert main(["cea", PAD, "--workers", "2", "--set",
+                 'solver.reduction.method="assembled"']) == 2
     refused = capsys.readouterr().err.strip().splitlines()
     assert len(refused) == 1 and "--workers" in refused[0]
 

@@ -116,7 +116,7 @@ def test_a_part_in_pieces_spans_its_static_responses(pieces):
 
 def test_pieces_are_refused_off_the_components_path():
     with pytest.raises(CaseError, match="components") as refused:
-        load(PAD, PAD_DISC + ["parts.disc.pieces=2"])
+        load(PAD, PAD_DISC + ["parts.disc.pieces=2", 'solver.reduction.method="assembled"'])
     assert refused.value.key == "parts.disc.pieces"
 
 

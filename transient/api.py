@@ -20,8 +20,9 @@ from .api_interface import InterfaceCompatibility, compat, compat_pairs
 from .api_results import export, history, modal_growth, summary
 from .api_studies import Bench, bench, compare_modes
 from .case.checks import check_transient
-from .case.loading import literal
+from .case.loading import literal, on_cluster
 from .case.loading import load as _load
+from .case.sizes import Cluster
 from .errors import CaseError
 
 __all__ = ["load", "prepare", "run", "modes", "cea", "mu_map", "compat", "compat_pairs",
@@ -30,7 +31,7 @@ __all__ = ["load", "prepare", "run", "modes", "cea", "mu_map", "compat", "compat
            "sweep_branches"]
 
 
-def load(path, overrides=()):
+def load(path, overrides=(), workers=0, scheduler=None):
     """Read, override and validate a case file.
 
     Parameters
@@ -40,18 +41,23 @@ def load(path, overrides=()):
     overrides : sequence of str
         ``"dotted.key=TOML_LITERAL"`` assignments applied before validation, as the command
         line's ``--set`` (``"solver.t_end=2e-3"``).
+    workers, scheduler
+        Where the components path will reduce the parts, as `prepare` takes them: the
+        memory bound at load is then each process's (this one's as the cluster's client, a
+        part's or a piece's on a worker). A case used elsewhere is checked again there.
 
     Returns
     -------
     Case
-        The frozen specs of every table, defaults filled, in SI units.
+        The frozen specs of every table, defaults filled, in SI units; a reduction whose
+        ``method`` is ``"auto"`` has it chosen (``Case.reduction_auto`` says why).
 
     Raises
     ------
     CaseError
         Any bad input: it names the file, the key and what was expected.
     """
-    return _load(path, list(overrides))
+    return _load(path, list(overrides), Cluster.of(workers, scheduler))
 
 
 def prepare(case, workers=0, scheduler=None, cache=None, on_part=None, on_stage=None):
@@ -92,6 +98,7 @@ def prepare(case, workers=0, scheduler=None, cache=None, on_part=None, on_stage=
     """
     from .stages import prepare as prepare_stages
     from .reduce.engine import engine_for
+    case = on_cluster(case, Cluster.of(workers, scheduler))
     with engine_for(case, workers, scheduler, cache, on_part, on_stage) as parts:
         return prepare_stages(case, parts=parts)
 
@@ -128,6 +135,7 @@ def run(case, path=None, resume=False, progress=False, key=None, workers=0, sche
         is what ``transient run --json`` prints.
     """
     check_transient(case)           # before the stages' modules (Numba, SciPy) are imported
+    case = on_cluster(case, Cluster.of(workers, scheduler))
     from .integration import run as run_case
     if path is None:
         path = case.directory / (case.output.file or Path(case.path).with_suffix(".h5").name)
@@ -163,11 +171,11 @@ class NormalModes:
                 "timings": dict(self.timings)}
 
 
-def dry_run(case, command="run"):
+def dry_run(case, command="run", workers=0, scheduler=None, cache=None):
     """What a command would take on a case, checked and measured without doing it: the
     model built (dofs by part), each contact pair's fine rule and initial gaps (checked as
-    the command would), the memory estimate against ``limits.memory`` and, for a run, its
-    steps. Nothing is factorized and nothing written.
+    the command would), the memory estimate of each process against ``limits.memory`` and,
+    for a run, its steps. Nothing is factorized and nothing written.
 
     Parameters
     ----------
@@ -175,20 +183,30 @@ def dry_run(case, command="run"):
         From `load`.
     command : str
         "run", "modes" or "cea".
+    workers, scheduler, cache
+        Where the components path would reduce the parts, as `prepare` takes them.
 
     Returns
     -------
     dict
         ``parts`` (dofs, free dofs, cells), ``pairs`` (fine points, ``gap0``), ``memory``
-        (``estimate_gb``, ``limit_gb``, ``largest_part``), for a run ``steps`` (``steps``,
-        ``exact``: False where it is a bound, None where the setup's critical step sets it),
-        ``setup_seconds`` (``low``, ``high``, ``setups``: estimated from the setups of its
-        kind this machine has timed, transient.setuptimes; None before any).
+        (``estimate_gb`` this process's, ``limit_gb``, ``largest_part`` the part whose
+        reduction it counts, ``client`` whether it is a cluster's client's, ``worker_gb``
+        the largest part's or piece's on a worker and ``worker_part`` which, ``budget_gb`` a
+        worker's share of ``limits.memory`` on an embedded cluster (None where none),
+        ``terms_gb`` what this process's estimate is made of, and the reduction's
+        ``method`` with ``auto``, why "auto" chose it), for a run ``steps``
+        (``steps``, ``exact``: False where it is a bound, None where the setup's critical
+        step sets it), ``setup_seconds`` (``low``, ``high``, ``setups``: estimated from the
+        setups of its kind this machine has timed, transient.setuptimes; None before any).
     """
     from .dryrun import measure
+    from .reduce.engine import used
     if command not in ("run", "modes", "cea"):
         raise CaseError("command line", "command", f"expected run, modes or cea, got "
                         f"'{command}'")
+    case = on_cluster(case, Cluster.of(workers, scheduler))
+    used(case, workers, scheduler, cache)
     return measure(case, command)
 
 
@@ -291,6 +309,7 @@ def cea(case, matrices=False, workers=0, scheduler=None, cache=None, on_part=Non
     from .stability.stage import analyse
     from .reduce.engine import engine_for
     complex_modes.check(case)
+    case = on_cluster(case, Cluster.of(workers, scheduler))
     with engine_for(case, workers, scheduler, cache, on_part, on_stage) as parts:
         result = analyse(case, matrices=matrices, parts=parts)
     if complex_modes.names(case) is None:

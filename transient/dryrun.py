@@ -4,7 +4,7 @@ built and its initial gaps checked, and the bounds the work is held to (the memo
 against limits.memory, the steps of a run). Nothing is factorized and nothing written: the
 checks a command makes before its costly stages, and their figures."""
 from . import setuptimes
-from .case.sizes import cells_by_part, entries, memory_need
+from .case.sizes import cells_by_part, dofs_by_part, entries, memory_need, worker_budget
 from .contact.gaps import check_gaps, initial_gaps
 from .contact.pair import pair_interface
 from .dynamics.plan import Plan
@@ -14,11 +14,11 @@ from .model.placement import check_motions
 
 def measure(case, command):
     """A dict of what `command` ("run", "modes" or "cea") would take on the case: parts
-    (dofs, free dofs, cells, the pieces the components path reduces it in), pairs (fine points, initial gaps), memory (the estimate, the
-    limit and the part that sets it on the components path), for a run its steps (exact
-    where the step is known before the setup, else a bound or None) and its setup's seconds
-    (the modes' for `modes`) as estimated from those timed on this machine
-    (setuptimes.estimate: low, high, from how many; None before any)."""
+    (dofs, free dofs, cells, the pieces the components path reduces it in), pairs (fine
+    points, initial gaps), memory (each process's estimate and bound: _memory), for a run
+    its steps (exact where the step is known before the setup, else a bound or None) and
+    its setup's seconds (the modes' for `modes`) as estimated from those timed on this
+    machine (setuptimes.estimate: low, high, from how many; None before any)."""
     model = build_model(case)
     free = ~model.fixed
     cells = cells_by_part(model.parts)
@@ -33,17 +33,31 @@ def measure(case, command):
         gaps = initial_gaps(interface)
         check_gaps(case, model, name, interface, gaps)
         pairs[name] = {"fine_points": int(interface.fine.n_points), "gap0": gaps.meta()}
-    need, largest = memory_need(case, cells)
     out = {"command": command, "case": str(case.path), "dofs": int(model.ndof),
            "free_dofs": int(free.sum()), "parts": parts, "pairs": pairs,
-           "memory": {"estimate_gb": need / 1e9, "limit_gb": case.limits.memory_bytes / 1e9,
-                      "largest_part": largest}}
+           "memory": _memory(case, cells, dofs_by_part(model.parts))}
     if command == "run":
         out["steps"] = _steps(case)
     # from the setups this machine has timed (setuptimes): None before any of this kind
     kind = "modes" if command == "modes" else setuptimes.kind(case, command == "cea")
     out["setup_seconds"] = setuptimes.estimate(kind, entries(sum(cells.values(), [])))
     return out
+
+
+def _memory(case, cells, dofs):
+    """The memory estimate of each process (case.sizes.memory_need) against its bound."""
+    need = memory_need(case, cells, dofs)
+    budget = worker_budget(case, need)
+    reduction = case.solver.reduction
+    return {"estimate_gb": need.here / 1e9, "limit_gb": case.limits.memory_bytes / 1e9,
+            "largest_part": need.part, "client": need.worker is not None,
+            "worker_gb": None if need.worker is None else need.worker / 1e9,
+            "worker_part": need.worker_part,
+            "worker_pieces": case.parts[need.worker_part].pieces if need.worker_part else 1,
+            "budget_gb": None if budget is None else budget / 1e9,
+            "terms_gb": {what: b / 1e9 for what, b in need.terms},
+            "method": reduction.method if reduction.enabled else None,
+            "auto": case.reduction_auto or None}
 
 
 def _steps(case):

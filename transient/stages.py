@@ -10,6 +10,7 @@ import numpy as np
 
 from .case.signals import compile_signals
 from . import heap, setuptimes
+from .case.checks import rebased
 from .case.sizes import check_steps, parts_cells, setup_bytes
 from .contact.contactset import first_tangent, stack
 from .contact.pair import build_contact, contact_stiffness
@@ -24,7 +25,7 @@ from .model import build_model, constant_load
 from .model.band import check_band
 from .reduce.basis import rebase
 from .reduce.components import components_basis, reduce_parts
-from .reduce.reference import rebased, reference_basis
+from .reduce.reference import reference_basis
 from .reduce.stage import reduce, reduction_mass
 from .shared import Built, factorization
 from .timings import Stages
@@ -96,11 +97,6 @@ def _band_keys(case, analysis):
 def _prepare(case, stages, built, want_unsampled=False, analysis=False, parts=None):
     solver = case.solver
     components = solver.reduction.components
-    if components and rebased(case):
-        name = next(n for n, c in case.contact.items() if c.friction.basis_mu)
-        raise CaseError(case.path, f"contact.{name}.friction.basis_mu", "not with "
-                        'solver.reduction.method = "components", whose part bases do not '
-                        "depend on the friction: leave it out")
     model = (stages.timed("loads", build_model, case, built.model) if built.model is not None
              else stages.timed("model", build_model, case))
     check_band(case, model, _band_keys(case, analysis))

@@ -1,13 +1,15 @@
 """Checks that need several keys of a case, run at load: before any mesh is built, a wrong
 combination is a one-line error naming the key to change."""
 from ..errors import CaseError
+from .auto import choose_method
 from .materials import check_materials
 from .signals import check_signal
 from .sizes import check_generated, check_steps
 
 
 def check(case):
-    """Raise CaseError on the first combination of keys that no stage admits (every case)."""
+    """Raise CaseError on the first combination of keys that no stage admits (every case);
+    return the case, its reduction's method chosen where it says "auto" (case/auto.py)."""
     _references(case)
     check_materials(case)
     _contact(case)
@@ -15,8 +17,11 @@ def check(case):
     _signals(case)
     _directions(case)
     _mass_scaling(case)
+    case = choose_method(case)
     _pieces(case)
+    _components(case)
     check_generated(case)
+    return case
 
 
 def check_transient(case):
@@ -203,6 +208,24 @@ def _pieces(case):
             _fail(case, f"parts.{name}.pieces", "the components path reduces a part in pieces: "
                   "set solver.reduction.enabled = true and solver.reduction.method = "
                   '"components"')
+
+
+def _components(case):
+    """The components path's part bases do not depend on the friction: a basis made at
+    another friction (basis_mu) has nothing to share there."""
+    if not case.solver.reduction.components or not rebased(case):
+        return
+    name = next(n for n, c in case.contact.items() if c.friction.basis_mu)
+    auto = f" ({case.reduction_auto})" if case.reduction_auto else ""
+    _fail(case, f"contact.{name}.friction.basis_mu", 'not with solver.reduction.method = '
+          f'"components"{auto}, whose part bases do not depend on the friction: leave it out')
+
+
+def rebased(case):
+    """Whether the case's basis is made at another friction than its own (a pair's basis_mu
+    differs from its mu), and is then rebased on its preload (reduce.reference)."""
+    return any(c.friction.basis_mu and c.friction.basis_mu != c.friction.mu
+               for c in case.contact.values())
 
 
 def _solver(case):

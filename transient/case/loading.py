@@ -4,11 +4,12 @@ import difflib
 import math
 import re
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from . import schema as S
 from .checks import check
+from .sizes import Cluster, check_generated
 from .specs import CeaSpec, LimitsSpec, OutputSpec, SolverSpec, build
 from ..errors import CaseError
 
@@ -32,6 +33,10 @@ class Case:
     output: OutputSpec
     cea: CeaSpec
     limits: LimitsSpec
+    # where the components path reduces its parts, as the command says (its memory bounds)
+    cluster: Cluster = Cluster()
+    # why solver.reduction.method is what it is where the case says "auto" ('' otherwise)
+    reduction_auto: str = ""
 
     @property
     def directory(self):
@@ -84,8 +89,10 @@ def literal(value):
     return repr(value)
 
 
-def load(path, overrides=()):
-    """Read, override and validate a case file; raises CaseError on any bad input."""
+def load(path, overrides=(), cluster=Cluster()):
+    """Read, override and validate a case file; raises CaseError on any bad input. cluster:
+    where the components path will reduce its parts (sizes.Cluster), whose memory bounds
+    are checked here."""
     path = Path(path)
     try:
         text = path.read_text()
@@ -93,10 +100,10 @@ def load(path, overrides=()):
         raise CaseError(path, "", "file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise CaseError(path, "", f"cannot read: {exc}") from None
-    return parse(text, path, overrides)
+    return parse(text, path, overrides, cluster)
 
 
-def parse(text, path, overrides=()):
+def parse(text, path, overrides=(), cluster=Cluster()):
     """A case from its TOML text, such as the copy a history keeps; path locates the files it
     names (meshes) and is the one errors name."""
     path = Path(path)
@@ -108,8 +115,17 @@ def parse(text, path, overrides=()):
         raise CaseError(path, "", f"invalid TOML: {exc}") from None
     except RecursionError:
         raise CaseError(path, "", "tables or arrays nested too deeply") from None
-    case = Case(path, text, tuple(overrides), **build(data))
-    check(case)
+    return check(Case(path, text, tuple(overrides), **build(data), cluster=cluster))
+
+
+def on_cluster(case, cluster):
+    """The case with its parts reduced where cluster says (sizes.Cluster), its memory bound
+    checked again if it was loaded for another place: a script may load a case, then reduce
+    its parts on workers, or here."""
+    if case.cluster == cluster:
+        return case
+    case = replace(case, cluster=cluster)
+    check_generated(case)
     return case
 
 

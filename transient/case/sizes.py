@@ -2,11 +2,17 @@
 will take, estimated from its cells (from the generators' divisions at load, from the cells
 read for a mesh file), and the steps a run will make. Past a bound (limits.memory, the
 machine's memory by default; limits.steps) the case is refused with the keys that drive it.
+
+The estimate is each process's: this one's, and on the components path reduced on a Dask
+cluster (the command's --workers or --scheduler, Case.cluster) the client's in this process
+and each part's (or piece's) on a worker.
 """
 import math
 import resource
+from dataclasses import dataclass
 
 from ..errors import CaseError
+from .specs import physical_memory
 
 NODES = {"hex8": 8, "hex20": 20, "tet4": 4, "tet10": 10, "wedge6": 6, "wedge15": 15}
 # the generators split each hex in six tets (Kuhn) or in two prisms
@@ -25,6 +31,61 @@ PART_BYTES_PER_ENTRY = 110
 # the model alone (K and M assembled, and their COO triplets while they are): the components
 # path's process holds it whole beside one part's setup at a time (docs/performance.md)
 MODEL_BYTES_PER_ENTRY = 30
+# the components path's client on a cluster holds the parts' bases side by side (the
+# synthesis): each part's free dofs times its columns (its modes past the cutoff, its
+# interface fields and loads), which grow with the basis' cutoff: PART_COLUMNS a part at
+# COLUMNS_CUTOFF, in proportion to it, above every part measured (docs/performance.md, "Each
+# part reduced on its own"); its dofs from its entries at ENTRIES_PER_DOF, the fewest of the
+# solid meshes measured (a coarser ratio counts more dofs)
+PART_COLUMNS = 1000
+COLUMNS_CUTOFF = 32000.0
+ENTRIES_PER_DOF = 150
+# and beside them the coupling's dense reduced matrices and the process itself
+CLIENT_MARGIN = 0.5e9
+# a part in pieces: a piece's stage on a worker holds up to twice its share of the part (its
+# condensation on the cut and its extension beside its own factors), and the client the
+# cut's model dense (its stiffness and mass, then the coupled eigenproblem's two matrices),
+# CUT_MATRICES of them; the cut's dofs CUT_DOFS (pieces - 1) dofs^(2/3) of the part's, above
+# the cuts measured (docs/performance.md, "A part in pieces")
+PIECE_SHARE = 2.0
+CUT_MATRICES = 4
+CUT_DOFS = 0.5
+
+
+@dataclass(frozen=True)
+class Cluster:
+    """Where the components path reduces its parts, as the command says before the case
+    loads: workers, those of an embedded LocalCluster on this machine (--workers N); remote,
+    an existing scheduler's (--scheduler), whose workers' memory it tells once reached;
+    neither: this process."""
+    workers: int = 0
+    remote: bool = False
+
+    @classmethod
+    def of(cls, workers=0, scheduler=None):
+        """The Cluster of the commands' --workers and --scheduler (a scheduler wins, as
+        cluster.client_for takes it)."""
+        return cls(0, True) if scheduler else cls(int(workers or 0), False)
+
+    def __bool__(self):
+        return self.workers > 0 or self.remote
+
+
+@dataclass(frozen=True)
+class Need:
+    """The memory a setup is estimated to take [B], by process: here, this process's (the
+    client's on a cluster), the sum of its terms ((what, bytes) pairs, said); part, the part
+    whose reduction that counts (None: none alone); worker, the largest part's (or piece's)
+    reduction on a worker, and its part (None: no worker)."""
+    here: float
+    part: str = None
+    worker: float = None
+    worker_part: str = None
+    terms: tuple = ()
+
+    def said(self):
+        """The terms in words: 'the model 5.8 GB, ...'."""
+        return ", ".join(f"{what} {b / 1e9:.3g} GB" for what, b in self.terms)
 
 
 def peak_rss_gb():
@@ -51,9 +112,34 @@ def setup_bytes(cells):
 
 def part_bytes(cells, pieces=1):
     """Estimated peak memory [bytes] of one part's reduction on a worker: cells (count, nodes)
-    pairs of the part; in pieces (reduce.pieces), each piece's stage on a worker holds its
-    share of the part."""
-    return PART_BYTES_FLOOR + PART_BYTES_PER_ENTRY * entries(cells) / pieces
+    pairs of the part; in pieces (reduce.pieces), each piece's stage on a worker holds
+    PIECE_SHARE times its share of the part. In one process a part in pieces takes no less
+    than whole (its pieces' columns and the cut's model beside each piece's stage):
+    memory_need counts it whole."""
+    share = 1.0 if pieces == 1 else min(1.0, PIECE_SHARE / pieces)
+    return PART_BYTES_FLOOR + PART_BYTES_PER_ENTRY * entries(cells) * share
+
+
+def cut_bytes(dofs, pieces):
+    """Estimated memory [bytes] of the cut's dense model on the client, of a part of dofs in
+    pieces (none whole)."""
+    if pieces == 1:
+        return 0.0
+    return CUT_MATRICES * 8.0 * (CUT_DOFS * (pieces - 1) * dofs ** (2.0 / 3.0)) ** 2
+
+
+def synthesis_bytes(cells, cutoff, dofs=None):
+    """Estimated memory [bytes] of the parts' bases side by side, cells (count, nodes) pairs
+    by part: each part's dofs (part_dofs) times its columns to the basis' cutoff [Hz] (at most
+    its dofs), 8 bytes each."""
+    columns = PART_COLUMNS * cutoff / COLUMNS_CUTOFF
+    return sum(8.0 * n * min(n, columns) for n in part_dofs(cells, dofs).values())
+
+
+def part_dofs(cells, dofs=None):
+    """Each part's dofs, by part: dofs' where its mesh is read, else from its entries."""
+    return {name: (dofs or {}).get(name, entries(c) / ENTRIES_PER_DOF)
+            for name, c in cells.items()}
 
 
 def parts_cells(parts):
@@ -63,34 +149,100 @@ def parts_cells(parts):
 
 def cells_by_part(parts):
     """parts_cells of each part, by name."""
-    return {name: [(len(c), c.shape[1]) for c in part.mesh.cells.values()]
-            for name, part in parts.items()}
+    return {name: mesh_cells(part.mesh) for name, part in parts.items()}
 
 
-def check_memory(case, cells, keys):
-    """Refuse (CaseError) a model whose estimated setup exceeds limits.memory. cells: (count,
-    nodes) of each cell block, by part; keys: the case key that sets each part's cells
-    (divisions, a mesh file), by part. The components path (solver.reduction.method) holds
-    the model whole but factorizes one part at a time: its need is the model's and the
-    largest part's setup."""
+def dofs_by_part(parts):
+    """The dofs of each part's mesh, by name."""
+    return {name: 3 * part.mesh.n_nodes for name, part in parts.items()}
+
+
+def mesh_cells(mesh):
+    """(count, nodes per cell) of each cell block of a mesh."""
+    return [(len(c), c.shape[1]) for c in mesh.cells.values()]
+
+
+def check_memory(case, cells, keys, dofs=None):
+    """Refuse (CaseError) a model whose estimated setup exceeds limits.memory in this process,
+    or a part whose reduction exceeds the workers' share of it on an embedded cluster
+    (worker_budget). cells: (count, nodes) of each cell block, by part; keys: the case key
+    that sets each part's cells (divisions, a mesh file), by part; dofs: as memory_need's."""
     have = case.limits.memory_bytes
-    need, largest = memory_need(case, cells)
-    named = [keys[largest]] if largest in keys else list(keys.values())
-    if need > have and named:
-        raise CaseError(case.path, named[0], f"the model would take about {need / 1e9:.3g} GB "
-                        f"(set by {', '.join(named)}), more than limits.memory allows "
-                        f"({have / 1e9:.3g} GB): coarsen the mesh, or raise limits.memory")
+    need = memory_need(case, cells, dofs)
+    named = [keys[need.part]] if need.part in keys else list(keys.values())
+    if need.here > have and named:
+        auto = f" ({case.reduction_auto})" if case.reduction_auto else ""
+        fix = ("coarsen the mesh, raise limits.memory, or reduce the parts on workers "
+               "(--workers, --scheduler)" if need.part is not None
+               else "coarsen the mesh, or raise limits.memory")
+        what = ("this process, the cluster's client," if need.worker is not None
+                else "the model")
+        terms = f": {need.said()}" if need.terms else ""
+        raise CaseError(case.path, named[0], f"{what} would take about {need.here / 1e9:.3g} "
+                        f"GB (set by {', '.join(named)}{terms}), more than limits.memory "
+                        f"allows ({have / 1e9:.3g} GB): {fix}{auto}")
+    if worker_budget(case, need) is not None:
+        pieces = {name: case.parts[name].pieces for name in cells}
+
+        def budget(name, count):
+            return worker_budget(case, memory_need(case, cells, dofs, {**pieces, name: count}))
+        check_workers(case, {n: c for n, c in cells.items() if n in keys}, budget,
+                      f"a worker's share of limits.memory beside this process, "
+                      f"{case.cluster.workers} workers")
 
 
-def memory_need(case, cells):
-    """(bytes, part or None) the setup of a model of these cells (count, nodes) by part is
-    estimated to take: the whole setup's, or on the components path the model whole and its
-    largest part's reduction (in this process as on a worker), named."""
-    if case.solver.reduction.components:
+def memory_need(case, cells, dofs=None, pieces=None):
+    """The Need of a setup of a model of these cells (count, nodes) by part: the whole
+    setup's in this process; on the components path the model whole and its largest part's
+    reduction, whole even in pieces (part_bytes); on a cluster (case.cluster) the client's
+    model and synthesis (dofs: of each part's mesh, where read) in this process, and the
+    largest part's or piece's on a worker (pieces: their count by part, the case's by
+    default)."""
+    if not case.solver.reduction.components:
+        return Need(setup_bytes(sum(cells.values(), [])))
+    terms = [("the model", MODEL_BYTES_PER_ENTRY * entries(sum(cells.values(), [])))]
+    if not case.cluster:
         largest = max(cells, key=lambda name: entries(cells[name]))
-        return (MODEL_BYTES_PER_ENTRY * entries(sum(cells.values(), []))
-                + part_bytes(cells[largest])), largest
-    return setup_bytes(sum(cells.values(), [])), None
+        terms.append((f"the reduction of {largest}", part_bytes(cells[largest])))
+        return Need(sum(b for _, b in terms), largest, terms=tuple(terms))
+    pieces = pieces or {name: case.parts[name].pieces for name in cells}
+    worker = {name: part_bytes(c, pieces[name]) for name, c in cells.items()}
+    largest = max(worker, key=worker.get)
+    terms.append(("the parts' bases side by side",
+                  synthesis_bytes(cells, case.solver.reduction.modes_fmax, dofs)))
+    n = part_dofs(cells, dofs)
+    terms += [(f"the cut of {name} in {pieces[name]} pieces", cut_bytes(n[name], pieces[name]))
+              for name in cells if pieces[name] > 1]
+    terms.append(("the coupling and the process", CLIENT_MARGIN))
+    return Need(sum(b for _, b in terms), None, worker[largest], largest, tuple(terms))
+
+
+def worker_budget(case, need):
+    """The memory [B] each worker of an embedded cluster may take: what limits.memory leaves
+    beside this process (need.here), shared by the workers, and no more than the LocalCluster
+    gives each (the machine's memory shared by them); None without workers on this machine
+    (a scheduler's tell their own: reduce.components.check_parts)."""
+    workers = case.cluster.workers
+    if not workers or not case.solver.reduction.components:
+        return None
+    return min(case.limits.memory_bytes - need.here, physical_memory()) / workers
+
+
+def check_workers(case, cells, budget, whose="a worker's memory"):
+    """Refuse a part whose reduction's estimated memory (cells: (count, nodes) by part)
+    exceeds budget(part, pieces) [B], a worker's with the part in that many pieces (whose:
+    what bounds it, said), naming parts.NAME.pieces and the count that fits, if any."""
+    for name, c in cells.items():
+        pieces = case.parts[name].pieces
+        need, have = part_bytes(c, pieces), budget(name, pieces)
+        if need > have:
+            fits = next((k for k in range(pieces + 1, 65)
+                         if part_bytes(c, k) <= budget(name, k)), None)
+            more = (f"parts.{name}.pieces = {fits}" if fits else "workers with more memory")
+            raise CaseError(case.path, f"parts.{name}.pieces", f"the part's reduction would "
+                            f"take about {need / 1e9:.3g} GB{' a piece' if pieces > 1 else ''}, "
+                            f"more than {whose} ({have / 1e9:.3g} GB): {more}, or a "
+                            "coarser mesh of the part")
 
 
 def entries(cells):

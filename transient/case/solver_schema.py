@@ -81,8 +81,10 @@ SOLVER = Table("solution settings", {
                         "of every part with the contact's low-rank update; components: each "
                         "part reduced on its own (its modes to the cutoff, its responses to "
                         "its interface's contact loads and to the loads), coupled through the "
-                        "contact rows in reduced coordinates", "assembled",
-                        choices=("assembled", "components")),
+                        "contact rows in reduced coordinates; auto: chosen at load, assembled "
+                        "where its setup's memory estimate fits limits.memory (every shipped "
+                        "case), else components, and components where a part is cut in "
+                        "pieces", "auto", choices=("assembled", "components", "auto")),
         "fmax": Value("float", "the band of the answer: the complex modes `transient cea` "
                       "reports, the contact stiffness a sampled rule reproduces, and the "
                       "exponential scheme's default step (20 steps a period) are to this "

@@ -263,8 +263,12 @@ class LimitsSpec:
 
     @property
     def memory_bytes(self):
-        physical = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-        return self.memory * 1e9 if self.memory > 0 else float(physical)
+        return self.memory * 1e9 if self.memory > 0 else physical_memory()
+
+
+def physical_memory():
+    """The machine's physical memory [B]."""
+    return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
 
 
 @dataclass(frozen=True)

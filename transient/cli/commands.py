@@ -65,11 +65,22 @@ def _interactive():
     return sys.stderr.isatty() and not os.environ.get("CI")
 
 
+def _load_for_parts(args):
+    """The case, its memory bounded for where --workers and --scheduler reduce the parts; a
+    line on standard error where "auto" chose the assembled path and they go unused."""
+    case = api.load(args.case, args.overrides, args.workers, args.scheduler)
+    given = [o for o, v in (("--workers", args.workers), ("--scheduler", args.scheduler),
+                            ("--cache", args.cache)) if v]
+    if given and case.reduction_auto and not case.solver.reduction.components:
+        print(f"{', '.join(given)}: not used: {case.reduction_auto}", file=sys.stderr)
+    return case
+
+
 def cmd_cea(args):
     t0 = time.perf_counter()
-    case = api.load(args.case, args.overrides)
+    case = _load_for_parts(args)
     if args.dry_run:
-        return _dry(case, "cea", args.json)
+        return _dry(case, "cea", args.json, args)
     result = api.cea(case, **_parts(args))
     modes = result.modes
     total = time.perf_counter() - t0
@@ -167,6 +178,8 @@ def _basis_notes(meta):
     notes = []
     if meta.get("modes_fmax_hz"):
         notes.append(f"its modes to {meta['modes_fmax_hz']:g} Hz")
+    if meta.get("reduction_auto"):
+        notes.append(meta["reduction_auto"])
     if meta.get("reduction_method") == "components":
         notes.append("each part reduced on its own")
         interfaces = (meta.get("basis_timings") or {}).get("part_interfaces") or {}
@@ -223,9 +236,9 @@ def _gap_text(gap0):
 
 
 def cmd_run(args):
-    case = api.load(args.case, args.overrides)
+    case = _load_for_parts(args)
     if args.dry_run:
-        return _dry(case, "run", args.json)
+        return _dry(case, "run", args.json, args)
     quiet = args.quiet or args.json or not _interactive()
     result = api.run(case, args.output, resume=args.resume, progress=not quiet,
                      key="-o" if args.output else None, **_parts(args, quiet))
@@ -254,9 +267,12 @@ def cmd_run(args):
     return 0
 
 
-def _dry(case, command, as_json):
-    """--dry-run: what the command would take (api.dry_run), said, then exit 0."""
-    d = api.dry_run(case, command)
+def _dry(case, command, as_json, args=None):
+    """--dry-run: what the command would take (api.dry_run), said, then exit 0; args: the
+    command's --workers, --scheduler and --cache, where it has them."""
+    where = {} if args is None else {"workers": args.workers, "scheduler": args.scheduler,
+                                     "cache": args.cache}
+    d = api.dry_run(case, command, **where)
     if as_json:
         print(json.dumps(d))
         return 0
@@ -267,10 +283,8 @@ def _dry(case, command, as_json):
               f"{pieces}")
     for name, p in d["pairs"].items():
         print(f"  contact {name}: {p['fine_points']} fine points" + _gap_text(p["gap0"]))
-    m = d["memory"]
-    by = f" (the model and its largest part, {m['largest_part']})" if m["largest_part"] else ""
-    print(f"  memory: about {m['estimate_gb']:.3g} GB{by}, limits.memory "
-          f"{m['limit_gb']:.3g} GB")
+    for line in _memory_lines(d["memory"]):
+        print("  " + line)
     if "steps" in d:
         s = d["steps"]
         print("  steps: " + (f"{s['steps']}" if s["exact"] else
@@ -285,6 +299,24 @@ def _dry(case, command, as_json):
                              "yet"))
     print("nothing factorized or written (--dry-run)")
     return 0
+
+
+def _memory_lines(m):
+    """What the dry run says of the memory: the path "auto" chose, and each process's
+    estimate against its bound."""
+    lines = [m["auto"]] if m["auto"] else []
+    terms = ", ".join(f"{what} {gb:.3g} GB" for what, gb in m["terms_gb"].items())
+    who = " this process, the cluster's client," if m["client"] else ""
+    lines.append(f"memory:{who} about {m['estimate_gb']:.3g} GB"
+                 + (f" ({terms})" if terms else "") + f", limits.memory {m['limit_gb']:.3g} GB")
+    if m["client"]:
+        bound = (f", each worker's share of limits.memory {m['budget_gb']:.3g} GB"
+                 if m["budget_gb"] is not None else ", checked against the scheduler's "
+                 "workers once reached")
+        piece = f"a piece of {m['worker_pieces']} of " if m["worker_pieces"] > 1 else ""
+        lines.append(f"memory: a worker about {m['worker_gb']:.3g} GB at most (the "
+                     f"reduction of {piece}{m['worker_part']}{bound})")
+    return lines
 
 
 def _duration(seconds):

@@ -131,6 +131,7 @@ ATTRIBUTES = {
     "normal_modes": (_is_count, "a count"),
     "reduction_method": (lambda v: v in ("assembled", "components"),
                          "assembled or components"),
+    "reduction_auto": (_is_text, "text"),
     "band_residual": (lambda v: _is_number(v) and v >= 0, "a residual >= 0"),
     "modes_fmax_hz": (lambda v: _is_number(v) and v > 0, "a frequency > 0 [Hz]"),
     "static_shapes": (lambda v: isinstance(v, list) and len(v) == 2 and all(map(_is_count, v)),

@@ -166,8 +166,14 @@ def run_case(path, meta):
         if meta.get(key) is None:
             raise CaseError(path, f"attribute {key}", "missing: the history keeps no case to "
                             "rebuild the run from (damaged, or not written by transient)")
+    overrides = list(meta.get("overrides") or [])
+    if meta.get("reduction_auto") and meta.get("reduction_method") in ("assembled",
+                                                                       "components"):
+        # the method "auto" chose for the run, not chosen again: its meshes need not be
+        # there any more, nor the memory it was chosen by
+        overrides.append(f'solver.reduction.method="{meta["reduction_method"]}"')
     try:
-        return parse(meta[CASE_TEXT], meta["case_path"], meta.get("overrides") or [])
+        return parse(meta[CASE_TEXT], meta["case_path"], overrides)
     except CaseError as exc:
         # named by the history that keeps it: the stored case path need not be a file
         raise CaseError(path, f"attribute {CASE_TEXT}", f"the stored case does not load "

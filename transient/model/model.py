@@ -13,14 +13,13 @@ from ..mesh import generators
 from .assembly import CellBlock, assemble
 from .elasticity import anisotropy
 from ..mesh.elements import ALIASES, ELEMENTS
-from ..case.sizes import cells_by_part, check_memory
+from ..case.sizes import cells_by_part, check_memory, dofs_by_part
 from ..errors import CaseError
 from .loads import nearest_node, pressure_forces
 from .placement import check_points, check_scale
-from ..mesh.meshfile import MeshFileError, read_mesh
 from ..mesh.mesh import Mesh, unit
 from ..mesh.placement import place
-from ..mesh.body import take_body
+from ..mesh.partfile import read_part_file
 from ..mesh.selections import find_set, offered, set_faces, set_nodes, with_geometric_sets
 
 AXES = {"x": 0, "y": 1, "z": 2}
@@ -80,22 +79,19 @@ def part_mesh(case, name):
     spec = case.parts[name].mesh
     key = f"parts.{name}.mesh"
     kind = spec.kind
-    try:
-        if kind == "file":
-            path = case.directory / spec.params["path"]
-            mesh = _body(case, key, read_mesh(path), spec.params["body"], path)
-            points = mesh.points * spec.params["scale"] + np.asarray(spec.params["translate"])
-            mesh = Mesh(points, mesh.cells, mesh.node_sets, mesh.face_sets, mesh.cell_sets)
-        else:
-            args = dict(spec.params)
-            args["element"] = ALIASES[args["element"]]
-            if kind == "drilled_box":
-                args["ogrid_cells"] = args["ogrid_cells"] or None
+    if kind == "file":
+        mesh = read_part_file(case, name)
+        points = mesh.points * spec.params["scale"] + np.asarray(spec.params["translate"])
+        mesh = Mesh(points, mesh.cells, mesh.node_sets, mesh.face_sets, mesh.cell_sets)
+    else:
+        args = dict(spec.params)
+        args["element"] = ALIASES[args["element"]]
+        if kind == "drilled_box":
+            args["ogrid_cells"] = args["ogrid_cells"] or None
+        try:
             mesh = getattr(generators, kind)(**args)
-    except MeshFileError as exc:
-        raise CaseError(case.path, f"{key}.path", f"{exc.path}: {exc.message}") from None
-    except ValueError as exc:
-        raise CaseError(case.path, key, str(exc)) from None
+        except ValueError as exc:
+            raise CaseError(case.path, key, str(exc)) from None
     mesh = with_geometric_sets(mesh, case.parts[name].sets)
     rotate, mirror = case.parts[name].transform.rotate, case.parts[name].transform.mirror
     placed = place(mesh, case.parts[name].transform.translate,
@@ -105,18 +101,6 @@ def part_mesh(case, name):
         raise CaseError(case.path, f"parts.{name}.transform", "places the part's nodes "
                         "beyond double precision: a translation or a point far out of range")
     return placed
-
-
-def _body(case, key, mesh, body, path):
-    """The part of a file's mesh that its key `body` names (a cell set), or all of it."""
-    if not body:
-        return mesh
-    name = find_set(mesh.cell_sets, body)
-    if name is None:
-        raise CaseError(case.path, f"{key}.body", f"{path} has no cell set '{body}' (cell "
-                        f"sets, with a deck's instances: "
-                        f"{', '.join(offered(mesh.cell_sets)) or 'none'})")
-    return take_body(mesh, name)
 
 
 def resolve_set(case, parts, ref, key, surface=False):
@@ -304,7 +288,8 @@ def build_model(case, structure=None):
     files = [n for n in case.parts if case.parts[n].mesh.kind == "file"]
     if files:
         # the cells read: the memory bound before any matrix is assembled
-        check_memory(case, cells_by_part(parts), {n: f"parts.{n}.mesh.path" for n in files})
+        check_memory(case, cells_by_part(parts), {n: f"parts.{n}.mesh.path" for n in files},
+                     dofs_by_part(parts))
 
     t0 = time.perf_counter()
     blocks = _cell_blocks(case, parts)

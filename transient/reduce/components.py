@@ -17,7 +17,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from ..case.sizes import cells_by_part, part_bytes, peak_rss_gb
+from ..case.sizes import cells_by_part, check_workers, peak_rss_gb
 from ..contact.blocks import points_gram
 from ..contact.contactset import first_tangent
 from ..dynamics.critical import critical_tangent
@@ -270,21 +270,10 @@ def condensed(K_lin, omega2, A, cutoff, gram, loads, q, tol):
 
 def check_parts(case, model, budget):
     """Refuse a part whose reduction's estimated memory (from its cells) exceeds budget [B],
-    a worker's, naming the key that sizes it; None: no bound here (limits.memory's, at the
-    model, holds the largest part)."""
-    if budget is None:
-        return
-    for name, cells in cells_by_part(model.parts).items():
-        pieces = case.parts[name].pieces
-        need = part_bytes(cells, pieces)
-        if need > budget:
-            fits = next((k for k in range(pieces + 1, 65) if part_bytes(cells, k) <= budget),
-                        None)
-            more = (f"parts.{name}.pieces = {fits}" if fits else "workers with more memory")
-            raise CaseError(case.path, f"parts.{name}.pieces", f"the part's reduction would "
-                            f"take about {need / 1e9:.3g} GB{' a piece' if pieces > 1 else ''}, "
-                            f"more than a worker's memory ({budget / 1e9:.3g} GB): {more}, or "
-                            "a coarser mesh of the part")
+    a worker's, naming the key that sizes it (case.sizes.check_workers); None: no bound here
+    (limits.memory's, at the model, holds the largest part)."""
+    if budget is not None:
+        check_workers(case, cells_by_part(model.parts), lambda name, pieces: budget)
 
 
 def _preload(case, contacts, pairs, X, Kr, rows, constant):

@@ -118,24 +118,35 @@ def cached(runner, folder):
     return run
 
 
+def used(case, workers=0, scheduler=None, cache=None):
+    """Whether the components path's options (--workers, --scheduler, --cache) are used:
+    not where none is given, nor where "auto" chose the assembled path (Case.reduction_auto:
+    a case of any size may be given them); refused on a case that names a path whose basis
+    is made in this process, whole (the assembled path, the full model)."""
+    if not (workers or scheduler or cache):
+        return False
+    if case.solver.reduction.components:
+        return True
+    if case.reduction_auto:
+        return False
+    option = "--workers" if workers else "--scheduler" if scheduler else "--cache"
+    raise CaseError(WHERE, option, "reduces the parts of the components path: set "
+                    'solver.reduction.enabled = true and solver.reduction.method = '
+                    '"components"')
+
+
 @contextmanager
 def engine_for(case, workers=0, scheduler=None, cache=None, on_part=None, on_stage=None):
     """The Engine of the components path for one call of the API (None: the parts in this
     process, uncached, nothing said), its Dask client closed at the end; on_part(name,
     seconds, cached) as each part is done, on_stage(name, seconds, peak GB) as each stage of
-    the setup ends. Asked of an assembled case, the options are refused: its basis is made
-    in this process, whole."""
+    the setup ends. Asked of an assembled case, the options are refused or unused (used)."""
     done = None if on_part is None else (
         lambda task, part: on_part(task.name, sum(part.seconds.values()),
                                    "cache" in part.seconds))
-    if not (workers or scheduler or cache):
+    if not used(case, workers, scheduler, cache):
         yield None if done is None and on_stage is None else Engine(done=done, stage=on_stage)
         return
-    if not case.solver.reduction.components:
-        option = "--workers" if workers else "--scheduler" if scheduler else "--cache"
-        raise CaseError(WHERE, option, "reduces the parts of the components path: "
-                        "set solver.reduction.enabled = true and solver.reduction.method = "
-                        '"components"')
     from ..cluster import check_cluster, client_for
     if cache is not None:
         cache = Path(cache)

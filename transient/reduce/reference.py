@@ -52,13 +52,6 @@ def reference_case(case):
     return replace(case, contact=contact)
 
 
-def rebased(case):
-    """Whether the case's basis is made at another friction than its own (a pair's basis_mu
-    differs from its mu), and is then rebased on its preload."""
-    return any(c.friction.basis_mu and c.friction.basis_mu != c.friction.mu
-               for c in case.contact.values())
-
-
 def reference_basis(case, model, M, pairs, cs, patterns, Mf=None):
     """The SharedBasis of reference_case(case) on the model, its pairs (any friction: their
     geometry is taken) and the factorization cs (lowrank.ContactSolver)."""

@@ -63,6 +63,7 @@ def reduce(case, model, M, pairs, contacts, preload, patterns, v0, solve, kt_cri
     q0, v = basis.coordinates(M @ preload.u), basis.coordinates(M @ v0)
     meta = {"reduced_dofs": len(basis.omega2), "normal_modes": basis.n_modes,
             "reduction_method": reduction.method,
+            **({"reduction_auto": case.reduction_auto} if case.reduction_auto else {}),
             "modes_fmax_hz": reduction.modes_fmax,
             "modes_hz": [float(f) for f in basis.mode_hz],
             "contact_shapes": basis.n_contact_shapes,
