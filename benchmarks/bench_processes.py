@@ -6,12 +6,14 @@ cut short and says so). With --base DIR the same command also runs on the packag
 `git worktree` of another commit), A B A B, --rounds times.
 
     python benchmarks/bench_processes.py [--every 1] [--limit 22] [--base DIR] [--rounds 1]
-                                  [--markdown FILE] [--json FILE] -- transient cea CASE ...
+                                  [--timeline FILE] [--markdown FILE] [--json FILE]
+                                  -- transient cea CASE ...
 """
 import argparse
 import os
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -22,18 +24,22 @@ from tables import publish, table  # noqa: E402  (a sibling in benchmarks/)
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def sampled(command, pythonpath, every, limit_gb):
+def sampled(command, pythonpath, every, limit_gb, timeline=None):
     """{"seconds", "sum_gb", "peaks_gb" (the largest first), "killed", "returncode"} of the
-    command run on the package at pythonpath."""
+    command run on the package at pythonpath; timeline (a path or None): each sample's
+    seconds, the sum and every process's resident GB, a line each."""
     env = dict(os.environ, PYTHONPATH=str(pythonpath))
     if command[0] == "transient":
         command = [sys.executable, "-m", "transient"] + command[1:]
     t0 = time.perf_counter()
-    proc = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True)
+    # standard error to a file: a pipe read only at the end would stall a long, chatty run
+    errors = tempfile.TemporaryFile("w+")
+    proc = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=errors,
+                            text=True)
     root, peaks, top, killed = psutil.Process(proc.pid), {}, 0.0, False
+    log = open(timeline, "w") if timeline else None
     while proc.poll() is None:
-        total = 0
+        total, now = 0, {}
         try:
             tree = [root] + root.children(recursive=True)
         except psutil.NoSuchProcess:
@@ -44,8 +50,13 @@ def sampled(command, pythonpath, every, limit_gb):
             except psutil.NoSuchProcess:
                 continue
             total += rss
+            now[p.pid] = rss
             peaks[p.pid] = max(peaks.get(p.pid, 0), rss)
         top = max(top, total)
+        if log is not None:
+            log.write(f"{time.perf_counter() - t0:.1f} {total / 1e9:.2f} " + " ".join(
+                f"{pid}:{now[pid] / 1e9:.2f}" for pid in sorted(now)) + "\n")
+            log.flush()
         if limit_gb and total > limit_gb * 1e9:
             killed = True
             for p in reversed(tree):
@@ -55,7 +66,12 @@ def sampled(command, pythonpath, every, limit_gb):
                     pass
             break
         time.sleep(every)
-    err = proc.communicate()[1]
+    if log is not None:
+        log.close()
+    proc.wait()
+    errors.seek(0)
+    err = errors.read()
+    errors.close()
     seconds = time.perf_counter() - t0
     if proc.returncode and not killed:
         sys.stderr.write(err)
@@ -79,6 +95,7 @@ def main(argv=None):
     parser.add_argument("--limit", type=float, default=0.0, help="GB (0: none)")
     parser.add_argument("--base")
     parser.add_argument("--rounds", type=int, default=1)
+    parser.add_argument("--timeline", help="a file: each sample's seconds and GB")
     parser.add_argument("--markdown")
     parser.add_argument("--json")
     parser.add_argument("command", nargs=argparse.REMAINDER)
@@ -90,7 +107,8 @@ def main(argv=None):
     load0, rows = os.getloadavg()[0], []
     for _ in range(args.rounds):
         for name, path in packages:
-            row = dict(sampled(command, path, args.every, args.limit), package=name)
+            row = dict(sampled(command, path, args.every, args.limit, args.timeline),
+                       package=name)
             rows.append(row)
             print(f"{name}: {row['seconds']:.1f} s, all {row['sum_gb']:.2f} GB, each "
                   f"{[round(p, 2) for p in row['peaks_gb']]}"
