@@ -49,6 +49,87 @@ def test_kernels_import_nothing_but_numba_numpy_and_jit():
                 assert ok, f"{path.name}: from {'.' * node.level}{node.module}"
 
 
+def import_graph(taken=None):
+    """{module: {modules it imports}} over the package's modules (dotted names below
+    transient, "" the package itself), every import counted: at module level and inside a
+    function (a deferred import is still a dependency). taken (a dict, filled if given):
+    {module: the names it takes from the package itself, "*" for the package whole}."""
+    modules = {}
+    for path in PACKAGE.rglob("*.py"):
+        parts = path.relative_to(PACKAGE).with_suffix("").parts
+        name = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+        modules[name] = path
+    graph = {}
+    for name, path in modules.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        found = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                found |= {a.name[len("transient."):] if a.name != "transient" else ""
+                          for a in node.names if a.name.split(".")[0] == "transient"}
+                if "" in found and taken is not None:
+                    taken.setdefault(name, set()).add("*")
+            elif isinstance(node, ast.ImportFrom):
+                if node.level == 0:
+                    if (node.module or "").split(".")[0] != "transient":
+                        continue
+                    base = node.module[len("transient."):] if node.module != "transient" else ""
+                else:
+                    up = package.split(".") if package else []
+                    up = up[:len(up) - (node.level - 1)]
+                    base = ".".join(up + ([node.module] if node.module else []))
+                for a in node.names:
+                    sub = f"{base}.{a.name}" if base else a.name
+                    found.add(sub if sub in modules else base)
+                    if sub not in modules and base == "" and taken is not None:
+                        taken.setdefault(name, set()).add(a.name)
+        graph[name] = {m for m in found if m in modules and m != name}
+    return graph
+
+
+def test_the_modules_import_one_another_without_a_circle():
+    """No circle among the package's modules: each stage imports only those below it. The
+    one deferred edge allowed is the package's own PEP 562 door to the API (transient.X
+    imports transient.api on first use), which nothing below the API may lean on: no module
+    but the command line and the package imports the API."""
+    taken = {}
+    graph = import_graph(taken)
+    assert graph[""] == {"settings", "api"}
+    graph[""].discard("api")
+    # through the package's door a module takes its version, nothing else: the settings
+    # from their home, the API not at all
+    assert {m: names for m, names in taken.items() if names != {"__version__"}} == {}
+    leaning = {m for m, deps in graph.items() if "api" in deps and m.split(".")[0] != "cli"}
+    assert leaning == set()
+    # the strongly connected components (Tarjan): each a circle if more than one module
+    index, low, stack, on, circles = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = set()
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                component.add(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                circles.append(sorted(component))
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    assert circles == []
+
+
 def test_loading_a_case_does_not_import_numba():
     code = ("import sys; from transient.case import load; load(sys.argv[1]); "
             "print('numba' in sys.modules)")

@@ -82,8 +82,8 @@ def on_cluster(client):
 
 
 def _run(task):
-    import transient
-    transient.configure()
+    from ..settings import configure
+    configure()
     return task.run()
 
 

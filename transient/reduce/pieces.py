@@ -180,8 +180,8 @@ class OnCluster:
 
 
 def _on_worker(fn, *args):
-    import transient
-    transient.configure()
+    from ..settings import configure
+    configure()
     with blas.one_thread():
         return fn(*args)
 
