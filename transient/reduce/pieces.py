@@ -27,6 +27,7 @@ from .. import blas
 from ..cluster import submitted
 from ..model.dofs import restrict
 from ..solve.modes import shift_sigma
+from .cut import coupled_traces
 from .fields import FIELD_TOL
 from .parts import PartBasis, PartInterface, PartTask, part_basis
 from .piece import Piece
@@ -99,24 +100,14 @@ def cut_basis(S, Mh, B, couplings, fmax, shift_hz):
     interior's inertia, and converge slowly), then the relaxations S^-1 B beyond them. S, Mh
     (g, g): the pieces' condensation summed with the cut's own; B (g, s) the loads carried to
     the cut; couplings: (G, omega2 (m,), C (m, len(G))) of each piece, its modes' squared
-    frequencies and their mass coupling Phi^T (M_II Psi + M_IG) with the cut's dofs G."""
+    frequencies and their mass coupling Phi^T (M_II Psi + M_IG) with the cut's dofs G. The
+    coupled model is applied by blocks, never formed (reduce.cut)."""
     sigma = shift_sigma(-shift_hz)
     top = (2 * np.pi * fmax) ** 2 - sigma
-    m = sum(len(w) for _, w, _ in couplings)
-    g = len(S)
-    Ks, Ms = np.zeros((m + g, m + g)), np.eye(m + g)
-    Ks[m:, m:], Ms[m:, m:] = S, Mh
-    at = 0
-    for G, omega2, C in couplings:
-        rows = np.arange(at, at + len(omega2))
-        Ks[rows, rows] = omega2 - sigma
-        Ms[np.ix_(rows, m + G)] = C
-        Ms[np.ix_(m + G, rows)] = C.T
-        at += len(omega2)
-    _, modes = sla.eigh(Ks, Ms, subset_by_value=(-np.inf, top), driver="gvx")
-    del Ks, Ms
-    traces = _orthonormal(modes[m:], Mh, None)
-    return np.hstack([traces, _orthonormal(sla.solve(S, B, assume_a="pos"), Mh, traces)])
+    traces, R = coupled_traces(S, Mh, [(G, omega2 - sigma, C) for G, omega2, C in couplings],
+                               top)
+    traces = _orthonormal(traces, Mh, None)
+    return np.hstack([traces, _orthonormal(sla.cho_solve((R, False), B), Mh, traces)])
 
 
 def _orthonormal(R, Mh, Phi):
@@ -328,5 +319,5 @@ _TEXTS = []
 def _texts():
     if not _TEXTS:
         here = Path(__file__).resolve().parent
-        _TEXTS.extend((here / name).read_bytes() for name in ("pieces.py", "piece.py"))
+        _TEXTS.extend((here / name).read_bytes() for name in ("pieces.py", "piece.py", "cut.py"))
     return _TEXTS
