@@ -4,7 +4,7 @@ reduction under its task's key (reduce.parts.PartTask.key)."""
 import os
 import time
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -13,20 +13,24 @@ from ..cluster import WHERE, submitted
 from ..errors import CaseError
 from .parts import PartBasis
 from .pieces import OnCluster, PiecesTask
+from .store import Store
 
-# what a part's cache file holds of its PartBasis
-_FIELDS = ("T", "Kr", "mode_hz", "n_shapes", "n_static", "interface_mu", "interface_loads")
+# what a part's cache file holds of its PartBasis beside T (in a file of its own, mapped
+# when read back)
+_FIELDS = ("Kr", "mode_hz", "n_shapes", "n_static", "interface_mu", "interface_loads")
 
 
 @dataclass(frozen=True)
 class Engine:
     """How the components path reduces its parts: on a Dask client (None: in this process),
-    through a cache folder (None: none), done(task, PartBasis) as each part is reduced; and
-    stage(name, seconds, peak GB) as each stage of the setup ends (None: nothing said)."""
+    through a cache folder (None: none), done(task, PartBasis) as each part is reduced;
+    stage(name, seconds, peak GB) as each stage of the setup ends (None: nothing said); and
+    where the parts' bases are kept (a reduce.store.Store; None: in memory)."""
     client: object = None
     cache: object = None
     done: object = None
     stage: object = None
+    store: object = None
 
     def budget(self):
         """The smallest worker's memory limit [B] on the cluster (None: in this process, or
@@ -38,84 +42,107 @@ class Engine:
         return min(limits) if limits and min(limits) > 0 else None
 
     def run(self, tasks):
-        runner = serial if self.client is None else on_cluster(self.client)
+        store = self.store or Store()
+        runner = serial(store) if self.client is None else on_cluster(self.client, store)
         if self.cache is not None:
             runner = cached(runner, self.cache)
         return runner(tasks, self.done)
 
 
-def serial(tasks, done=None):
-    """Each task in this process, in order; done(task, PartBasis) after each."""
-    out = []
-    for task in tasks:
-        out.append(task.run())
-        if done is not None:
-            done(task, out[-1])
-    return out
+def serial(store):
+    """A runner of each task in this process, in order, its basis kept in store;
+    done(task, PartBasis) after each."""
+    def run(tasks, done=None):
+        out = []
+        for task in tasks:
+            part = task.run(None, store) if isinstance(task, PiecesTask) else task.run()
+            out.append(replace(part, T=store.kept(task.name, part.T)))
+            if done is not None:
+                done(task, out[-1])
+        return out
+    return run
 
 
-def on_cluster(client):
+def on_cluster(client, store=None):
     """A runner of the tasks on a Dask client, one task a part (a part in pieces, a task a
-    piece and stage: reduce.pieces), their results in order; done(task, PartBasis) as each
+    piece and stage: reduce.pieces), their results in order, each basis kept in store (a
+    worker writes it there, this process maps it); done(task, PartBasis) as each
     finishes. A task whose worker dies is run again on another
     (the scheduler's), the same arithmetic on one thread."""
+    store = store or Store()
+
     def run(tasks, done=None):
         from dask.distributed import as_completed
         whole = [i for i, task in enumerate(tasks) if not isinstance(task, PiecesTask)]
-        futures = [submitted(client, _run, tasks[i], key=f"part-{tasks[i].name}-"
+        futures = [submitted(client, _run, tasks[i], store, key=f"part-{tasks[i].name}-"
                              f"{tasks[i].key()[:16]}", pure=False) for i in whole]
         index = {f.key: i for i, f in zip(whole, futures)}
         out = [None] * len(tasks)
         # a part in pieces: its stages fan out over the workers beside the whole parts'
         for i, task in enumerate(tasks):
             if i not in index.values():
-                out[i] = task.run(OnCluster(client))
+                part = task.run(OnCluster(client), store)
+                out[i] = replace(part, T=store.kept(task.name, part.T))
                 if done is not None:
                     done(task, out[i])
         for future in as_completed(futures):
             i = index[future.key]
-            out[i] = future.result()
+            part = future.result()
+            out[i] = replace(part, T=store.mapped(part.T))
             if done is not None:
                 done(tasks[i], out[i])
         return out
     return run
 
 
-def _run(task):
+def _run(task, store):
+    """A part's reduction on a worker: its basis handed back as store's file."""
     from ..settings import configure
     configure()
-    return task.run()
+    part = task.run()
+    return replace(part, T=store.written(task.name, part.T))
 
 
 def cached(runner, folder):
-    """runner through the folder: a task whose key is there is read back, the others run and
-    are written (whole, under a temporary name then renamed: a killed run leaves no part
-    file half written). Nothing else in the folder is read, changed or deleted."""
+    """runner through the folder: a task whose key is there is read back (its basis mapped
+    from its file), the others run and are written (each file under a temporary name then
+    renamed, the basis first: a killed run leaves no part half written). Nothing else in
+    the folder is read, changed or deleted."""
     folder = Path(folder)
 
     def run(tasks, done=None):
         out, todo = [None] * len(tasks), []
         for i, task in enumerate(tasks):
             path = folder / f"part-{task.key()}.npz"
-            if path.is_file():
+            basis = path.with_suffix(".T.npy")
+            if path.is_file() and basis.is_file():
                 with np.load(path) as data:
-                    out[i] = PartBasis(task.name, data["T"], data["Kr"], data["mode_hz"],
-                                       int(data["n_shapes"]), int(data["n_static"]),
-                                       {"cache": 0.0}, data["interface_mu"],
-                                       int(data["interface_loads"]))
+                    out[i] = PartBasis(task.name, np.load(basis, mmap_mode="r"), data["Kr"],
+                                       data["mode_hz"], int(data["n_shapes"]),
+                                       int(data["n_static"]), {"cache": 0.0},
+                                       data["interface_mu"], int(data["interface_loads"]))
                 if done is not None:
                     done(task, out[i])
             else:
                 todo.append(i)
         for i, p in zip(todo, runner([tasks[i] for i in todo], done)):
-            out[i] = p
             folder.mkdir(parents=True, exist_ok=True)
             path = folder / f"part-{tasks[i].key()}.npz"
-            part = folder / f".{path.name}.{os.getpid()}.{time.monotonic_ns()}.npz"
-            np.savez(part, **{name: getattr(p, name) for name in _FIELDS})
-            os.replace(part, path)
+            basis = path.with_suffix(".T.npy")
+            _replaced(basis, lambda f: np.save(f, p.T))
+            _replaced(path, lambda f: np.savez(f, **{name: getattr(p, name)
+                                                    for name in _FIELDS}))
+            out[i] = replace(p, T=np.load(basis, mmap_mode="r"))
         return out
     return run
+
+
+def _replaced(path, write):
+    """path written by write(file) under a temporary name, then renamed over it."""
+    part = path.with_name(f".{path.name}.{os.getpid()}.{time.monotonic_ns()}")
+    with open(part, "wb") as f:
+        write(f)
+    os.replace(part, path)
 
 
 def used(case, workers=0, scheduler=None, cache=None):
@@ -137,29 +164,33 @@ def used(case, workers=0, scheduler=None, cache=None):
 
 @contextmanager
 def engine_for(case, workers=0, scheduler=None, cache=None, on_part=None, on_stage=None):
-    """The Engine of the components path for one call of the API (None: the parts in this
-    process, uncached, nothing said), its Dask client closed at the end; on_part(name,
-    seconds, cached) as each part is done, on_stage(name, seconds, peak GB) as each stage of
-    the setup ends. Asked of an assembled case, the options are refused or unused (used)."""
+    """The Engine of the components path for one call of the API (without options: the
+    parts in this process, uncached), its Dask client closed and its store removed at the
+    end; on_part(name, seconds, cached) as each part is done, on_stage(name, seconds, peak
+    GB) as each stage of the setup ends. Asked of an assembled case, the options are refused or unused (used)."""
     done = None if on_part is None else (
         lambda task, part: on_part(task.name, sum(part.seconds.values()),
                                    "cache" in part.seconds))
-    if not used(case, workers, scheduler, cache):
-        yield None if done is None and on_stage is None else Engine(done=done, stage=on_stage)
-        return
-    from ..cluster import check_cluster, client_for
-    if cache is not None:
-        cache = Path(cache)
-        if cache.exists() and not cache.is_dir():
-            raise CaseError("command line", "--cache", f"{cache} is not a folder")
+    # the parts' bases in files of this machine where it and the workers share a disk (not
+    # an existing cluster's: its workers' files are theirs)
+    store = Store.made() if case.solver.reduction.components and not scheduler else Store()
     client = cluster = None
-    if workers or scheduler:
-        check_cluster(scheduler, workers)
-        client, cluster = client_for(scheduler, workers)
     try:
-        yield Engine(client, cache, done, on_stage)
+        if not used(case, workers, scheduler, cache):
+            yield Engine(done=done, stage=on_stage, store=store)
+            return
+        from ..cluster import check_cluster, client_for
+        if cache is not None:
+            cache = Path(cache)
+            if cache.exists() and not cache.is_dir():
+                raise CaseError("command line", "--cache", f"{cache} is not a folder")
+        if workers or scheduler:
+            check_cluster(scheduler, workers)
+            client, cluster = client_for(scheduler, workers)
+        yield Engine(client, cache, done, on_stage, store)
     finally:
         if client is not None:
             client.close()
         if cluster is not None:
             cluster.close()
+        store.close()

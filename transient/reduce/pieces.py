@@ -31,6 +31,7 @@ from .cut import coupled_traces
 from .fields import FIELD_TOL
 from .parts import PartBasis, PartInterface, PartTask, part_basis
 from .piece import Piece
+from .store import Store
 
 CUT = -1             # piece_of's value on the cut's dofs
 # the cut's shapes kept: directions whose norm in the cut's condensed mass, beyond those
@@ -177,11 +178,12 @@ def _on_worker(fn, *args):
         return fn(*args)
 
 
-def pieces_basis(task, where=None):
+def pieces_basis(task, where=None, store=None):
     """The PartBasis of a part reduced in pieces (a PiecesTask), its pieces' stages run where
     says (Here: in this process, OnCluster: on a Dask client's workers), the cut's and the
-    part's own reduction on that model in this process."""
-    where = where or Here()
+    part's own reduction on that model in this process, its basis filled in store's file (a
+    reduce.store.Store; None: in memory) a piece's rows at a time."""
+    where, store = where or Here(), store or Store()
     seconds, t0 = {}, time.perf_counter()
 
     def lap(stage):
@@ -240,7 +242,7 @@ def pieces_basis(task, where=None):
     red = part_basis(task.name, sp.csr_matrix(Kcb), sp.csr_matrix(Mcb), cb_interface,
                      Fcb[:, f:], task.fmax, task.shift_hz, task.tol, task.backend)
     lap("part")
-    T = np.empty((len(piece_of), red.T.shape[1]))
+    T = store.empty(task.name, (len(piece_of), red.T.shape[1]))
     Tw = red.T[at[-2]:]
     T[cut] = V @ Tw
     rows = where.each(Piece.expanded, ((held.pop(0), red.T[at[i]:at[i + 1]], Tw)
@@ -300,9 +302,9 @@ class PiecesTask(PartTask):
     Kc: object = None
     Mc: object = None
 
-    def run(self, where=None):
+    def run(self, where=None, store=None):
         with blas.one_thread():
-            return pieces_basis(self, where)
+            return pieces_basis(self, where, store)
 
     def key(self):
         h = hashlib.sha256(super().key().encode())
