@@ -1,7 +1,10 @@
 """A command's resident memory, every process it starts counted (a Dask cluster's workers and
 nanny processes too): sampled every --every seconds, each process's peak and the peak of
-their sum, which is what a machine's memory must hold. With --limit GB the command's
-processes are stopped once their sum passes it (a run that would exhaust a shared machine is
+their sum, which is what a machine's memory must hold. Each is counted twice: resident
+(every page mapped in, a file's too) and anonymous (resident less the pages a file backs:
+those of a mapped file, which the system reads back and lets go as memory asks, cost no
+memory that another process needs). With --limit GB the command's processes are stopped once
+the sum of their anonymous memory passes it (a run that would exhaust a shared machine is
 cut short and says so). With --base DIR the same command also runs on the package at DIR (a
 `git worktree` of another commit), A B A B, --rounds times.
 
@@ -25,9 +28,10 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def sampled(command, pythonpath, every, limit_gb, timeline=None):
-    """{"seconds", "sum_gb", "peaks_gb" (the largest first), "killed", "returncode"} of the
-    command run on the package at pythonpath; timeline (a path or None): each sample's
-    seconds, the sum and every process's resident GB, a line each."""
+    """{"seconds", "sum_gb", "peaks_gb" (the largest first), "anon_gb", "anon_peaks_gb",
+    "killed", "returncode"} of the command run on the package at pythonpath; timeline (a
+    path or None): each sample's seconds, the sums and every process's resident and
+    anonymous GB (pid:resident/anonymous), a line each."""
     env = dict(os.environ, PYTHONPATH=str(pythonpath))
     if command[0] == "transient":
         command = [sys.executable, "-m", "transient"] + command[1:]
@@ -37,27 +41,33 @@ def sampled(command, pythonpath, every, limit_gb, timeline=None):
     proc = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=errors,
                             text=True)
     root, peaks, top, killed = psutil.Process(proc.pid), {}, 0.0, False
+    anon_peaks, anon_top = {}, 0.0
     log = open(timeline, "w") if timeline else None
     while proc.poll() is None:
-        total, now = 0, {}
+        total, anon, now = 0, 0, {}
         try:
             tree = [root] + root.children(recursive=True)
         except psutil.NoSuchProcess:
             break
         for p in tree:
             try:
-                rss = p.memory_info().rss
+                info = p.memory_info()
             except psutil.NoSuchProcess:
                 continue
+            # Linux's shared: the resident pages a file (or shared memory) backs
+            rss, own = info.rss, info.rss - getattr(info, "shared", 0)
             total += rss
-            now[p.pid] = rss
+            anon += own
+            now[p.pid] = (rss, own)
             peaks[p.pid] = max(peaks.get(p.pid, 0), rss)
-        top = max(top, total)
+            anon_peaks[p.pid] = max(anon_peaks.get(p.pid, 0), own)
+        top, anon_top = max(top, total), max(anon_top, anon)
         if log is not None:
-            log.write(f"{time.perf_counter() - t0:.1f} {total / 1e9:.2f} " + " ".join(
-                f"{pid}:{now[pid] / 1e9:.2f}" for pid in sorted(now)) + "\n")
+            log.write(f"{time.perf_counter() - t0:.1f} {total / 1e9:.2f} {anon / 1e9:.2f} "
+                      + " ".join(f"{pid}:{now[pid][0] / 1e9:.2f}/{now[pid][1] / 1e9:.2f}"
+                                 for pid in sorted(now)) + "\n")
             log.flush()
-        if limit_gb and total > limit_gb * 1e9:
+        if limit_gb and anon > limit_gb * 1e9:
             killed = True
             for p in reversed(tree):
                 try:
@@ -77,14 +87,19 @@ def sampled(command, pythonpath, every, limit_gb, timeline=None):
         sys.stderr.write(err)
     return {"seconds": seconds, "sum_gb": top / 1e9,
             "peaks_gb": sorted((v / 1e9 for v in peaks.values() if v > 50e6), reverse=True),
+            "anon_gb": anon_top / 1e9,
+            "anon_peaks_gb": sorted((v / 1e9 for v in anon_peaks.values() if v > 50e6),
+                                    reverse=True),
             "killed": killed, "returncode": proc.returncode}
 
 
 def markdown(rows, load):
     return table(["package", "seconds", "all processes' peak [GB]",
-                  "each process's peak [GB] (above 0.05)", "ended", "load"],
+                  "each process's peak [GB] (above 0.05)", "anonymous: all", "each", "ended",
+                  "load"],
                  [[r["package"], f"{r['seconds']:.1f}", f"{r['sum_gb']:.2f}",
-                   ", ".join(f"{p:.2f}" for p in r["peaks_gb"]),
+                   ", ".join(f"{p:.2f}" for p in r["peaks_gb"]), f"{r['anon_gb']:.2f}",
+                   ", ".join(f"{p:.2f}" for p in r["anon_peaks_gb"]),
                    "stopped at the limit" if r["killed"] else f"exit {r['returncode']}",
                    f"{load:.1f}"] for r in rows])
 
@@ -111,7 +126,8 @@ def main(argv=None):
                        package=name)
             rows.append(row)
             print(f"{name}: {row['seconds']:.1f} s, all {row['sum_gb']:.2f} GB, each "
-                  f"{[round(p, 2) for p in row['peaks_gb']]}"
+                  f"{[round(p, 2) for p in row['peaks_gb']]}; anonymous all "
+                  f"{row['anon_gb']:.2f} GB, each {[round(p, 2) for p in row['anon_peaks_gb']]}"
                   f"{', stopped at the limit' if row['killed'] else ''}", flush=True)
     publish(markdown(rows, 0.5 * (load0 + os.getloadavg()[0])), args.markdown, args.json, rows)
     return 0
