@@ -14,6 +14,7 @@ against the full model).
 """
 import numpy as np
 
+from ..solve.lowrank import block_columns
 from ..solve.realmaps import real_apply, real_times
 from .linearize import preload_pressure
 
@@ -22,6 +23,17 @@ def mode_residuals(model, M, system, state, basis, modes, which):
     """rho (len(which),) of the reduced modes `which` (indices into ComplexModes `modes`) of a
     reduced system (dynamics.system.ReducedSystem at its preload `state`) on the basis
     (X, AW); M the reduced model's mass on the model's dofs."""
+    # a block of modes at a time: each mode's residual is its own, and the modes' complex
+    # fields side by side (x, its forces, its damping's) would be the model's size times
+    # the modes, several times
+    which = np.asarray(which, dtype=int)
+    width = block_columns(model.ndof)
+    return np.concatenate([np.zeros(0)] + [
+        _residuals(model, M, system, state, basis, modes, which[start:start + width])
+        for start in range(0, len(which), width)])
+
+
+def _residuals(model, M, system, state, basis, modes, which):
     X, AW = basis
     contacts = system.contacts
     p, kt = preload_pressure(system, state)

@@ -4,6 +4,7 @@ each other part alone (the pad on its abutments) its motion there resembles: whi
 and which pad mode couple."""
 import numpy as np
 
+from ..solve.lowrank import block_columns
 from ..solve.mac import mac
 from ..solve.realmaps import real_times
 from .diameters import disc_motion
@@ -30,12 +31,23 @@ def describe(case, model, basis, modes, which, fmax, own=None):
     (diameters.disc_motion) and the still parts' elastic modes it resembles. basis: (X, A),
     the modes' coordinates z are X (A z) on the model's dofs. The still parts' own modes up
     to fmax [Hz], or own: {part: part_modes(model, part, fmax)} made already."""
+    # the parts that do not turn (the pad): which of their own modes the motion resembles
+    still = still_parts(case, model)
+    if own is None and len(which):
+        own = {part: part_modes(model, part, fmax) for part in still}
+    # a block of modes at a time: each mode's descriptors are its own, and the modes'
+    # complex fields side by side would be the model's size times the modes
+    width = block_columns(model.ndof)
+    return [row for start in range(0, len(which), width)
+            for row in _described(case, model, basis, modes, which[start:start + width],
+                                  still, fmax, own)]
+
+
+def _described(case, model, basis, modes, which, still, fmax, own):
     X, A = basis
     U = real_times(X, A @ modes.vectors[:, which])
     rotations = {m.part: disc_motion(model, m, U)
                  for m in case.motion.values() if m.kind == "rotation"}
-    # the parts that do not turn (the pad): which of their own modes the motion resembles
-    still = still_parts(case, model)
     matched = matched_part_modes(model, U, still, fmax, own) if len(which) else {}
     out = []
     shares = part_shares(model, model.M, U)
