@@ -262,3 +262,27 @@ def test_the_parts_options_unused_where_auto_takes_the_assembled_path(capsys):
     line = _refusal(capsys, args + ["--set", 'solver.reduction.method="assembled"'],
                     "command line")
     assert line.startswith("error: command line: --workers: ")
+
+
+def test_the_parts_bases_are_counted_on_disk_here_and_in_memory_from_a_scheduler(
+        machine, monkeypatch, capsys):
+    """The parts' bases go to files of the temporary directory on this machine (in this
+    process and on its embedded cluster: reduce.store), so the client's memory leaves them
+    out and the disk counts them; a scheduler's workers hand them back whole, in memory. A
+    disk too small is refused in one line naming TMPDIR, before any mesh."""
+    cells = _cells(BIG)
+    bases = synthesis_bytes(cells, load(PAD, BIG + COMPONENTS).solver.reduction.modes_fmax)
+    for cluster in (Cluster(), Cluster(workers=2)):
+        need = sizes.memory_need(load(PAD, BIG + COMPONENTS + ["limits.memory=1e6"], cluster),
+                                 cells)
+        assert need.disk == bases
+        assert all("bases" not in what for what, _ in need.terms)
+    remote = sizes.memory_need(load(PAD, BIG + COMPONENTS + ["limits.memory=1e6"],
+                                    Cluster(remote=True)), cells)
+    assert remote.disk == 0 and ("the parts' bases side by side", bases) in remote.terms
+    monkeypatch.setattr(sizes.shutil, "disk_usage",
+                        lambda path: type("Usage", (), {"free": 0.5 * bases})())
+    line = _refusal(capsys, ["cea", PAD] + [a for o in BIG + COMPONENTS + ["limits.memory=1e6"]
+                                          for a in ("--set", o)])
+    assert "TMPDIR" in line and "the parts' bases" in line
+    load(PAD, BIG + COMPONENTS + ["limits.memory=1e6"], Cluster(remote=True))

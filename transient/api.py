@@ -194,7 +194,8 @@ def dry_run(case, command="run", workers=0, scheduler=None, cache=None):
         reduction it counts, ``client`` whether it is a cluster's client's, ``worker_gb``
         the largest part's or piece's on a worker and ``worker_part`` which, ``budget_gb`` a
         worker's share of ``limits.memory`` on an embedded cluster (None where none),
-        ``terms_gb`` what this process's estimate is made of, and the reduction's
+        ``terms_gb`` what this process's estimate is made of, ``disk_gb`` the parts' bases
+        in files of the temporary directory (the components path), and the reduction's
         ``method`` with ``auto``, why "auto" chose it), for a run ``steps``
         (``steps``, ``exact``: False where it is a bound, None where the setup's critical
         step sets it), ``setup_seconds`` (``low``, ``high``, ``setups``: estimated from the

@@ -56,6 +56,7 @@ def _memory(case, cells, dofs):
             "worker_pieces": case.parts[need.worker_part].pieces if need.worker_part else 1,
             "budget_gb": None if budget is None else budget / 1e9,
             "terms_gb": {what: b / 1e9 for what, b in need.terms},
+            "disk_gb": need.disk / 1e9,
             "method": reduction.method if reduction.enabled else None,
             "auto": case.reduction_auto or None}
 

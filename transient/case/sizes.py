@@ -9,6 +9,8 @@ and each part's (or piece's) on a worker.
 """
 import math
 import resource
+import shutil
+import tempfile
 from dataclasses import dataclass
 
 from ..errors import CaseError
@@ -76,12 +78,14 @@ class Need:
     """The memory a setup is estimated to take [B], by process: here, this process's (the
     client's on a cluster), the sum of its terms ((what, bytes) pairs, said); part, the part
     whose reduction that counts (None: none alone); worker, the largest part's (or piece's)
-    reduction on a worker, and its part (None: no worker)."""
+    reduction on a worker, and its part (None: no worker); disk, the parts' bases in files
+    under the temporary directory (reduce.store: the components path on this machine)."""
     here: float
     part: str = None
     worker: float = None
     worker_part: str = None
     terms: tuple = ()
+    disk: float = 0.0
 
     def said(self):
         """The terms in words: 'the model 5.8 GB, ...'."""
@@ -181,6 +185,8 @@ def check_memory(case, cells, keys, dofs=None):
         raise CaseError(case.path, named[0], f"{what} would take about {need.here / 1e9:.3g} "
                         f"GB (set by {', '.join(named)}{terms}), more than limits.memory "
                         f"allows ({have / 1e9:.3g} GB): {fix}{auto}")
+    if need.disk:
+        check_disk(case, need.disk, named[0] if named else "solver.reduction.method")
     if worker_budget(case, need) is not None:
         pieces = {name: case.parts[name].pieces for name in cells}
 
@@ -189,6 +195,17 @@ def check_memory(case, cells, keys, dofs=None):
         check_workers(case, {n: c for n, c in cells.items() if n in keys}, budget,
                       f"a worker's share of limits.memory beside this process, "
                       f"{case.cluster.workers} workers")
+
+
+def check_disk(case, need, key):
+    """Refuse (CaseError) the components path where its parts' bases (need [B], in files under
+    the temporary directory: reduce.store) would not fit the disk that holds it."""
+    folder = tempfile.gettempdir()
+    free = shutil.disk_usage(folder).free
+    if need > free:
+        raise CaseError(case.path, key, f"the parts' bases would take about {need / 1e9:.3g} GB "
+                        f"of disk in {folder}, which has {free / 1e9:.3g} GB free: set TMPDIR "
+                        "to a folder on a larger disk, or coarsen the mesh")
 
 
 def memory_need(case, cells, dofs=None, pieces=None):
@@ -201,20 +218,24 @@ def memory_need(case, cells, dofs=None, pieces=None):
     if not case.solver.reduction.components:
         return Need(setup_bytes(sum(cells.values(), [])))
     terms = [("the model", MODEL_BYTES_PER_ENTRY * entries(sum(cells.values(), [])))]
+    # the parts' bases: in files this process maps (reduce.store), but from a remote
+    # cluster's workers, handed back whole
+    bases = synthesis_bytes(cells, case.solver.reduction.modes_fmax, dofs)
+    disk = 0.0 if case.cluster.remote else bases
     if not case.cluster:
         largest = max(cells, key=lambda name: entries(cells[name]))
         terms.append((f"the reduction of {largest}", part_bytes(cells[largest])))
-        return Need(sum(b for _, b in terms), largest, terms=tuple(terms))
+        return Need(sum(b for _, b in terms), largest, terms=tuple(terms), disk=disk)
     pieces = pieces or {name: case.parts[name].pieces for name in cells}
     worker = {name: part_bytes(c, pieces[name]) for name, c in cells.items()}
     largest = max(worker, key=worker.get)
-    terms.append(("the parts' bases side by side",
-                  synthesis_bytes(cells, case.solver.reduction.modes_fmax, dofs)))
+    if case.cluster.remote:
+        terms.append(("the parts' bases side by side", bases))
     n = part_dofs(cells, dofs)
     terms += [(f"the cut of {name} in {pieces[name]} pieces", cut_bytes(n[name], pieces[name]))
               for name in cells if pieces[name] > 1]
     terms.append(("the coupling and the process", CLIENT_MARGIN))
-    return Need(sum(b for _, b in terms), None, worker[largest], largest, tuple(terms))
+    return Need(sum(b for _, b in terms), None, worker[largest], largest, tuple(terms), disk)
 
 
 def worker_budget(case, need):

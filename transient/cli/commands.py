@@ -316,6 +316,9 @@ def _memory_lines(m):
         piece = f"a piece of {m['worker_pieces']} of " if m["worker_pieces"] > 1 else ""
         lines.append(f"memory: a worker about {m['worker_gb']:.3g} GB at most (the "
                      f"reduction of {piece}{m['worker_part']}{bound})")
+    if m["disk_gb"]:
+        lines.append(f"disk: the parts' bases about {m['disk_gb']:.3g} GB in files of the "
+                     "temporary directory (TMPDIR), removed at the end")
     return lines
 
 
