@@ -9,7 +9,8 @@ cut short and says so). With --base DIR the same command also runs on the packag
 `git worktree` of another commit), A B A B, --rounds times.
 
     python benchmarks/bench_processes.py [--every 1] [--limit 22] [--base DIR] [--rounds 1]
-                                  [--timeline FILE] [--markdown FILE] [--json FILE]
+                                  [--timeline FILE] [--output FILE] [--markdown FILE]
+                                  [--json FILE]
                                   -- transient cea CASE ...
 """
 import argparse
@@ -27,19 +28,20 @@ from tables import publish, table  # noqa: E402  (a sibling in benchmarks/)
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def sampled(command, pythonpath, every, limit_gb, timeline=None):
+def sampled(command, pythonpath, every, limit_gb, timeline=None, output=None):
     """{"seconds", "sum_gb", "peaks_gb" (the largest first), "anon_gb", "anon_peaks_gb",
     "killed", "returncode"} of the command run on the package at pythonpath; timeline (a
     path or None): each sample's seconds, the sums and every process's resident and
-    anonymous GB (pid:resident/anonymous), a line each."""
+    anonymous GB (pid:resident/anonymous), a line each; output (a path or None): where the
+    command's standard output goes (a --json report's stages)."""
     env = dict(os.environ, PYTHONPATH=str(pythonpath))
     if command[0] == "transient":
         command = [sys.executable, "-m", "transient"] + command[1:]
     t0 = time.perf_counter()
     # standard error to a file: a pipe read only at the end would stall a long, chatty run
     errors = tempfile.TemporaryFile("w+")
-    proc = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL, stderr=errors,
-                            text=True)
+    out = open(output, "w") if output else subprocess.DEVNULL
+    proc = subprocess.Popen(command, env=env, stdout=out, stderr=errors, text=True)
     root, peaks, top, killed = psutil.Process(proc.pid), {}, 0.0, False
     anon_peaks, anon_top = {}, 0.0
     log = open(timeline, "w") if timeline else None
@@ -79,6 +81,8 @@ def sampled(command, pythonpath, every, limit_gb, timeline=None):
     if log is not None:
         log.close()
     proc.wait()
+    if output:
+        out.close()
     errors.seek(0)
     err = errors.read()
     errors.close()
@@ -111,6 +115,7 @@ def main(argv=None):
     parser.add_argument("--base")
     parser.add_argument("--rounds", type=int, default=1)
     parser.add_argument("--timeline", help="a file: each sample's seconds and GB")
+    parser.add_argument("--output", help="a file: the command's standard output")
     parser.add_argument("--markdown")
     parser.add_argument("--json")
     parser.add_argument("command", nargs=argparse.REMAINDER)
@@ -122,7 +127,8 @@ def main(argv=None):
     load0, rows = os.getloadavg()[0], []
     for _ in range(args.rounds):
         for name, path in packages:
-            row = dict(sampled(command, path, args.every, args.limit, args.timeline),
+            row = dict(sampled(command, path, args.every, args.limit, args.timeline,
+                               args.output),
                        package=name)
             rows.append(row)
             print(f"{name}: {row['seconds']:.1f} s, all {row['sum_gb']:.2f} GB, each "
