@@ -76,9 +76,10 @@ def test_a_store_without_a_folder_keeps_arrays_as_they_are():
 
 @pytest.mark.slow
 def test_a_workers_basis_is_mapped_by_the_client_from_the_file_it_wrote(tmp_path):
-    """On a LocalCluster of two workers each part's task writes its basis to the store and
-    this process maps it: the numbers those of the same cluster returning its bases whole,
-    bit for bit (one-thread workers), no file left."""
+    """On a LocalCluster of two workers the pad's task writes its basis to the store and this
+    process maps it, the disc's 2 pieces keep their columns in files between stages: the
+    numbers those of the same cluster holding everything in memory, bit for bit (one-thread
+    workers), no file left."""
     pytest.importorskip("dask.distributed")
     from transient.cluster import client_for
     client, cluster = client_for(None, 2)
@@ -87,8 +88,8 @@ def test_a_workers_basis_is_mapped_by_the_client_from_the_file_it_wrote(tmp_path
         store.folder.mkdir()
         runs = []
         for where in (store, Store()):
-            setup = prepare(load(PAD, PAD_DISC + COMPONENTS), analysis=True,
-                            parts=Engine(client, store=where))
+            setup = prepare(load(PAD, PAD_DISC + COMPONENTS + ["parts.disc.pieces=2"]),
+                            analysis=True, parts=Engine(client, store=where))
             X, AW = setup.basis
             runs.append(([T for _, T in X.parts], X @ AW, setup.system.omega2))
         assert list(store.folder.iterdir()) == []

@@ -214,7 +214,7 @@ def pieces_basis(task, where=None, store=None):
         [E, sp.csr_matrix(task.loads)]).tocsr()
     loads = [F[I] for I in interior]
     # each piece held at the cut, then the cut condensed, reduced and extended
-    A, small = where.split(Piece.condensed, ((p, f, PIECE_REACH * task.fmax)
+    A, small = where.split(_condensed, ((p, f, PIECE_REACH * task.fmax, store)
                                         for p, f in zip(pieces, loads)))
     Kc, Mc = task.Kc, task.Mc
     S = (Kc - shift_sigma(-task.shift_hz) * Mc).toarray()
@@ -230,7 +230,7 @@ def pieces_basis(task, where=None, store=None):
     lap("cut")
     # each piece's first columns are in its extended ones: taken from the list as its
     # extension starts, they go once it has run
-    held, blocks = where.split(Piece.extended, ((p, A.pop(0), V[g], f)
+    held, blocks = where.split(_extended, ((p, A.pop(0), V[g], f, store)
                                            for p, g, f in zip(pieces, Gs, loads)))
     lap("extension")
     Kcb, Mcb, Fcb, at = _model(blocks, V, Kc, Mc, F[cut])
@@ -252,6 +252,20 @@ def pieces_basis(task, where=None, store=None):
     lap("expansion")
     return PartBasis(task.name, T, red.Kr, red.mode_hz, red.n_shapes, red.n_static, seconds,
                      red.interface_mu, interface.E.shape[1] if interface is not None else 0)
+
+
+def _condensed(piece, loads, fmax, store):
+    """Piece.condensed, its columns A kept in store's file (mapped where they were made) until
+    the extension takes them: a worker's memory then holds one stage's work, not the columns
+    of every piece it has made."""
+    A, small = piece.condensed(loads, fmax)
+    return store.kept(piece.name, A), small
+
+
+def _extended(piece, A, V, loads, store):
+    """Piece.extended, its columns (A2, ext) kept in store's files until the expansion."""
+    (A2, ext), blocks = piece.extended(A, V, loads)
+    return (store.kept(piece.name, A2), store.kept(piece.name, ext)), blocks
 
 
 def _piece(name, cells, I, cut, share, shift_hz, backend):
