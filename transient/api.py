@@ -10,11 +10,9 @@ complex modes over a parameter, `mu_map`, `branches` and `sweep_branches` (api_b
 The stages' modules (Numba, SciPy) are imported by the functions that need them, so that
 `import transient` stays light and a case's bad input is refused before they load.
 """
-import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import setuptimes
 from .api_branches import branches, mu_map, sweep_branches
 from .api_interface import InterfaceCompatibility, compat, compat_pairs
 from .api_results import export, history, modal_growth, summary
@@ -175,7 +173,9 @@ def dry_run(case, command="run", workers=0, scheduler=None, cache=None):
     """What a command would take on a case, checked and measured without doing it: the
     model built (dofs by part), each contact pair's fine rule and initial gaps (checked as
     the command would), the memory estimate of each process against ``limits.memory`` and,
-    for a run, its steps. Nothing is factorized and nothing written.
+    for a run, its steps, and the setup's time. Nothing of the case is factorized or written
+    (this machine's calibration, when made, sets up a coarse case of its own in a child
+    process).
 
     Parameters
     ----------
@@ -198,8 +198,10 @@ def dry_run(case, command="run", workers=0, scheduler=None, cache=None):
         in files of the temporary directory (the components path), and the reduction's
         ``method`` with ``auto``, why "auto" chose it), for a run ``steps``
         (``steps``, ``exact``: False where it is a bound, None where the setup's critical
-        step sets it), ``setup_seconds`` (``low``, ``high``, ``setups``: estimated from the
-        setups of its kind this machine has timed, transient.setuptimes; None before any).
+        step sets it), ``setup_seconds`` (``low``, ``high``, ``source``: ``setups`` when
+        estimated from the ``setups`` of its kind this machine has timed, else
+        ``calibration``, from this machine's calibration, made now if there is none
+        (transient.setuptimes); None with the setup-time log off).
     """
     from .dryrun import measure
     from .reduce.engine import used
@@ -227,20 +229,11 @@ def modes(case, matrices=False):
         ``frequencies`` [Hz] and mass-normalized ``shapes`` (one column per mode on the
         model's dofs); with ``output.vtu`` the shapes are also written for ParaView.
     """
-    from .contact.pair import build_contact
-    from .model.band import check_modes_band
-    from .model.model import build_model
-    from .solve.tied import contact_modes
+    from .solve.tied import case_modes
     if case.output.vtu:
         from .io.lock import check_writable
         check_writable(case.directory / case.output.vtu, "output.vtu")
-    t0 = time.perf_counter()
-    model = build_model(case)
-    check_modes_band(case, model)
-    pairs = build_contact(case, model)
-    found, tie = contact_modes(case, model, pairs)
-    # what a dry run of `modes` on a model its size is estimated from, on this machine
-    setuptimes.record_setup("modes", model, pairs, time.perf_counter() - t0)
+    model, pairs, found, tie = case_modes(case)
     stage_times = {f"contact.{p.name}.{k}": v for p in pairs for k, v in p.timings.items()}
     vtu = None
     if case.output.vtu:

@@ -3,7 +3,7 @@ case loaded and checked, the model built (its dofs by part), each contact pair's
 built and its initial gaps checked, and the bounds the work is held to (the memory estimate
 against limits.memory, the steps of a run). Nothing is factorized and nothing written: the
 checks a command makes before its costly stages, and their figures."""
-from . import setuptimes
+from . import progress, setuptimes
 from .case.sizes import cells_by_part, dofs_by_part, entries, memory_need, worker_budget
 from .contact.gaps import check_gaps, initial_gaps
 from .contact.pair import pair_interface
@@ -18,7 +18,9 @@ def measure(case, command):
     points, initial gaps), memory (each process's estimate and bound: _memory), for a run
     its steps (exact where the step is known before the setup, else a bound or None) and
     its setup's seconds (the modes' for `modes`) as estimated from those timed on this
-    machine (setuptimes.estimate: low, high, from how many; None before any)."""
+    machine, else from its calibration, made now (said as it starts) when there is none
+    (setuptimes.estimate: low, high, source, from how many setups; None with the
+    setup-time log off)."""
     model = build_model(case)
     free = ~model.fixed
     cells = cells_by_part(model.parts)
@@ -38,9 +40,10 @@ def measure(case, command):
            "memory": _memory(case, cells, dofs_by_part(model.parts))}
     if command == "run":
         out["steps"] = _steps(case)
-    # from the setups this machine has timed (setuptimes): None before any of this kind
+    # from the setups this machine has timed, else from its calibration (setuptimes)
     kind = "modes" if command == "modes" else setuptimes.kind(case, command == "cea")
-    out["setup_seconds"] = setuptimes.estimate(kind, entries(sum(cells.values(), [])))
+    out["setup_seconds"] = setuptimes.estimate(kind, entries(sum(cells.values(), [])),
+                                               announce=progress.started)
     return out
 
 

@@ -19,10 +19,15 @@ def shown(on=True):
         _SHOWN.reset(token)
 
 
+def showing():
+    """Whether the lines and bars are drawn here (within shown(True))."""
+    return _SHOWN.get()
+
+
 def started(what):
     """A line on standard error as a long stage starts, within shown() only: the line its end
     prints (its seconds and peak memory) says when it is done."""
-    if _SHOWN.get():
+    if showing():
         print(f"{what} ...", file=sys.stderr, flush=True)
 
 
@@ -30,7 +35,7 @@ def work(what, total, unit):
     """A bar over `total` units of a stage's inner work, or one that shows nothing outside
     shown(): advance(to, total) moves it to `to` of a total that may grow (the Lanczos' wanted
     modes are known as its Ritz values converge); close() takes it off the terminal."""
-    return _WorkBar(what, total, unit) if _SHOWN.get() else _NoWork()
+    return _WorkBar(what, total, unit) if showing() else _NoWork()
 
 
 class _NoWork:

@@ -100,6 +100,8 @@ def _prepare(case, stages, built, want_unsampled=False, analysis=False, parts=No
     model = (stages.timed("loads", build_model, case, built.model) if built.model is not None
              else stages.timed("model", build_model, case))
     check_band(case, model, _band_keys(case, analysis))
+    if built.model is None:
+        setuptimes.announce(setuptimes.kind(case, analysis), model)
     small = setup_bytes(parts_cells(model.parts)) <= case.limits.memory_bytes / 2
     if small and heap.permitted():
         heap.retain_freed()     # freed blocks reused, not faulted in afresh (heap's docstring)

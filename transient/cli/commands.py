@@ -269,10 +269,11 @@ def cmd_run(args):
 
 def _dry(case, command, as_json, args=None):
     """--dry-run: what the command would take (api.dry_run), said, then exit 0; args: the
-    command's --workers, --scheduler and --cache, where it has them."""
+    command's --workers, --scheduler and --cache, where it has them; a calibration said."""
     where = {} if args is None else {"workers": args.workers, "scheduler": args.scheduler,
                                      "cache": args.cache}
-    d = api.dry_run(case, command, **where)
+    with progress.shown(not as_json):
+        d = api.dry_run(case, command, **where)
     if as_json:
         print(json.dumps(d))
         return 0
@@ -293,10 +294,11 @@ def _dry(case, command, as_json, args=None):
                              "set by the setup's critical step (central differences)"))
     if "setup_seconds" in d:
         t = d["setup_seconds"]
+        source = (f"{t['setups']} setup(s) of its kind timed on this machine" if t and
+                  t["source"] == "setups" else "this machine's calibration")
         print("  setup: " + (f"about {_duration(t['low'])} to {_duration(t['high'])} (from "
-                             f"{t['setups']} setup(s) of its kind timed on this machine)" if t
-                             else "no estimate: no setup of its kind timed on this machine "
-                             "yet"))
+                             f"{source})" if t else "no estimate (TRANSIENT_SETUP_LOG is off, "
+                             "or this machine's calibration failed)"))
     print("nothing factorized or written (--dry-run)")
     return 0
 

@@ -17,8 +17,8 @@ def _case_args(p):
 def _dry_args(p):
     p.add_argument("--dry-run", action="store_true", help="build the model and the contact "
                    "pairs' fine rules, check them, say the dofs by part, the contact points, "
-                   "the memory estimate (and a run's steps), then stop: nothing factorized "
-                   "or written")
+                   "the memory and setup-time estimates (and a run's steps), then stop: "
+                   "nothing factorized or written")
 
 
 def _parts_args(p):

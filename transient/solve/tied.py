@@ -16,10 +16,13 @@ low-rank update (lowrank.ContactSolver), the penalty through the factorization o
 import time
 from dataclasses import dataclass
 
+from .. import setuptimes
 from ..contact.contactset import first_tangent, stack
-from ..contact.pair import contact_stiffness
+from ..contact.pair import build_contact, contact_stiffness
 from ..errors import CaseError
 from ..model import constant_load
+from ..model.band import check_modes_band
+from ..model.model import build_model
 from .lowrank import contact_solver
 from .modes import normal_modes, shift_sigma
 from .preload import PreloadError, solve_preload
@@ -37,6 +40,21 @@ class Tie:
     held: int = 0            # exact: directions of the rows held at zero
     dofs: int = 0            # exact: the dofs the rows touch
     preload: object = None   # preload: the Preload the tangents come from
+
+
+def case_modes(case):
+    """(model, pairs, Modes, Tie): the work of `transient modes` on a case, its seconds logged
+    as the setup of kind `modes` (setuptimes), what a dry run of `modes` is estimated from."""
+    t0 = time.perf_counter()
+    model = build_model(case)
+    check_modes_band(case, model)
+    t1 = time.perf_counter()
+    setuptimes.announce("modes", model)
+    t0 += time.perf_counter() - t1      # a calibration it makes is no time of these modes
+    pairs = build_contact(case, model)
+    found, tie = contact_modes(case, model, pairs)
+    setuptimes.record_setup("modes", model, pairs, time.perf_counter() - t0)
+    return model, pairs, found, tie
 
 
 def contact_modes(case, model, pairs):
