@@ -146,15 +146,23 @@ def _timed(records, path_kind):
     return out
 
 
+# a calibration that failed within MAX_AGE: not tried again before (each try may take TIMEOUT)
+FAILED = {"failed": True}
+
+
 def calibrated(records, path_kind, version, now=None):
-    """{"entries", "seconds"} of the newest calibration of a path at this version made within
-    MAX_AGE, or None."""
+    """{"entries", "seconds"} of this host's newest calibration of a path at this version made
+    within MAX_AGE, FAILED where that one failed, or None."""
     now = time.time() if now is None else now
+    host = platform.node()
     for r in reversed(records):
         try:
-            if (r["calibration"], r["version"]) == (path_kind, version) \
-                    and 0 <= now - r["time"] <= MAX_AGE and r["entries"] > 0 \
-                    and r["seconds"] > 0:
+            if (r["calibration"], r["version"], r["host"]) != (path_kind, version, host) \
+                    or not 0 <= now - r["time"] <= MAX_AGE:
+                continue
+            if r.get("failed"):
+                return FAILED
+            if r["entries"] > 0 and r["seconds"] > 0:
                 return {"entries": float(r["entries"]), "seconds": float(r["seconds"])}
         except (KeyError, TypeError):
             continue
@@ -202,11 +210,11 @@ def estimate(path_kind, entries, calibrate=True, announce=None):
             announce(f"calibrating this machine's {path_kind} setup (once a version, "
                      "seconds): no setup of its kind timed here yet")
         found = measure(path_kind)
-        if found is not None:
-            _append({"host": platform.node(), "calibration": path_kind,
-                     "version": __version__, "entries": int(found["entries"]),
-                     "seconds": found["seconds"], "time": time.time()})
-    if found is None:
+        line = {"host": platform.node(), "calibration": path_kind, "version": __version__,
+                "time": time.time()}
+        _append({**line, "entries": int(found["entries"]), "seconds": found["seconds"]}
+                if found is not None else {**line, "failed": True})
+    if found is None or found is FAILED:
         return None
     # a model below the calibration's size takes at most its seconds: much of a small
     # setup's time (the Lanczos' dense steps, Python) does not shrink with its entries
