@@ -34,16 +34,9 @@ FIXED_POINT_RATE = 0.5
 
 
 @njit_fast
-def active_rows(code, params, gap, w, kt0, h2, Gd, e, active):
-    """Fills e and the rows to correct exactly (largest |e_i| G_ii first); returns their count."""
-    m = gap.shape[0]
-    size = np.empty(m)
-    total = 0.0
-    for i in range(m):
-        _, kt = pressure(code[i], params[i], gap[i])
-        e[i] = h2 * w[i] * (kt - kt0[i])
-        size[i] = abs(e[i]) * Gd[i]
-        total += size[i]
+def _largest(size, total, active):
+    """The terms to correct exactly: the largest sizes first into active, until those left sum
+    to at most WOODBURY_REST (total: the sum of size); returns their count."""
     if total <= WOODBURY_REST:
         return 0
     order = np.argsort(-size)
@@ -55,6 +48,20 @@ def active_rows(code, params, gap, w, kt0, h2, Gd, e, active):
         n_active += 1
         total -= size[i]
     return n_active
+
+
+@njit_fast
+def active_rows(code, params, gap, w, kt0, h2, Gd, e, active):
+    """Fills e and the rows to correct exactly (largest |e_i| G_ii first); returns their count."""
+    m = gap.shape[0]
+    size = np.empty(m)
+    total = 0.0
+    for i in range(m):
+        _, kt = pressure(code[i], params[i], gap[i])
+        e[i] = h2 * w[i] * (kt - kt0[i])
+        size[i] = abs(e[i]) * Gd[i]
+        total += size[i]
+    return _largest(size, total, active)
 
 
 @njit_fast
@@ -132,17 +139,7 @@ def coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu, size, a
                 size[c + 2] = abs(h11 * GV[m + i, 2 * m + i]) + abs(h01 * GV[m + i, m + i])
         for k in range(stride):
             total += size[c + k]
-    if total <= WOODBURY_REST:
-        return 0
-    order = np.argsort(-size[:stride * m])
-    n_active = 0
-    for c in order:
-        if total <= WOODBURY_REST:
-            break
-        active[n_active] = c
-        n_active += 1
-        total -= size[c]
-    return n_active
+    return _largest(size[:stride * m], total, active)
 
 
 @njit_fast
