@@ -34,6 +34,22 @@ def _point(i, s, g0, w, kt0, code, params, gap, press):
 
 
 @njit_fast
+def _dots4(r0, r1, r2, r3, x):
+    """The dots of four rows with x, in one loop: each load of x serves the four."""
+    s0 = 0.0
+    s1 = 0.0
+    s2 = 0.0
+    s3 = 0.0
+    for j in range(x.shape[0]):
+        y = x[j]
+        s0 += r0[j] * y
+        s1 += r1[j] * y
+        s2 += r2[j] * y
+        s3 += r3[j] * y
+    return s0, s1, s2, s3
+
+
+@njit_fast
 def _normal_rows(C, g0, w, kt0, code, params, q, fb, gap, press, start, stop):
     """Rows start..stop without friction, four at a time: their four dots share each load of
     q, and their updates one load and store of fb (a row at a time, the update's store of
@@ -48,16 +64,7 @@ def _normal_rows(C, g0, w, kt0, code, params, q, fb, gap, press, start, stop):
         r1 = C[i + 1]
         r2 = C[i + 2]
         r3 = C[i + 3]
-        s0 = 0.0
-        s1 = 0.0
-        s2 = 0.0
-        s3 = 0.0
-        for j in range(n):
-            x = q[j]
-            s0 += r0[j] * x
-            s1 += r1[j] * x
-            s2 += r2[j] * x
-            s3 += r3[j] * x
+        s0, s1, s2, s3 = _dots4(r0, r1, r2, r3, q)
         a0, e0, l0 = _point(i, s0, g0, w, kt0, code, params, gap, press)
         a1, e1, l1 = _point(i + 1, s1, g0, w, kt0, code, params, gap, press)
         a2, e2, l2 = _point(i + 2, s2, g0, w, kt0, code, params, gap, press)
@@ -120,26 +127,8 @@ def _friction_fours(contact, q, fr, v, fb, ffb, gap, press, slip, start, stop):
         lin += l_
         t0, t1, t2, t3 = Ct[i], Ct[i + 1], Ct[i + 2], Ct[i + 3]
         c0, c1, c2, c3 = Cc[i], Cc[i + 1], Cc[i + 2], Cc[i + 3]
-        u0 = 0.0
-        u1 = 0.0
-        u2 = 0.0
-        u3 = 0.0
-        x0 = 0.0
-        x1 = 0.0
-        x2 = 0.0
-        x3 = 0.0
-        for j in range(n):
-            y = v[j]
-            u0 += t0[j] * y
-            u1 += t1[j] * y
-            u2 += t2[j] * y
-            u3 += t3[j] * y
-        for j in range(n):
-            y = v[j]
-            x0 += c0[j] * y
-            x1 += c1[j] * y
-            x2 += c2[j] * y
-            x3 += c3[j] * y
+        u0, u1, u2, u3 = _dots4(t0, t1, t2, t3, v)
+        x0, x1, x2, x3 = _dots4(c0, c1, c2, c3, v)
         b0, d0, i0 = _traction(i, press[i], V[i] - u0, -x0, fr, w, slip)
         b1, d1, i1 = _traction(i + 1, press[i + 1], V[i + 1] - u1, -x1, fr, w, slip)
         b2, d2, i2 = _traction(i + 2, press[i + 2], V[i + 2] - u2, -x2, fr, w, slip)
