@@ -59,53 +59,65 @@ def _mirror(Ke, nen):
 
 
 @njit
-def stiffness_blocks(X, conn, dN, w, lam, mu, blocks, min_det):
-    """Stiffness of every cell into blocks (ne, 3 nen, 3 nen); min det J per cell into min_det.
-
-    X (nn, 3) coordinates; conn (ne, nen); dN (ng, nen, 3) reference derivatives and w (ng)
-    weights of the quadrature rule; lam, mu (ne) Lame constants [Pa].
-    """
-    ne, nen = conn.shape
-    ng = w.shape[0]
-    J = np.empty((3, 3))
-    G = np.empty((nen, 3))
-    for e in range(ne):
-        nodes = conn[e]
-        Ke = blocks[e]
-        Ke[:, :] = 0.0
-        md = np.inf
-        for g in range(ng):
-            det = _gradients(X, nodes, dN[g], J, G)
-            md = min(md, det)
-            c = w[g] * det
-            cl = c * lam[e]
-            cm = c * mu[e]
-            for a in range(nen):
-                ga0, ga1, ga2 = G[a, 0], G[a, 1], G[a, 2]
-                for b in range(a, nen):
-                    gb0, gb1, gb2 = G[b, 0], G[b, 1], G[b, 2]
-                    s = cm * (ga0 * gb0 + ga1 * gb1 + ga2 * gb2)
-                    r, q = 3 * a, 3 * b
-                    Ke[r, q] += cl * ga0 * gb0 + cm * ga0 * gb0 + s
-                    Ke[r, q + 1] += cl * ga0 * gb1 + cm * ga1 * gb0
-                    Ke[r, q + 2] += cl * ga0 * gb2 + cm * ga2 * gb0
-                    Ke[r + 1, q] += cl * ga1 * gb0 + cm * ga0 * gb1
-                    Ke[r + 1, q + 1] += cl * ga1 * gb1 + cm * ga1 * gb1 + s
-                    Ke[r + 1, q + 2] += cl * ga1 * gb2 + cm * ga2 * gb1
-                    Ke[r + 2, q] += cl * ga2 * gb0 + cm * ga0 * gb2
-                    Ke[r + 2, q + 1] += cl * ga2 * gb1 + cm * ga1 * gb2
-                    Ke[r + 2, q + 2] += cl * ga2 * gb2 + cm * ga2 * gb2 + s
-        _mirror(Ke, nen)
-        min_det[e] = md
+def _isotropic_point(Ke, G, cl, cm):
+    """Ke's blocks b >= a += the isotropic term of one rule point: G its gradients (nen, 3),
+    cl and cm the Lame constants times the point's weight and det J."""
+    nen = G.shape[0]
+    for a in range(nen):
+        ga0, ga1, ga2 = G[a, 0], G[a, 1], G[a, 2]
+        for b in range(a, nen):
+            gb0, gb1, gb2 = G[b, 0], G[b, 1], G[b, 2]
+            s = cm * (ga0 * gb0 + ga1 * gb1 + ga2 * gb2)
+            r, q = 3 * a, 3 * b
+            Ke[r, q] += cl * ga0 * gb0 + cm * ga0 * gb0 + s
+            Ke[r, q + 1] += cl * ga0 * gb1 + cm * ga1 * gb0
+            Ke[r, q + 2] += cl * ga0 * gb2 + cm * ga2 * gb0
+            Ke[r + 1, q] += cl * ga1 * gb0 + cm * ga0 * gb1
+            Ke[r + 1, q + 1] += cl * ga1 * gb1 + cm * ga1 * gb1 + s
+            Ke[r + 1, q + 2] += cl * ga1 * gb2 + cm * ga2 * gb1
+            Ke[r + 2, q] += cl * ga2 * gb0 + cm * ga0 * gb2
+            Ke[r + 2, q + 1] += cl * ga2 * gb1 + cm * ga1 * gb2
+            Ke[r + 2, q + 2] += cl * ga2 * gb2 + cm * ga2 * gb2 + s
 
 
 @njit
-def anisotropic_stiffness_blocks(X, conn, dN, w, D, blocks, min_det):
-    """stiffness_blocks with an elasticity matrix D (ne, ng or 1, 6, 6) [Pa] per cell and
+def _anisotropic_point(Ke, G, Dg, c, DB):
+    """Ke's blocks b >= a += c B^T Dg B of one rule point: G its gradients (nen, 3), Dg (6, 6),
+    c its weight times det J; DB (nen, 6, 3) is scratch."""
+    nen = G.shape[0]
+    for b in range(nen):
+        g0, g1, g2 = G[b, 0], G[b, 1], G[b, 2]
+        # D B_b: B_b's columns are (g0, 0, 0, 0, g2, g1), (0, g1, 0, g2, 0, g0) and
+        # (0, 0, g2, g1, g0, 0)
+        for r in range(6):
+            DB[b, r, 0] = c * (Dg[r, 0] * g0 + Dg[r, 4] * g2 + Dg[r, 5] * g1)
+            DB[b, r, 1] = c * (Dg[r, 1] * g1 + Dg[r, 3] * g2 + Dg[r, 5] * g0)
+            DB[b, r, 2] = c * (Dg[r, 2] * g2 + Dg[r, 3] * g1 + Dg[r, 4] * g0)
+    for a in range(nen):
+        g0, g1, g2 = G[a, 0], G[a, 1], G[a, 2]
+        for b in range(a, nen):
+            for j in range(3):
+                Ke[3 * a, 3 * b + j] += (g0 * DB[b, 0, j] + g2 * DB[b, 4, j]
+                                         + g1 * DB[b, 5, j])
+                Ke[3 * a + 1, 3 * b + j] += (g1 * DB[b, 1, j] + g2 * DB[b, 3, j]
+                                             + g0 * DB[b, 5, j])
+                Ke[3 * a + 2, 3 * b + j] += (g2 * DB[b, 2, j] + g1 * DB[b, 3, j]
+                                             + g0 * DB[b, 4, j])
+
+
+@njit
+def stiffness_blocks(X, conn, dN, w, lam, mu, D, blocks, min_det):
+    """Stiffness of every cell into blocks (ne, 3 nen, 3 nen); min det J per cell into min_det.
+
+    X (nn, 3) coordinates; conn (ne, nen); dN (ng, nen, 3) reference derivatives and w (ng)
+    weights of the quadrature rule. The material: isotropic, lam, mu (ne) Lame constants [Pa],
+    where D has no cell; else D (ne, ng or 1, 6, 6) [Pa], an elasticity matrix per cell and
     rule point (or per cell), Voigt order 11, 22, 33, 23, 13, 12 with engineering shears:
-    Ke = sum_g w_g det J_g B_g^T D_g B_g."""
+    Ke = sum_g w_g det J_g B_g^T D_g B_g (lam and mu unused).
+    """
     ne, nen = conn.shape
     ng = w.shape[0]
+    isotropic = D.shape[0] == 0
     per_point = D.shape[1] > 1
     J = np.empty((3, 3))
     G = np.empty((nen, 3))
@@ -118,26 +130,11 @@ def anisotropic_stiffness_blocks(X, conn, dN, w, D, blocks, min_det):
         for g in range(ng):
             det = _gradients(X, nodes, dN[g], J, G)
             md = min(md, det)
-            Dg = D[e, g if per_point else 0]
             c = w[g] * det
-            for b in range(nen):
-                g0, g1, g2 = G[b, 0], G[b, 1], G[b, 2]
-                # D B_b: B_b's columns are (g0, 0, 0, 0, g2, g1), (0, g1, 0, g2, 0, g0) and
-                # (0, 0, g2, g1, g0, 0)
-                for r in range(6):
-                    DB[b, r, 0] = c * (Dg[r, 0] * g0 + Dg[r, 4] * g2 + Dg[r, 5] * g1)
-                    DB[b, r, 1] = c * (Dg[r, 1] * g1 + Dg[r, 3] * g2 + Dg[r, 5] * g0)
-                    DB[b, r, 2] = c * (Dg[r, 2] * g2 + Dg[r, 3] * g1 + Dg[r, 4] * g0)
-            for a in range(nen):
-                g0, g1, g2 = G[a, 0], G[a, 1], G[a, 2]
-                for b in range(a, nen):
-                    for j in range(3):
-                        Ke[3 * a, 3 * b + j] += (g0 * DB[b, 0, j] + g2 * DB[b, 4, j]
-                                                 + g1 * DB[b, 5, j])
-                        Ke[3 * a + 1, 3 * b + j] += (g1 * DB[b, 1, j] + g2 * DB[b, 3, j]
-                                                     + g0 * DB[b, 5, j])
-                        Ke[3 * a + 2, 3 * b + j] += (g2 * DB[b, 2, j] + g1 * DB[b, 3, j]
-                                                     + g0 * DB[b, 4, j])
+            if isotropic:
+                _isotropic_point(Ke, G, c * lam[e], c * mu[e])
+            else:
+                _anisotropic_point(Ke, G, D[e, g if per_point else 0], c, DB)
         _mirror(Ke, nen)
         min_det[e] = md
 
@@ -238,9 +235,11 @@ def _find(idx, lo, hi, value):
 
 
 @njit
-def add_vector_blocks(ptr, idx, conn, blocks, data):
-    """data += blocks (ne, 3 nen, 3 nen) summed into the block CSR pattern of (ptr, idx)."""
+def add_blocks(ptr, idx, conn, blocks, data):
+    """data += blocks summed into the block CSR pattern of (ptr, idx): blocks (ne, 3 nen, 3 nen)
+    entry by entry, or scalar blocks (ne, nen, nen) (a mass) times the 3 x 3 identity."""
     ne, nen = conn.shape
+    scalar = blocks.shape[1] == nen
     for e in range(ne):
         for a in range(nen):
             A = conn[e, a]
@@ -249,23 +248,11 @@ def add_vector_blocks(ptr, idx, conn, blocks, data):
                 k = _find(idx, ptr[A], ptr[A + 1], conn[e, b]) - ptr[A]
                 for i in range(3):
                     base = 9 * ptr[A] + 3 * deg * i + 3 * k
-                    for j in range(3):
-                        data[base + j] += blocks[e, 3 * a + i, 3 * b + j]
-
-
-@njit
-def add_scalar_blocks(ptr, idx, conn, blocks, data):
-    """data += blocks (ne, nen, nen) times the 3 x 3 identity, into the block CSR pattern."""
-    ne, nen = conn.shape
-    for e in range(ne):
-        for a in range(nen):
-            A = conn[e, a]
-            deg = ptr[A + 1] - ptr[A]
-            for b in range(nen):
-                k = _find(idx, ptr[A], ptr[A + 1], conn[e, b]) - ptr[A]
-                v = blocks[e, a, b]
-                for i in range(3):
-                    data[9 * ptr[A] + 3 * deg * i + 3 * k + i] += v
+                    if scalar:
+                        data[base + i] += blocks[e, a, b]
+                    else:
+                        for j in range(3):
+                            data[base + j] += blocks[e, 3 * a + i, 3 * b + j]
 
 
 @njit

@@ -79,22 +79,23 @@ def assemble(points, blocks, stiffness_degree=None, mass_degree=None):
         det = np.empty(ne)
         if block.anisotropy is None:
             lam, mu = lame(np.asarray(block.young, float), np.asarray(block.poisson, float))
-            kern.stiffness_blocks(points, conn, dN, w, np.broadcast_to(lam, ne).copy(),
-                                  np.broadcast_to(mu, ne).copy(), Ke, det)
+            lam, mu = np.broadcast_to(lam, ne).copy(), np.broadcast_to(mu, ne).copy()
+            D = np.empty((0, 1, 6, 6))
         else:
-            D = block.anisotropy.at(np.einsum("ga,eai->egi", N, points[conn]))
-            kern.anisotropic_stiffness_blocks(points, conn, dN, w, np.ascontiguousarray(D),
-                                              Ke, det)
-        kern.add_vector_blocks(ptr, idx, conn, Ke, k_data)
+            lam = mu = np.empty(0)
+            D = np.ascontiguousarray(block.anisotropy.at(np.einsum("ga,eai->egi", N,
+                                                                   points[conn])))
+        kern.stiffness_blocks(points, conn, dN, w, lam, mu, D, Ke, det)
+        kern.add_blocks(ptr, idx, conn, Ke, k_data)
         if block.loss is not None and np.any(block.loss):
             Ke *= np.asarray(block.loss, float)[:, None, None]
-            kern.add_vector_blocks(ptr, idx, conn, Ke, h_data)
+            kern.add_blocks(ptr, idx, conn, Ke, h_data)
         del Ke
         N, dN, w = tabulate(block.cell_type, mass_degree or el.mass_degree)
         Me = np.empty((ne, nen, nen))
         kern.mass_blocks(points, conn, N, dN, w,
                          np.broadcast_to(np.asarray(block.density, float), ne).copy(), Me)
-        kern.add_scalar_blocks(ptr, idx, conn, Me, m_data)
+        kern.add_blocks(ptr, idx, conn, Me, m_data)
         kern.lumped_mass_hrz(conn, Me, lumped)
         min_det.append(det)
     index_type = np.int32 if len(indices) < 2 ** 31 - 1 else np.int64
