@@ -31,7 +31,7 @@ window's RMS, or a warning line says so; its trend over the window is printed to
     slip     the slip's dissipation, integral of sum w p c |s|^2 (the same);
     net      input - slip: the friction's work on the structure, what feeds the vibration;
     damping  the modal damping's dissipation. energy/dissipated holds damping + the friction's
-             dissipation as the scheme books it (kernels.friction.friction_work: its input
+             dissipation as the scheme books it (kernels.friction.friction_energy: its input
              less sum 1/2 (ff0 + ff) . dq), energy/external_work the loads' work + the
              friction's input; with ff from the stored tractions and rows Ct, Cc, and the
              loads' work from F(t) and the stored q: damping = d dissipated - d external_work
@@ -152,7 +152,7 @@ def up_crossings(x, level):
 
 def step_works(f, rows):
     """Per step r -> r+1 of the stored rows: the loads' work 1/2 (F_r + F_r+1) . dq and the
-    friction's 1/2 (ff_r + ff_r+1) . dq (kernels.friction.friction_work), and the rows'
+    friction's 1/2 (ff_r + ff_r+1) . dq (kernels.friction.friction_energy), and the rows'
     sliding input and slip dissipation powers [W]."""
     from transient.contact.friction import friction_powers, traction_factor
     from transient.io.systems import read_friction_law, read_system

@@ -1,5 +1,6 @@
 """What every stepping kernel does around its physics, in one place: the buffers a step fills,
-the energies of a step and their balance, and a step's close (finite? converged? stored?).
+the energies of a step and their balance, the time and the loads at a step's end, and a
+step's close (finite? converged? stored?).
 
 Energies (stored per output row): kinetic, strain (structure only: 1/2 q^T K q), contact
 (sum w Phi(g)), external work, dissipated; their balance kinetic + strain + contact - work +
@@ -9,23 +10,31 @@ import numpy as np
 from numba import types
 from numba.extending import overload
 
-from ..jit import njit, njit_fast
+from ..jit import njit, njit_fast, njit_inline
 from .codes import (CONTACT, DISSIPATED, KINETIC, NO_CONVERGENCE, NOT_FINITE, OK, STRAIN,
                     WORK)
-from .friction import friction_energy
-from .layout import DISSIPATED_ACC, FRICTION_ROW, WORK_ACC
+from .friction import friction_energy, friction_points
+from .layout import DISSIPATED_ACC, FRICTION_ROW, Q_ROW, TIME_ROW, V_ROW, WORK_ACC
+from .signals import external_forces
 
 
 @njit_fast
-def step_buffers(state, n, m, n_signals, n_friction):
-    """The arrays a step fills besides the state, for n dofs and m contact points: the
-    signals' values (n_signals,), the gaps and the pressures (m,), the energy terms (5,), the
-    friction force (n,), the slip velocities (2, n_friction), the step's displacement (n,), and
-    the friction force at the step's start, carried in the state (with friction only: a
-    frictionless state may have fewer rows)."""
+def step_buffers(state, contact, fr, signals):
+    """The arrays a step fills besides the state, for n dofs and m contact points: the contact
+    force (n,), the loads at the step's end and at its start (n,: at the state's time), the
+    signals' values, the gaps and the pressures (m,), the energy terms (5,), the friction
+    force (n,), the slip velocities (2, points with friction), the step's displacement (n,),
+    and the friction force at the step's start, carried in the state (with friction only: a
+    frictionless state may have fewer rows). contact, fr and signals: the kernels' groups."""
+    n = state.shape[1]
+    m = contact[1].shape[0]
+    n_friction = friction_points(fr)
+    fext_old = np.empty(n)
+    svals = np.empty(signals[0].shape[0])
+    external_forces(state[TIME_ROW, 0], signals, svals, fext_old)
     ff0 = state[FRICTION_ROW] if n_friction > 0 else np.empty(n)
-    return (np.empty(n_signals), np.empty(m), np.empty(m), np.empty(5), np.empty(n),
-            np.empty((2, n_friction)), np.empty(n), ff0)
+    return (np.empty(n), np.empty(n), fext_old, svals, np.empty(m), np.empty(m), np.empty(5),
+            np.empty(n), np.empty((2, n_friction)), np.empty(n), ff0)
 
 
 EXPONENT = np.int64(0x7FF0000000000000)
@@ -43,9 +52,13 @@ def _finite(x):
     return True
 
 
-@njit_fast
-def energies(energy, kin, strain, phi, acc, work, dissipated):
-    """Adds a step's external work and dissipation to acc, and fills the energy terms."""
+# inlined: the kernels' dissipation products fuse into the accumulators' sums as they did
+# before the friction's share made this too large for LLVM to inline
+@njit_inline
+def energies(energy, kin, strain, phi, acc, work, dissipated, fr, ff0, ff, dq, p_in, dt):
+    """Adds a step's external work and dissipation to acc, fills the energy terms, then adds
+    the friction's share (friction.friction_energy: ff0 becomes ff; dq the step's
+    displacement, p_in the sliding's input power at its end)."""
     acc[WORK_ACC] += work
     acc[DISSIPATED_ACC] += dissipated
     energy[KINETIC] = kin
@@ -53,14 +66,18 @@ def energies(energy, kin, strain, phi, acc, work, dissipated):
     energy[CONTACT] = phi
     energy[WORK] = acc[WORK_ACC]
     energy[DISSIPATED] = acc[DISSIPATED_ACC]
+    friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
 
 
 @njit_fast
-def modal_step_energies(q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt, acc, energy):
+def modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq, acc, energy):
     """The energies after a step of a modal system (M = I, diagonal damping and K_lin) from
-    (q0, v0) to (q, v): external work and dissipation by the trapezoidal rule, kinetic and
-    strain (K_lin's, less the contact's linear part lin) at the end; phi the contact
-    potential."""
+    start = (q0, v0, fext0) to (q, v, fext): external work and dissipation by the trapezoidal
+    rule, kinetic and strain (K_lin's, less the contact's linear part) at the end, the
+    friction's share; passed = (phi, lin, p_in) as contact_pass returns them. dq becomes
+    q - q0, fext0 fext and ff0 ff."""
+    q0, v0, fext0 = start
+    phi, lin, p_in = passed
     work = 0.0
     power = 0.0
     kin = 0.0
@@ -70,21 +87,19 @@ def modal_step_energies(q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt, a
         power += damp[k] * (v0[k] * v0[k] + v[k] * v[k])
         kin += 0.5 * v[k] * v[k]
         strain += 0.5 * omega2[k] * q[k] * q[k]
-    energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
-
-
-@njit_fast
-def modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq, acc, energy):
-    """A modal step's energies, the friction's included (friction.friction_energy), from
-    start = (q0, v0, fext0) to (q, v, fext); passed = (phi, lin, p_in) as contact_pass returns
-    them. dq becomes q - q0, fext0 fext and ff0 ff."""
-    q0, v0, fext0 = start
-    phi, lin, p_in = passed
-    modal_step_energies(q, v, q0, v0, fext0, fext, damp, omega2, lin, phi, dt, acc, energy)
     for k in range(q.shape[0]):
         dq[k] = q[k] - q0[k]
         fext0[k] = fext[k]
-    friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
+    energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power, fr, ff0, ff, dq, p_in, dt)
+
+
+@njit_fast
+def advance(state, dt, signals, svals, fext):
+    """The state's time moved on by dt, to the step's end, and the loads there into fext
+    (svals: the signals' values)."""
+    t = state[TIME_ROW, 0] + dt
+    state[TIME_ROW, 0] = t
+    external_forces(t, signals, svals, fext)
 
 
 @njit
@@ -123,21 +138,24 @@ def _sense_typed(row, q, S, out_s):
 
 
 @njit_fast
-def close_step(step, every, row, t, q, v, S, gap, press, slip, energy, converged, out):
-    """A step closed: its status (NOT_FINITE before NO_CONVERGENCE, else OK) and the next
-    output row, the step stored when OK at a multiple of every: the time, the energies, the
-    sensors S q (S dense or CSR), and the contact points' gaps, pressures and (with friction)
-    slip velocities when stored (out_v (r, 2, m), or none)."""
+def close_step(step, every, state, signals, gap, press, slip, energy, converged, out):
+    """Step `step` of a chunk closed: its status (NOT_FINITE before NO_CONVERGENCE, else OK);
+    the step stored when OK at a multiple of every, in row step // every - 1 (a chunk stops
+    at its first failed step): the state's time, the energies, the sensors S q (signals' S,
+    dense or CSR), and the contact points' gaps, pressures and (with friction) slip
+    velocities when stored (out_v (r, 2, m), or none)."""
+    q, v = state[Q_ROW], state[V_ROW]
     status = _status(q, v, energy, converged)
     if status != OK or step % every != 0:
-        return status, row
+        return status
+    row = step // every - 1
     out_t, out_s, out_g, out_p, out_v, out_e = out
-    out_t[row] = t
+    out_t[row] = state[TIME_ROW, 0]
     out_e[row] = energy
-    _sense(row, q, S, out_s)
+    _sense(row, q, signals[2], out_s)
     if out_g.shape[1] > 0:
         out_g[row] = gap
         out_p[row] = press
     if out_v.shape[2] > 0:
         out_v[row] = slip
-    return status, row + 1
+    return status

@@ -6,11 +6,10 @@ for by Newton (exponential_implicit)."""
 import numpy as np
 
 from ..jit import njit_fast
-from .bookkeeping import close_step, modal_step_end, step_buffers
+from .bookkeeping import advance, close_step, modal_step_end, step_buffers
 from .codes import OK
-from .layout import A_ROW, Q_ROW, TIME_ROW, V_ROW
+from .layout import A_ROW, Q_ROW, V_ROW
 from .contact import block_buffers, contact_pass
-from .stepping import _external
 from .woodbury import coupled_buffers, friction_move, move_start, newton_coupled
 
 IMPLICIT_TOL = 1e-3     # the implicit corrector's residual, relative to the step's motion
@@ -44,10 +43,9 @@ def _carried(fprev, f0, f1):
 
 
 @njit_fast
-def _finish(state, t, f0, fstart, omega2, damp):
-    """A chunk's end: the time, the forces at the start of the next step (carried, so that a
-    run cut into chunks is the same run), and the acceleration they give."""
-    state[TIME_ROW, 0] = t
+def _finish(state, f0, fstart, omega2, damp):
+    """A chunk's end: the forces at the start of the next step (carried, so that a run cut
+    into chunks is the same run), and the acceleration they give."""
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     for k in range(q.shape[0]):
         fstart[k] = f0[k]
@@ -79,34 +77,24 @@ def exponential_reduced(state, acc, n_steps, every, dt, modal, contact, fr, sign
     at each evaluation's velocity; the state's FRICTION_ROW and the SLIDING_ACC accumulator
     carry its force and input power."""
     coef, damp, omega2 = modal
-    C, g0, w, kt0, code, params = contact
-    patterns, sig, S = signals
     corrections, propagate = corrector
     fprev, fstart = carry
     q, v = state[Q_ROW], state[V_ROW]
-    t = state[TIME_ROW, 0]
     n = q.shape[0]
-    m = C.shape[0]
-    rem = np.empty(n)
-    fext = np.empty(n)
-    fext0 = np.empty(n)
+    rem, fext, fext0, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
+        state, contact, fr, signals)
     f0 = np.empty(n)
     f1 = np.empty(n)
     q0 = np.empty(n)
     v0 = np.empty(n)
     start = (q0, v0, fext0)
     fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
-    svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
-                                                                fr[0].shape[0])
-    _external(t, patterns, sig, svals, fext0)
     for k in range(n):
         f0[k] = fstart[k]
-    row = 0
     status, step = OK, 0
     for step in range(1, n_steps + 1):
         _predicted(q, v, f0, fprev, q0, v0, f1)
-        t += dt
-        _external(t, patterns, sig, svals, fext)
+        advance(state, dt, signals, svals, fext)
         passed = (0.0, 0.0, 0.0)
         for it in range(corrections + 1):
             _propagate(coef, q0, v0, f0, f1, q, v)
@@ -118,11 +106,10 @@ def exponential_reduced(state, acc, n_steps, every, dt, modal, contact, fr, sign
             _propagate(coef, q0, v0, f0, f1, q, v)
         modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq, acc, energy)
         _carried(fprev, f0, f1)
-        status, row = close_step(step, every, row, t, q, v, S, gap, press, slip, energy, True,
-                                 out)
+        status = close_step(step, every, state, signals, gap, press, slip, energy, True, out)
         if status != OK:
             break
-    _finish(state, t, f0, fstart, omega2, damp)
+    _finish(state, f0, fstart, omega2, damp)
     return status, step
 
 
@@ -152,18 +139,14 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
     max_iter iterations. q stays the last state evaluated, v is propagated with the forces
     found there. Otherwise as exponential_reduced."""
     coef, damp, omega2 = modal
-    C, g0, w, kt0, code, params = contact
-    patterns, sig, S = signals
     GQ, GV, max_iter = iteration
     fprev, fstart = carry
     q, v = state[Q_ROW], state[V_ROW]
-    t = state[TIME_ROW, 0]
     n = q.shape[0]
-    m = C.shape[0]
+    m = contact[0].shape[0]
     friction = fr[0].shape[0] > 0
-    rem = np.empty(n)
-    fext = np.empty(n)
-    fext0 = np.empty(n)
+    rem, fext, fext0, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
+        state, contact, fr, signals)
     f0 = np.empty(n)
     f1 = np.empty(n)
     x = np.empty(n)
@@ -182,17 +165,12 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
     Dv = np.ascontiguousarray(coef[:, 7])
     coupled = coupled_buffers((3 if friction else 1) * m)
     fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
-    svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
-                                                                fr[0].shape[0])
-    _external(t, patterns, sig, svals, fext0)
     for k in range(n):
         f0[k] = fstart[k]
-    row = 0
     status, step = OK, 0
     for step in range(1, n_steps + 1):
         _predicted(q, v, f0, fprev, q0, v0, x)
-        t += dt
-        _external(t, patterns, sig, svals, fext)
+        advance(state, dt, signals, svals, fext)
         _propagate(coef, q0, v0, f0, x, q, v)
         for k in range(n):
             qb[k] = q[k] - Dq[k] * x[k]
@@ -241,9 +219,8 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
         _propagate(coef, q0, v0, f0, f1, qb, v)
         modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq, acc, energy)
         _carried(fprev, f0, f1)
-        status, row = close_step(step, every, row, t, q, v, S, gap, press, slip, energy,
-                                 converged, out)
+        status = close_step(step, every, state, signals, gap, press, slip, energy, converged, out)
         if status != OK:
             break
-    _finish(state, t, f0, fstart, omega2, damp)
+    _finish(state, f0, fstart, omega2, damp)
     return status, step

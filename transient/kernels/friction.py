@@ -15,12 +15,26 @@ c(s) = mu(s) sgn_reg(s) / s, tau = w p c(|s|) s, so d tau / d s = w p (c I + c'(
 (e = s / |s|), and d tau / d g = -k_t w c s.
 """
 import numpy as np
+from numba import types
+from numba.extending import overload
 
 from ..jit import njit_fast
 from .codes import DISSIPATED, FRICTIONLESS, TANH, WORK
 from .layout import DISSIPATED_ACC, SLIDING_ACC, WORK_ACC
 
 SMALL = 1e-6     # |s| / v_eps below which sgn_reg(|s|) / |s| is its series (no 0 / 0)
+
+
+def friction_points(fr):
+    """The points with friction rows: fr's Ct rows, dense in the reduced kernels, a CSR triplet
+    (whose indptr has a single entry without friction) in the full model's."""
+
+
+@overload(friction_points, jit_options={"fastmath": True, "error_model": "numpy"})
+def _friction_points_typed(fr):
+    if isinstance(fr.types[0], types.Array):
+        return lambda fr: fr[0].shape[0]
+    return lambda fr: fr[0][0].shape[0] - 1
 
 
 @njit_fast
@@ -145,7 +159,7 @@ def friction_pass_sparse(fr, w, press, v, ff, f, slip):
     (2, m), when the system has friction: fr = (Ct, Cc, V, code, v_eps, table, speeds, values,
     counts) with Ct, Cc CSR triplets (Ct's indptr of one entry without friction). Returns the
     sliding's input power [W]."""
-    if fr[0][0].shape[0] <= 1:
+    if friction_points(fr) == 0:
         return 0.0
     for j in range(ff.shape[0]):
         ff[j] = 0.0
@@ -163,15 +177,9 @@ def friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt):
     balance closes on the scheme's own arithmetic; the sliding's input, tau_t V, by the
     trapezoid of its power (acc[SLIDING_ACC] carries the power at the start) goes to the
     external work, and what of it the structure did not take to the dissipated energy. ff0
-    becomes ff."""
-    if fr[0].shape[0] == 0:
+    becomes ff. fr dense or with CSR rows (friction_points)."""
+    if friction_points(fr) == 0:
         return
-    friction_work(acc, energy, ff0, ff, dq, p_in, dt)
-
-
-@njit_fast
-def friction_work(acc, energy, ff0, ff, dq, p_in, dt):
-    """friction_energy with friction (the full model's kernels, whose fr is sparse)."""
     onto = 0.0
     for j in range(ff.shape[0]):
         onto += 0.5 * (ff0[j] + ff[j]) * dq[j]

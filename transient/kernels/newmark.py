@@ -15,13 +15,12 @@ are left to the fixed-operator iteration, which they slow by at most that factor
 import numpy as np
 
 from ..jit import njit_fast
-from .bookkeeping import close_step, energies, modal_step_end, step_buffers
+from .bookkeeping import advance, close_step, energies, modal_step_end, step_buffers
 from .sparse import csr_abs_matvec, csr_matvec, factor_solve
 from .codes import OK
-from .layout import A_ROW, Q_ROW, TIME_ROW, V_ROW
+from .layout import A_ROW, Q_ROW, V_ROW
 from .contact import block_buffers, contact_pass
-from .friction import friction_pass_sparse, friction_work
-from .stepping import _external, remainder_sparse
+from .stepping import contact_pass_sparse
 from .woodbury import (active_rows, coupled_buffers, coupled_rows, coupled_solve_sparse,
                        friction_move, move_start, newton_coupled, newton_update, woodbury)
 
@@ -59,17 +58,13 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
     outputs as in stepping.explicit_reduced; friction at the end velocity, the state's
     FRICTION_ROW and the SLIDING_ACC accumulator carrying its force and input power
     (friction.friction_energy)."""
-    C, g0, w, kt0, code, params = contact
-    patterns, sig, S = signals
     GQ, GV, tol, max_iter = iteration
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
-    t = state[TIME_ROW, 0]
     n = q.shape[0]
-    m = C.shape[0]
+    m = contact[0].shape[0]
     friction = fr[0].shape[0] > 0
-    rem = np.empty(n)
-    fext = np.empty(n)
-    fext_old = np.empty(n)
+    rem, fext, fext_old, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
+        state, contact, fr, signals)
     qp = np.empty(n)
     vp = np.empty(n)
     q_old = np.empty(n)
@@ -83,22 +78,17 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
     start = (q_old, v_old, fext_old)
     coupled = coupled_buffers((3 if friction else 1) * m)
     fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
-    svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
-                                                                fr[0].shape[0])
     h2 = 0.25 * dt * dt
     Dq = np.full(n, h2)
     Dv = np.full(n, 0.5 * dt)
     v_scale = 2.0 / dt if dt > 0.0 else 0.0     # momentum over a step: a force scale in flight
     for k in range(n):
         op[k] = 1.0 + 0.5 * dt * damp[k] + h2 * omega2[k]
-    _external(t, patterns, sig, svals, fext_old)
-    row = 0
     passed = (0.0, 0.0, 0.0)
     status, step = OK, 0
     for step in range(1, n_steps + 1):
         _predicted(q, v, a, dt, h2, q_old, v_old, qp, vp)
-        t += dt
-        _external(t, patterns, sig, svals, fext)
+        advance(state, dt, signals, svals, fext)
         converged = False
         rprev, alpha, newton = move_start(friction)
         for it in range(max_iter):
@@ -126,11 +116,9 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
             alpha = 1.0
         _corrected(qp, vp, a, dt, q, v)
         modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq, acc, energy)
-        status, row = close_step(step, every, row, t, q, v, S, gap, press, slip, energy,
-                                 converged, out)
+        status = close_step(step, every, state, signals, gap, press, slip, energy, converged, out)
         if status != OK:
             break
-    state[TIME_ROW, 0] = t
     return status, step
 
 
@@ -145,19 +133,16 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
     dt/2 [Ct; Cc] Z for coupled_rows, the fixed point first and then Newton with backtracking,
     as newmark_reduced. Otherwise as newmark_reduced."""
     C, g0, w, kt0, code, params = contact
-    patterns, sig, S = signals
     factor, Z, G, GV, tol, max_iter = iteration
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
-    t = state[TIME_ROW, 0]
     n = q.shape[0]
     m = g0.shape[0]
     Kp, Ki, Kd = K
     Mp, Mi, Md = M
     Cp, Ci, Cd = C
     perm_in, L, U, perm_out = factor
-    rem = np.empty(n)
-    fext = np.empty(n)
-    fext_old = np.empty(n)
+    rem, fext, fext_old, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
+        state, contact, fr, signals)
     qp = np.empty(n)
     vp = np.empty(n)
     q_old = np.empty(n)
@@ -177,34 +162,28 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
     for i in range(m):
         Gd[i] = G[i, i]
     friction = fr[0][0].shape[0] > 1
-    svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
-                                                                fr[0][0].shape[0] - 1)
     a_prev = np.empty(n)
     delta = np.empty(n)
     cu, size, coupled = coupled_buffers(3 * m if friction else 0)
     h2 = 0.25 * dt * dt
     v_scale = 2.0 / dt if dt > 0.0 else 0.0     # momentum over a step: a force scale in flight
-    _external(t, patterns, sig, svals, fext_old)
     csr_matvec(Mp, Mi, Md, v, mv)
     csr_matvec(Kp, Ki, Kd, v, kv)
     power_old = 0.0
     for k in range(n):
         power_old += alpha * v[k] * mv[k] + beta * v[k] * kv[k]
-    row = 0
     phi = 0.0
     lin = 0.0
     p_in = 0.0
     status, step = OK, 0
     for step in range(1, n_steps + 1):
         _predicted(q, v, a, dt, h2, q_old, v_old, qp, vp)
-        t += dt
-        _external(t, patterns, sig, svals, fext)
+        advance(state, dt, signals, svals, fext)
         converged = False
         rprev, frac, newton = move_start(friction)
         for it in range(max_iter):
             _corrected(qp, vp, a, dt, q, v)
-            phi, lin = remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, rem, gap, press)
-            p_in = friction_pass_sparse(fr, w, press, v, ff, rem, slip)
+            phi, lin, p_in = contact_pass_sparse(contact, q, fr, v, rem, ff, gap, press, slip)
             csr_matvec(Kp, Ki, Kd, q, ku)
             csr_abs_matvec(Kp, Ki, Kd, q, kabs)
             csr_matvec(Mp, Mi, Md, a, ma)
@@ -267,15 +246,12 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
             if beta != 0.0:
                 power += beta * v[k] * kv[k]
             fext_old[k] = fext[k]
-        energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
+        energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power), fr, ff0,
+                 ff, dq, p_in, dt)
         power_old = power
-        if friction:
-            friction_work(acc, energy, ff0, ff, dq, p_in, dt)
-        status, row = close_step(step, every, row, t, q, v, S, gap, press, slip, energy,
-                                 converged, out)
+        status = close_step(step, every, state, signals, gap, press, slip, energy, converged, out)
         if status != OK:
             break
-    state[TIME_ROW, 0] = t
     return status, step
 
 

@@ -2,7 +2,7 @@
 packs (see that module for the kinds and their active windows)."""
 import numpy as np
 
-from ..jit import njit
+from ..jit import njit, njit_fast
 from .codes import (AMPLITUDE, CHIRP, CONSTANT, DURATION, F1, FREQUENCY, IMPULSE, PHASE, RISE,
                     SINE, START, STEP, TABLE)
 
@@ -62,3 +62,18 @@ def signal_values(t, codes, params, table_t, table_v, table_n, out):
     """Fill out (J,) with every signal's value at time t [s]."""
     for j in range(codes.shape[0]):
         out[j] = signal_value(j, t, codes, params, table_t, table_v, table_n)
+
+
+@njit_fast
+def external_forces(t, signals, svals, fext):
+    """fext = patterns^T s(t), the loads at time t [s] on the reduced or the full dofs, from the
+    kernels' signals group (patterns, packed signals, sensors); svals gets the signals'
+    values."""
+    patterns, sig, _ = signals
+    signal_values(t, sig[0], sig[1], sig[2], sig[3], sig[4], svals)
+    fext[:] = 0.0
+    for j in range(patterns.shape[0]):
+        s = svals[j]
+        if s != 0.0:
+            for k in range(fext.shape[0]):
+                fext[k] += s * patterns[j, k]

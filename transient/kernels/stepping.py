@@ -17,27 +17,13 @@ The exponential kernels are in exponential.py, the implicit Newmark ones in newm
 import numpy as np
 
 from ..jit import njit_fast
-from .bookkeeping import close_step, energies, step_buffers
+from .bookkeeping import advance, close_step, energies, step_buffers
 from .codes import OK
-from .layout import A_ROW, DAMPING_ACC, Q_ROW, TIME_ROW, V_ROW
+from .layout import A_ROW, DAMPING_ACC, Q_ROW, V_ROW
 from .contact import block_buffers, contact_pass
-from .friction import friction_energy, friction_pass_sparse, friction_work
+from .friction import friction_pass_sparse
 from .laws import pressure_potential
-from .signals import signal_values
 from .sparse import csr_matvec
-
-
-
-@njit_fast
-def _external(t, patterns, sig, svals, fext):
-    """fext = patterns^T s(t) for the reduced or full dofs."""
-    signal_values(t, sig[0], sig[1], sig[2], sig[3], sig[4], svals)
-    fext[:] = 0.0
-    for j in range(patterns.shape[0]):
-        s = svals[j]
-        if s != 0.0:
-            for k in range(fext.shape[0]):
-                fext[k] += s * patterns[j, k]
 
 
 @njit_fast
@@ -58,20 +44,11 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, contact, fr, 
     fr: the friction's arrays (contact.contact_pass), taken at the half-step velocity; the
     state's FRICTION_ROW and the SLIDING_ACC accumulator then carry its force and input power
     (friction_energy). Returns (status, steps done)."""
-    C, g0, w, kt0, code, params = contact
-    patterns, sig, S = signals
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
-    t = state[TIME_ROW, 0]
     n = q.shape[0]
-    m = C.shape[0]
-    f = np.empty(n)
-    fext = np.empty(n)
-    fext_old = np.empty(n)
-    svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
-                                                                fr[0].shape[0])
+    f, fext, fext_old, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
+        state, contact, fr, signals)
     fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
-    _external(t, patterns, sig, svals, fext_old)
-    row = 0
     status, step = OK, 0
     for step in range(1, n_steps + 1):
         power = 0.0
@@ -81,8 +58,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, contact, fr, 
             power += damp[k] * v[k] * v[k]
             q[k] += dq[k]
             v[k] = vh
-        t += dt
-        _external(t, patterns, sig, svals, fext)
+        advance(state, dt, signals, svals, fext)
         phi, lin, p_in = contact_pass(contact, q, fr, v, f, ff, gap,
                                       press, slip, blocks, fbuf, ffbuf)
         _track_min(gap, gmin)
@@ -100,13 +76,11 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, contact, fr, 
             kin += 0.5 * vn * vn
             strain += 0.5 * omega2[k] * q[k] * q[k]
             power += damp[k] * vn * vn
-        energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power)
-        friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
-        status, row = close_step(step, every, row, t, q, v, S, gap, press, slip, energy, True,
-                                 out)
+        energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power, fr, ff0, ff, dq, p_in,
+                 dt)
+        status = close_step(step, every, state, signals, gap, press, slip, energy, True, out)
         if status != OK:
             break
-    state[TIME_ROW, 0] = t
     return status, step
 
 
@@ -133,6 +107,16 @@ def remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press):
 
 
 @njit_fast
+def contact_pass_sparse(contact, q, fr, v, f, ff, gap, press, slip):
+    """contact.contact_pass on the full model: contact's C and fr's Ct, Cc CSR triplets
+    (friction_pass_sparse), one row at a time. Returns (contact potential,
+    1/2 sum w k_t* (g - g0)^2, the sliding's input power [W])."""
+    C, g0, w, kt0, code, params = contact
+    phi, lin = remainder_sparse(C[0], C[1], C[2], g0, w, kt0, code, params, q, f, gap, press)
+    return phi, lin, friction_pass_sparse(fr, w, press, v, ff, f, slip)
+
+
+@njit_fast
 def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, contact, fr, signals, gmin,
                   out):
     """Central differences on the free dofs of the full model: K = (indptr, indices, data) of
@@ -141,27 +125,16 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, contact,
     arrays with CSR rows (friction_pass_sparse), taken at the half-step velocity as in
     explicit_reduced. Same state and outputs as explicit_reduced; acc[DAMPING_ACC] carries the
     damping power at the end of the last step."""
-    C, g0, w, kt0, code, params = contact
-    patterns, sig, S = signals
-    q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
-    t = state[TIME_ROW, 0]
-    n = q.shape[0]
-    m = g0.shape[0]
     Kp, Ki, Kd = K
-    Cp, Ci, Cd = C
-    f = np.empty(n)
+    q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
+    n = q.shape[0]
+    f, fext, fext_old, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
+        state, contact, fr, signals)
     ku = np.empty(n)
     kv = np.empty(n)
-    fext = np.empty(n)
-    fext_old = np.empty(n)
-    friction = fr[0][0].shape[0] > 1
-    svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(state, n, m, patterns.shape[0],
-                                                                fr[0][0].shape[0] - 1)
-    _external(t, patterns, sig, svals, fext_old)
     # the damping power at the end of the last step, carried (it takes K at the half-step
     # velocity, which a chunk's start does not have)
     power_old = acc[DAMPING_ACC]
-    row = 0
     status, step = OK, 0
     for step in range(1, n_steps + 1):
         for k in range(n):
@@ -169,10 +142,8 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, contact,
             dq[k] = dt * vh
             q[k] += dq[k]
             v[k] = vh
-        t += dt
-        _external(t, patterns, sig, svals, fext)
-        phi, lin = remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press)
-        p_in = friction_pass_sparse(fr, w, press, v, ff, f, slip)
+        advance(state, dt, signals, svals, fext)
+        phi, lin, p_in = contact_pass_sparse(contact, q, fr, v, f, ff, gap, press, slip)
         _track_min(gap, gmin)
         csr_matvec(Kp, Ki, Kd, q, ku)
         if beta != 0.0:
@@ -195,14 +166,11 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, contact,
             power += alpha * mass[k] * vn * vn
             if beta != 0.0:
                 power += beta * vn * kv[k]
-        energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power))
+        energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power), fr, ff0,
+                 ff, dq, p_in, dt)
         power_old = power
         acc[DAMPING_ACC] = power
-        if friction:
-            friction_work(acc, energy, ff0, ff, dq, p_in, dt)
-        status, row = close_step(step, every, row, t, q, v, S, gap, press, slip, energy, True,
-                                 out)
+        status = close_step(step, every, state, signals, gap, press, slip, energy, True, out)
         if status != OK:
             break
-    state[TIME_ROW, 0] = t
     return status, step
