@@ -10,7 +10,7 @@ from .bookkeeping import advance, close_step, modal_step_end, step_buffers
 from .codes import OK
 from .layout import A_ROW, Q_ROW, V_ROW
 from .contact import block_buffers, contact_pass
-from .woodbury import coupled_buffers, friction_move, move_start, newton_coupled
+from .woodbury import friction_move, move_start, newton_buffers, newton_coupled
 
 IMPLICIT_TOL = 1e-3     # the implicit corrector's residual, relative to the step's motion
 
@@ -143,7 +143,6 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
     fprev, fstart = carry
     q, v = state[Q_ROW], state[V_ROW]
     n = q.shape[0]
-    m = contact[0].shape[0]
     friction = fr[0].shape[0] > 0
     rem, fext, fext0, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
         state, contact, fr, signals)
@@ -154,16 +153,11 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
     v0 = np.empty(n)
     qb = np.empty(n)
     vb = np.empty(n)
-    y = np.empty(n)
-    uz = np.empty(n)
-    x_prev = np.empty(n)
-    delta = np.empty(n)
-    move = (x, x_prev, delta)
+    y, uz, move, coupled = newton_buffers(x, gap.shape[0], friction)
     start = (q0, v0, fext0)
     ones = np.ones(n)
     Dq = np.ascontiguousarray(coef[:, 6])
     Dv = np.ascontiguousarray(coef[:, 7])
-    coupled = coupled_buffers((3 if friction else 1) * m)
     fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
     for k in range(n):
         f0[k] = fstart[k]
@@ -175,9 +169,8 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
         for k in range(n):
             qb[k] = q[k] - Dq[k] * x[k]
             vb[k] = v[k] - Dv[k] * x[k]
-        converged = False
         passed = (0.0, 0.0, 0.0)
-        rprev, alpha, newton = move_start(friction)
+        converged, rprev, alpha, newton = move_start(friction)
         for it in range(max_iter):
             passed = contact_pass(contact, q, fr, v, rem, ff, gap, press, slip, blocks, fbuf,
                                   ffbuf)
@@ -204,13 +197,11 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
                     not friction or rv <= tol2 * max(change, 1e-20 * size_v, 1e-300)):
                 converged = True
                 break
-            solve, newton, rprev, alpha = friction_move(x, x_prev, delta, y, rf, rprev,
-                                                        newton, alpha, friction)
+            solve, newton, rprev, alpha = friction_move(move, y, rf, rprev, newton, alpha,
+                                                        friction)
             if solve:
                 newton_coupled(y, Dq, Dv, ones, contact, fr, gap, press, slip, GQ, GV, coupled,
                                uz, move)
-                rprev = rf
-                alpha = 1.0
             for k in range(n):
                 q[k] = qb[k] + Dq[k] * x[k]
                 v[k] = vb[k] + Dv[k] * x[k]

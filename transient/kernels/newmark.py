@@ -16,31 +16,53 @@ import numpy as np
 
 from ..jit import njit_fast
 from .bookkeeping import advance, close_step, energies, modal_step_end, step_buffers
-from .sparse import csr_abs_matvec, csr_matvec, factor_solve
+from .sparse import csr_abs_matvec, csr_matvec, csr_row_dot, factor_solve
 from .codes import OK
 from .layout import A_ROW, Q_ROW, V_ROW
 from .contact import block_buffers, contact_pass
 from .stepping import contact_pass_sparse
-from .woodbury import (active_rows, coupled_buffers, coupled_rows, coupled_solve_sparse,
-                       friction_move, move_start, newton_coupled, newton_update, woodbury)
+from .woodbury import (active_rows, coupled_rows, coupled_solve_sparse, friction_move,
+                       move_start, newton_buffers, newton_coupled, newton_update, woodbury)
 
 
 @njit_fast
-def _corrected(qp, vp, a, dt, q, v):
-    """Newmark's displacement and velocity from their predictors and the accelerations."""
+def _corrected(kept, a, dt, q, v):
+    """Newmark's displacement and velocity from their predictors (kept = (q_old, v_old, qp,
+    vp)) and the accelerations."""
+    qp, vp = kept[2], kept[3]
     for k in range(q.shape[0]):
         q[k] = qp[k] + 0.25 * dt * dt * a[k]
         v[k] = vp[k] + 0.5 * dt * a[k]
 
 
 @njit_fast
-def _predicted(q, v, a, dt, h2, q_old, v_old, qp, vp):
-    """A step's start kept (q_old, v_old) and Newmark's predictors from it (h2 = dt^2 / 4)."""
+def _predicted(state, dt, h2, kept, signals, svals, fext):
+    """A step's start: kept = (q_old, v_old, qp, vp) the state there and Newmark's predictors
+    from it (h2 = dt^2 / 4), the state moved to the first iterate (the accelerations kept),
+    and the time and the loads at the step's end."""
+    q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
+    q_old, v_old, qp, vp = kept
     for k in range(q.shape[0]):
         q_old[k] = q[k]
         v_old[k] = v[k]
         qp[k] = q[k] + dt * v[k] + h2 * a[k]
         vp[k] = v[k] + 0.5 * dt * a[k]
+    _corrected(kept, a, dt, q, v)
+    advance(state, dt, signals, svals, fext)
+
+
+@njit_fast
+def _kept(n):
+    """_predicted's (q_old, v_old, qp, vp) for n dofs."""
+    return np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+
+
+@njit_fast
+def _rayleigh(K, M, beta, v, mv, kv):
+    """The products of Rayleigh damping's two parts with v: M v, and K v where beta is not 0."""
+    csr_matvec(M[0], M[1], M[2], v, mv)
+    if beta != 0.0:
+        csr_matvec(K[0], K[1], K[2], v, kv)
 
 
 @njit_fast
@@ -61,23 +83,14 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
     GQ, GV, tol, max_iter = iteration
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     n = q.shape[0]
-    m = contact[0].shape[0]
     friction = fr[0].shape[0] > 0
     rem, fext, fext_old, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
         state, contact, fr, signals)
-    qp = np.empty(n)
-    vp = np.empty(n)
-    q_old = np.empty(n)
-    v_old = np.empty(n)
-    op = np.empty(n)
-    y = np.empty(n)
-    uz = np.empty(n)
-    a_prev = np.empty(n)
-    delta = np.empty(n)
-    move = (a, a_prev, delta)
-    start = (q_old, v_old, fext_old)
-    coupled = coupled_buffers((3 if friction else 1) * m)
     fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
+    kept = _kept(n)
+    start = (kept[0], kept[1], fext_old)
+    y, uz, move, coupled = newton_buffers(a, gap.shape[0], friction)
+    op = np.empty(n)
     h2 = 0.25 * dt * dt
     Dq = np.full(n, h2)
     Dv = np.full(n, 0.5 * dt)
@@ -87,12 +100,9 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
     passed = (0.0, 0.0, 0.0)
     status, step = OK, 0
     for step in range(1, n_steps + 1):
-        _predicted(q, v, a, dt, h2, q_old, v_old, qp, vp)
-        advance(state, dt, signals, svals, fext)
-        converged = False
-        rprev, alpha, newton = move_start(friction)
+        _predicted(state, dt, h2, kept, signals, svals, fext)
+        converged, rprev, alpha, newton = move_start(friction)
         for it in range(max_iter):
-            _corrected(qp, vp, a, dt, q, v)
             passed = contact_pass(contact, q, fr, v, rem, ff, gap, press, slip, blocks, fbuf,
                                   ffbuf)
             rnorm = 0.0
@@ -106,15 +116,12 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
             if rnorm <= tol * tol * max(fnorm, 1e-300):
                 converged = True
                 break
-            solve, newton, rprev, alpha = friction_move(a, a_prev, delta, y, rnorm, rprev,
-                                                        newton, alpha, friction)
-            if not solve:
-                continue
-            newton_coupled(y, Dq, Dv, op, contact, fr, gap, press, slip, GQ, GV, coupled, uz,
-                           move)
-            rprev = rnorm
-            alpha = 1.0
-        _corrected(qp, vp, a, dt, q, v)
+            solve, newton, rprev, alpha = friction_move(move, y, rnorm, rprev, newton, alpha,
+                                                        friction)
+            if solve:
+                newton_coupled(y, Dq, Dv, op, contact, fr, gap, press, slip, GQ, GV, coupled,
+                               uz, move)
+            _corrected(kept, a, dt, q, v)
         modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq, acc, energy)
         status = close_step(step, every, state, signals, gap, press, slip, energy, converged, out)
         if status != OK:
@@ -139,21 +146,19 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
     m = g0.shape[0]
     Kp, Ki, Kd = K
     Mp, Mi, Md = M
-    Cp, Ci, Cd = C
     perm_in, L, U, perm_out = factor
+    friction = fr[0][0].shape[0] > 1
     rem, fext, fext_old, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
         state, contact, fr, signals)
-    qp = np.empty(n)
-    vp = np.empty(n)
-    q_old = np.empty(n)
-    v_old = np.empty(n)
+    kept = _kept(n)
+    y, _, move, coupled = newton_buffers(a, m, friction)
+    cu, size, active_terms = coupled
     ku = np.empty(n)
     kabs = np.empty(n)
     kv = np.empty(n)
     ma = np.empty(n)
     mv = np.empty(n)
     r = np.empty(n)
-    y = np.empty(n)
     work_n = np.empty(n)
     e = np.empty(m)
     u = np.empty(m)
@@ -161,10 +166,6 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
     Gd = np.empty(m)
     for i in range(m):
         Gd[i] = G[i, i]
-    friction = fr[0][0].shape[0] > 1
-    a_prev = np.empty(n)
-    delta = np.empty(n)
-    cu, size, coupled = coupled_buffers(3 * m if friction else 0)
     h2 = 0.25 * dt * dt
     v_scale = 2.0 / dt if dt > 0.0 else 0.0     # momentum over a step: a force scale in flight
     csr_matvec(Mp, Mi, Md, v, mv)
@@ -177,19 +178,14 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
     p_in = 0.0
     status, step = OK, 0
     for step in range(1, n_steps + 1):
-        _predicted(q, v, a, dt, h2, q_old, v_old, qp, vp)
-        advance(state, dt, signals, svals, fext)
-        converged = False
-        rprev, frac, newton = move_start(friction)
+        _predicted(state, dt, h2, kept, signals, svals, fext)
+        converged, rprev, frac, newton = move_start(friction)
         for it in range(max_iter):
-            _corrected(qp, vp, a, dt, q, v)
             phi, lin, p_in = contact_pass_sparse(contact, q, fr, v, rem, ff, gap, press, slip)
             csr_matvec(Kp, Ki, Kd, q, ku)
             csr_abs_matvec(Kp, Ki, Kd, q, kabs)
             csr_matvec(Mp, Mi, Md, a, ma)
-            csr_matvec(Mp, Mi, Md, v, mv)
-            if beta != 0.0:
-                csr_matvec(Kp, Ki, Kd, v, kv)
+            _rayleigh(K, M, beta, v, mv, kv)
             rnorm = 0.0
             fnorm = 0.0
             for k in range(n):
@@ -203,36 +199,26 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
                 converged = True
                 break
             factor_solve(perm_in, L, U, perm_out, r, y, work_n)
-            if not friction:
-                n_active = active_rows(code, params, gap, w, kt0, h2, Gd, e, active)
-                if n_active:
-                    for j in range(n_active):
-                        i = active[j]
-                        s = 0.0
-                        for k in range(Cp[i], Cp[i + 1]):
-                            s += Cd[k] * y[Ci[k]]
-                        u[j] = s
-                    woodbury(y, u, active, n_active, e, Z, G)
-                for k in range(n):
-                    a[k] -= y[k]
-                continue
-            solve, newton, rprev, frac = friction_move(a, a_prev, delta, y, rnorm, rprev,
-                                                       newton, frac, True)
-            if not solve:
-                continue
-            n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, G, GV, cu, size,
-                                    coupled)
-            if n_active:
-                coupled_solve_sparse(y, h2, 0.5 * dt, C, fr[0], fr[1], Z, G, GV, cu, coupled,
-                                     n_active)
-            newton_update(a, a_prev, delta, y)
-            rprev = rnorm
-            frac = 1.0
-        _corrected(qp, vp, a, dt, q, v)
+            solve, newton, rprev, frac = friction_move(move, y, rnorm, rprev, newton, frac,
+                                                       friction)
+            if solve:
+                if friction:
+                    n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, G, GV,
+                                            cu, size, active_terms)
+                    if n_active:
+                        coupled_solve_sparse(y, h2, 0.5 * dt, C, fr[0], fr[1], Z, G, GV, cu,
+                                             active_terms, n_active)
+                else:
+                    n_active = active_rows(code, params, gap, w, kt0, h2, Gd, e, active)
+                    if n_active:
+                        for j in range(n_active):
+                            u[j] = csr_row_dot(C, active[j], y)
+                        woodbury(y, u, active, n_active, e, Z, G)
+                newton_update(move, y)
+            _corrected(kept, a, dt, q, v)
         csr_matvec(Kp, Ki, Kd, q, ku)
-        csr_matvec(Mp, Mi, Md, v, mv)
-        if beta != 0.0:
-            csr_matvec(Kp, Ki, Kd, v, kv)
+        _rayleigh(K, M, beta, v, mv, kv)
+        q_old = kept[0]
         work = 0.0
         kin = 0.0
         strain = -lin

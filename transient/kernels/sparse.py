@@ -190,6 +190,16 @@ def csr_matvec(indptr, indices, data, x, out):
 
 
 @njit_fast
+def csr_row_dot(R, i, y):
+    """Row i of a CSR triplet R times y."""
+    Rp, Ri, Rd = R
+    s = 0.0
+    for j in range(Rp[i], Rp[i + 1]):
+        s += Rd[j] * y[Ri[j]]
+    return s
+
+
+@njit_fast
 def csr_abs_matvec(indptr, indices, data, x, out):
     """|A| |x|: the scale of the round-off in A x."""
     for i in range(out.shape[0]):

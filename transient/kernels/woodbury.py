@@ -17,6 +17,7 @@ from ..jit import njit_fast
 from .codes import FRICTIONLESS
 from .friction import slip_tangent
 from .laws import pressure
+from .sparse import csr_row_dot
 
 WOODBURY_REST = 0.1
 # The friction's Newton iteration backtracks (halves its step) while the residual does not fall
@@ -204,16 +205,6 @@ def coupled_solve(y, Dq, Dv, P, C, Ct, Cc, GQ, GV, cu, active, n_active, uz):
 
 
 @njit_fast
-def _row_dot(R, i, y):
-    """Row i of a CSR triplet R times y."""
-    Rp, Ri, Rd = R
-    s = 0.0
-    for j in range(Rp[i], Rp[i + 1]):
-        s += Rd[j] * y[Ri[j]]
-    return s
-
-
-@njit_fast
 def coupled_solve_sparse(y, h2, hv, C, Ct, Cc, Z, GQ, GV, cu, active, n_active):
     """coupled_solve on the full model (x = a, Dq = h2, Dv = hv scalars, C, Ct, Cc CSR
     triplets), P^-1 Cs^T given as Z = S^-1 [C; Ct; Cc]^T (n, 3m): y = S^-1 R on entry,
@@ -227,10 +218,10 @@ def coupled_solve_sparse(y, h2, hv, C, Ct, Cc, Z, GQ, GV, cu, active, n_active):
         ia = ca // 3
         kind = ca % 3
         if kind == 0:
-            rhs[a] = h2 * _row_dot(C, ia, y)
+            rhs[a] = h2 * csr_row_dot(C, ia, y)
             X = GQ[ia]
         else:
-            rhs[a] = hv * _row_dot(Ct if kind == 1 else Cc, ia, y)
+            rhs[a] = hv * csr_row_dot(Ct if kind == 1 else Cc, ia, y)
             X = _term_row(GV, kind, ia, m)
         for b in range(k):
             cb = active[b]
@@ -249,12 +240,14 @@ def coupled_solve_sparse(y, h2, hv, C, Ct, Cc, Z, GQ, GV, cu, active, n_active):
 
 
 @njit_fast
-def friction_move(x, x_prev, delta, y, rnorm2, rprev2, newton, frac, friction):
+def friction_move(move, y, rnorm2, rprev2, newton, frac, friction):
     """The implicit steps' iteration before a Newton solve, with friction: a fixed-point step
     x -= y while the residual (rnorm2, squared) falls by FIXED_POINT_RATE, then Newton, whose
-    last step (x_prev - delta) is halved while backtrack says so. Returns (solve, newton,
-    rprev2, frac): solve False when x was moved here and the iteration goes on; without
-    friction always Newton, never halved."""
+    last step (x_prev - delta) is halved while backtrack says so; move = (x, x_prev, delta).
+    Returns (solve, newton, rprev2, frac): solve False when x was moved here and the
+    iteration goes on, True when the caller takes a full Newton step from this residual
+    (rprev2 then rnorm2, frac 1); without friction always Newton, never halved."""
+    x, x_prev, delta = move
     if not newton:
         if rnorm2 <= FIXED_POINT_RATE * FIXED_POINT_RATE * rprev2:
             for k in range(x.shape[0]):
@@ -267,14 +260,14 @@ def friction_move(x, x_prev, delta, y, rnorm2, rprev2, newton, frac, friction):
         for k in range(x.shape[0]):
             x[k] = x_prev[k] - frac * delta[k]
         return False, newton, rprev2, frac
-    return True, newton, rprev2, frac
+    return True, newton, rnorm2, 1.0
 
 
 @njit_fast
 def move_start(friction):
-    """friction_move's (rprev2, frac, newton) at a step's start: with friction the fixed point
-    first, without it Newton at once."""
-    return np.inf, 1.0, not friction
+    """An implicit step's iteration at its start: not converged, and friction_move's (rprev2,
+    frac, newton), with friction the fixed point first, without it Newton at once."""
+    return False, np.inf, 1.0, not friction
 
 
 @njit_fast
@@ -284,22 +277,34 @@ def coupled_buffers(rows):
 
 
 @njit_fast
+def newton_buffers(x, m, friction):
+    """An implicit step's buffers for its unknown x (n,) and m contact points: y (n,), the
+    residual and then the Newton step; uz (n,), coupled_solve's scratch; move = (x, x_prev,
+    delta) (friction_move, newton_update); coupled_rows' buffers for a term a point, three
+    with friction."""
+    n = x.shape[0]
+    move = (x, np.empty(n), np.empty(n))
+    return np.empty(n), np.empty(n), move, coupled_buffers((3 if friction else 1) * m)
+
+
+@njit_fast
 def newton_coupled(y, Dq, Dv, P, contact, fr, gap, press, slip, GQ, GV, coupled, uz, move):
     """The Newton step of a reduced implicit kernel: y = J^-1 r with the exact terms of
     coupled_rows (coupled: its buffers), then move = (x, x_prev, delta) by newton_update;
     contact as contact.contact_pass takes it."""
     C, g0, w, kt0, code, params = contact
     cu, size, active = coupled
-    x, x_prev, delta = move
     n_active = coupled_rows(code, params, gap, press, w, kt0, fr, slip, GQ, GV, cu, size, active)
     if n_active > 0:
         coupled_solve(y, Dq, Dv, P, C, fr[0], fr[1], GQ, GV, cu, active, n_active, uz)
-    newton_update(x, x_prev, delta, y)
+    newton_update(move, y)
 
 
 @njit_fast
-def newton_update(x, x_prev, delta, y):
-    """The full Newton step x -= y, kept (x_prev, delta) for friction_move's halving."""
+def newton_update(move, y):
+    """The full Newton step x -= y, kept (x_prev, delta) for friction_move's halving; move =
+    (x, x_prev, delta)."""
+    x, x_prev, delta = move
     for k in range(x.shape[0]):
         x_prev[k] = x[k]
         delta[k] = y[k]
