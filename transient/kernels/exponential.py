@@ -76,41 +76,9 @@ def exponential_reduced(state, acc, n_steps, every, dt, modal, contact, fr, sign
     fr: the friction's arrays (contact.contact_pass), its tractions part of the remainder,
     at each evaluation's velocity; the state's FRICTION_ROW and the SLIDING_ACC accumulator
     carry its force and input power."""
-    coef, damp, omega2 = modal
-    corrections, propagate = corrector
-    fprev, fstart = carry
-    q, v = state[Q_ROW], state[V_ROW]
-    n = q.shape[0]
-    rem, fext, fext0, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
-        state, contact, fr, signals)
-    f0 = np.empty(n)
-    f1 = np.empty(n)
-    q0 = np.empty(n)
-    v0 = np.empty(n)
-    start = (q0, v0, fext0)
-    fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
-    for k in range(n):
-        f0[k] = fstart[k]
-    status, step = OK, 0
-    for step in range(1, n_steps + 1):
-        _predicted(q, v, f0, fprev, q0, v0, f1)
-        advance(state, dt, signals, svals, fext)
-        passed = (0.0, 0.0, 0.0)
-        for it in range(corrections + 1):
-            _propagate(coef, q0, v0, f0, f1, q, v)
-            passed = contact_pass(contact, q, fr, v, rem, ff, gap, press, slip, blocks, fbuf,
-                                  ffbuf)
-            for k in range(n):
-                f1[k] = fext[k] + rem[k]
-        if propagate:
-            _propagate(coef, q0, v0, f0, f1, q, v)
-        modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq, acc, energy)
-        _carried(fprev, f0, f1)
-        status = close_step(step, every, state, signals, gap, press, slip, energy, True, out)
-        if status != OK:
-            break
-    _finish(state, f0, fstart, omega2, damp)
-    return status, step
+    no_iteration = (np.empty((0, 0)), np.empty((0, 0)), 0)
+    return _steps(state, acc, n_steps, every, dt, modal, contact, fr, signals, blocks, corrector,
+                  no_iteration, carry, out)
 
 
 @njit_fast
@@ -138,76 +106,103 @@ def exponential_implicit(state, acc, n_steps, every, dt, modal, contact, fr, sig
     and with friction Dv R below IMPLICIT_TOL of the velocity's change; NO_CONVERGENCE after
     max_iter iterations. q stays the last state evaluated, v is propagated with the forces
     found there. Otherwise as exponential_reduced."""
+    return _steps(state, acc, n_steps, every, dt, modal, contact, fr, signals, blocks, (0, False),
+                  iteration, carry, out)
+
+
+@njit_fast
+def _steps(state, acc, n_steps, every, dt, modal, contact, fr, signals, blocks, corrector,
+           iteration, carry, out):
+    """The steps of both kernels, which differ only in how a step finds the forces at its end:
+    exponential_reduced's explicit corrector (corrector = (corrections, propagate)) where
+    iteration's max_iter is 0, else exponential_implicit's Newton (iteration = (GQ, GV,
+    max_iter); corrector unused)."""
     coef, damp, omega2 = modal
+    corrections, propagate = corrector
     GQ, GV, max_iter = iteration
     fprev, fstart = carry
     q, v = state[Q_ROW], state[V_ROW]
     n = q.shape[0]
+    implicit = max_iter > 0
     friction = fr[0].shape[0] > 0
     rem, fext, fext0, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
         state, contact, fr, signals)
+    fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
     f0 = np.empty(n)
     f1 = np.empty(n)
-    x = np.empty(n)
     q0 = np.empty(n)
     v0 = np.empty(n)
+    start = (q0, v0, fext0)
+    # the implicit corrector's unknown, the end forces, apart from f1 (the forces evaluated
+    # at its iterate); the explicit corrector predicts into f1 itself
+    x = np.empty(n) if implicit else f1
     qb = np.empty(n)
     vb = np.empty(n)
     y, uz, move, coupled = newton_buffers(x, gap.shape[0], friction)
-    start = (q0, v0, fext0)
     ones = np.ones(n)
     Dq = np.ascontiguousarray(coef[:, 6])
     Dv = np.ascontiguousarray(coef[:, 7])
-    fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
     for k in range(n):
         f0[k] = fstart[k]
     status, step = OK, 0
     for step in range(1, n_steps + 1):
         _predicted(q, v, f0, fprev, q0, v0, x)
         advance(state, dt, signals, svals, fext)
-        _propagate(coef, q0, v0, f0, x, q, v)
-        for k in range(n):
-            qb[k] = q[k] - Dq[k] * x[k]
-            vb[k] = v[k] - Dv[k] * x[k]
         passed = (0.0, 0.0, 0.0)
-        converged, rprev, alpha, newton = move_start(friction)
-        for it in range(max_iter):
-            passed = contact_pass(contact, q, fr, v, rem, ff, gap, press, slip, blocks, fbuf,
-                                  ffbuf)
-            rf = 0.0
-            rq = 0.0
-            rv = 0.0
-            motion = 0.0
-            size_q = 0.0
-            change = 0.0
-            size_v = 0.0
+        converged = True
+        if not implicit:
+            for it in range(corrections + 1):
+                _propagate(coef, q0, v0, f0, f1, q, v)
+                passed = contact_pass(contact, q, fr, v, rem, ff, gap, press, slip, blocks,
+                                      fbuf, ffbuf)
+                for k in range(n):
+                    f1[k] = fext[k] + rem[k]
+            if propagate:
+                _propagate(coef, q0, v0, f0, f1, q, v)
+        else:
+            _propagate(coef, q0, v0, f0, x, q, v)
             for k in range(n):
-                f1[k] = fext[k] + rem[k]
-                r = x[k] - f1[k]
-                y[k] = r
-                rf += r * r
-                rq += (Dq[k] * r) ** 2
-                rv += (Dv[k] * r) ** 2
-                motion += (q[k] - q0[k]) ** 2
-                size_q += q[k] * q[k]
-                change += (v[k] - v0[k]) ** 2
-                size_v += v[k] * v[k]
-            tol2 = IMPLICIT_TOL * IMPLICIT_TOL
-            if rq <= tol2 * max(motion, 1e-20 * size_q, 1e-300) and (
-                    not friction or rv <= tol2 * max(change, 1e-20 * size_v, 1e-300)):
-                converged = True
-                break
-            solve, newton, rprev, alpha = friction_move(move, y, rf, rprev, newton, alpha,
-                                                        friction)
-            if solve:
-                newton_coupled(y, Dq, Dv, ones, contact, fr, gap, press, slip, GQ, GV, coupled,
-                               uz, move)
-            for k in range(n):
-                q[k] = qb[k] + Dq[k] * x[k]
-                v[k] = vb[k] + Dv[k] * x[k]
-        # v from the forces found; q stays the state they were evaluated at (within the
-        # tolerance of the propagated one), so a chunk restarting from it finds the same forces
-        _propagate(coef, q0, v0, f0, f1, qb, v)
+                qb[k] = q[k] - Dq[k] * x[k]
+                vb[k] = v[k] - Dv[k] * x[k]
+            converged, rprev, alpha, newton = move_start(friction)
+            for it in range(max_iter):
+                passed = contact_pass(contact, q, fr, v, rem, ff, gap, press, slip, blocks,
+                                      fbuf, ffbuf)
+                rf = 0.0
+                rq = 0.0
+                rv = 0.0
+                motion = 0.0
+                size_q = 0.0
+                change = 0.0
+                size_v = 0.0
+                for k in range(n):
+                    f1[k] = fext[k] + rem[k]
+                    r = x[k] - f1[k]
+                    y[k] = r
+                    rf += r * r
+                    rq += (Dq[k] * r) ** 2
+                    rv += (Dv[k] * r) ** 2
+                    motion += (q[k] - q0[k]) ** 2
+                    size_q += q[k] * q[k]
+                    change += (v[k] - v0[k]) ** 2
+                    size_v += v[k] * v[k]
+                tol2 = IMPLICIT_TOL * IMPLICIT_TOL
+                if rq <= tol2 * max(motion, 1e-20 * size_q, 1e-300) and (
+                        not friction or rv <= tol2 * max(change, 1e-20 * size_v, 1e-300)):
+                    converged = True
+                    break
+                solve, newton, rprev, alpha = friction_move(move, y, rf, rprev, newton, alpha,
+                                                            friction)
+                if solve:
+                    newton_coupled(y, Dq, Dv, ones, contact, fr, gap, press, slip, GQ, GV,
+                                   coupled, uz, move)
+                for k in range(n):
+                    q[k] = qb[k] + Dq[k] * x[k]
+                    v[k] = vb[k] + Dv[k] * x[k]
+            # v from the forces found; q stays the state they were evaluated at (within the
+            # tolerance of the propagated one), so a chunk restarting from it finds the same
+            # forces
+            _propagate(coef, q0, v0, f0, f1, qb, v)
         modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq, acc, energy)
         _carried(fprev, f0, f1)
         status = close_step(step, every, state, signals, gap, press, slip, energy, converged, out)
