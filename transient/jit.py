@@ -189,9 +189,6 @@ def _locked(**flags):
 
 njit = _locked(nogil=True, error_model="numpy")
 njit_fast = _locked(nogil=True, error_model="numpy", fastmath=True)
-# inlined into each caller by Numba, not left to LLVM, which may keep a larger helper a call:
-# the helper's arithmetic then fuses with the caller's as if written out there
-njit_inline = _locked(nogil=True, error_model="numpy", fastmath=True, inline="always")
 njit_parallel = _locked(nogil=True, error_model="numpy", fastmath=True,
                         parallel=True)
 # parallel without fastmath: no fused multiply-adds, so the sums are SciPy's to the last bit

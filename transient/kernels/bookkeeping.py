@@ -1,6 +1,5 @@
 """What every stepping kernel does around its physics, in one place: the buffers a step fills,
-the energies of a step and their balance, the time and the loads at a step's end, and a
-step's close (finite? converged? stored?).
+the energies of a step and their balance, and a step's close (finite? converged? stored?).
 
 Energies (stored per output row): kinetic, strain (structure only: 1/2 q^T K q), contact
 (sum w Phi(g)), external work, dissipated; their balance kinetic + strain + contact - work +
@@ -10,7 +9,7 @@ import numpy as np
 from numba import types
 from numba.extending import overload
 
-from ..jit import njit, njit_fast, njit_inline
+from ..jit import njit, njit_fast
 from .codes import (CONTACT, DISSIPATED, KINETIC, NO_CONVERGENCE, NOT_FINITE, OK, STRAIN,
                     WORK)
 from .friction import friction_energy, friction_points
@@ -29,9 +28,10 @@ def step_buffers(state, contact, fr, signals):
     n = state.shape[1]
     m = contact[1].shape[0]
     n_friction = friction_points(fr)
+    patterns, sig, _ = signals
     fext_old = np.empty(n)
-    svals = np.empty(signals[0].shape[0])
-    external_forces(state[TIME_ROW, 0], signals, svals, fext_old)
+    svals = np.empty(patterns.shape[0])
+    external_forces(state[TIME_ROW, 0], patterns, sig, svals, fext_old)
     ff0 = state[FRICTION_ROW] if n_friction > 0 else np.empty(n)
     return (np.empty(n), np.empty(n), fext_old, svals, np.empty(m), np.empty(m), np.empty(5),
             np.empty(n), np.empty((2, n_friction)), np.empty(n), ff0)
@@ -52,13 +52,11 @@ def _finite(x):
     return True
 
 
-# inlined: the kernels' dissipation products fuse into the accumulators' sums as they did
-# before the friction's share made this too large for LLVM to inline
-@njit_inline
+@njit_fast
 def energies(energy, kin, strain, phi, acc, work, dissipated, fr, ff0, ff, dq, p_in, dt):
-    """Adds a step's external work and dissipation to acc, fills the energy terms, then adds
-    the friction's share (friction.friction_energy: ff0 becomes ff; dq the step's
-    displacement, p_in the sliding's input power at its end)."""
+    """Adds a step's external work and dissipation to acc, fills the energy terms, then, where
+    fr has friction, adds the friction's share (friction.friction_energy: ff0 becomes ff; dq
+    the step's displacement, p_in the sliding's input power at its end)."""
     acc[WORK_ACC] += work
     acc[DISSIPATED_ACC] += dissipated
     energy[KINETIC] = kin
@@ -66,7 +64,8 @@ def energies(energy, kin, strain, phi, acc, work, dissipated, fr, ff0, ff, dq, p
     energy[CONTACT] = phi
     energy[WORK] = acc[WORK_ACC]
     energy[DISSIPATED] = acc[DISSIPATED_ACC]
-    friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt)
+    if friction_points(fr) > 0:
+        friction_energy(acc, energy, ff0, ff, dq, p_in, dt)
 
 
 @njit_fast
@@ -91,15 +90,6 @@ def modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq,
         dq[k] = q[k] - q0[k]
         fext0[k] = fext[k]
     energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power, fr, ff0, ff, dq, p_in, dt)
-
-
-@njit_fast
-def advance(state, dt, signals, svals, fext):
-    """The state's time moved on by dt, to the step's end, and the loads there into fext
-    (svals: the signals' values)."""
-    t = state[TIME_ROW, 0] + dt
-    state[TIME_ROW, 0] = t
-    external_forces(t, signals, svals, fext)
 
 
 @njit
@@ -138,21 +128,22 @@ def _sense_typed(row, q, S, out_s):
 
 
 @njit_fast
-def close_step(step, every, state, signals, gap, press, slip, energy, converged, out):
-    """Step `step` of a chunk closed: its status (NOT_FINITE before NO_CONVERGENCE, else OK);
-    the step stored when OK at a multiple of every, in row step // every - 1 (a chunk stops
-    at its first failed step): the state's time, the energies, the sensors S q (signals' S,
-    dense or CSR), and the contact points' gaps, pressures and (with friction) slip
-    velocities when stored (out_v (r, 2, m), or none)."""
+def close_step(step, every, t, state, S, gap, press, slip, energy, converged, out):
+    """Step `step` of a chunk closed at time t, the state's time set: its status (NOT_FINITE
+    before NO_CONVERGENCE, else OK); the step stored when OK at a multiple of every, in row
+    step // every - 1 (a chunk stops at its first failed step): the time, the energies, the
+    sensors S q (S dense or CSR), and the contact points' gaps, pressures and (with friction)
+    slip velocities when stored (out_v (r, 2, m), or none)."""
+    state[TIME_ROW, 0] = t
     q, v = state[Q_ROW], state[V_ROW]
     status = _status(q, v, energy, converged)
     if status != OK or step % every != 0:
         return status
     row = step // every - 1
     out_t, out_s, out_g, out_p, out_v, out_e = out
-    out_t[row] = state[TIME_ROW, 0]
+    out_t[row] = t
     out_e[row] = energy
-    _sense(row, q, signals[2], out_s)
+    _sense(row, q, S, out_s)
     if out_g.shape[1] > 0:
         out_g[row] = gap
         out_p[row] = press

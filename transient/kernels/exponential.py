@@ -6,10 +6,11 @@ for by Newton (exponential_implicit)."""
 import numpy as np
 
 from ..jit import njit_fast
-from .bookkeeping import advance, close_step, modal_step_end, step_buffers
+from .bookkeeping import close_step, modal_step_end, step_buffers
 from .codes import OK
-from .layout import A_ROW, Q_ROW, V_ROW
+from .layout import A_ROW, Q_ROW, TIME_ROW, V_ROW
 from .contact import block_buffers, contact_pass
+from .signals import external_forces
 from .woodbury import friction_move, move_start, newton_buffers, newton_coupled
 
 IMPLICIT_TOL = 1e-3     # the implicit corrector's residual, relative to the step's motion
@@ -118,10 +119,12 @@ def _steps(state, acc, n_steps, every, dt, modal, contact, fr, signals, blocks, 
     iteration's max_iter is 0, else exponential_implicit's Newton (iteration = (GQ, GV,
     max_iter); corrector unused)."""
     coef, damp, omega2 = modal
+    patterns, sig, S = signals
     corrections, propagate = corrector
     GQ, GV, max_iter = iteration
     fprev, fstart = carry
     q, v = state[Q_ROW], state[V_ROW]
+    t = state[TIME_ROW, 0]
     n = q.shape[0]
     implicit = max_iter > 0
     friction = fr[0].shape[0] > 0
@@ -147,7 +150,8 @@ def _steps(state, acc, n_steps, every, dt, modal, contact, fr, signals, blocks, 
     status, step = OK, 0
     for step in range(1, n_steps + 1):
         _predicted(q, v, f0, fprev, q0, v0, x)
-        advance(state, dt, signals, svals, fext)
+        t += dt
+        external_forces(t, patterns, sig, svals, fext)
         passed = (0.0, 0.0, 0.0)
         converged = True
         if not implicit:
@@ -205,7 +209,7 @@ def _steps(state, acc, n_steps, every, dt, modal, contact, fr, signals, blocks, 
             _propagate(coef, q0, v0, f0, f1, qb, v)
         modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq, acc, energy)
         _carried(fprev, f0, f1)
-        status = close_step(step, every, state, signals, gap, press, slip, energy, converged, out)
+        status = close_step(step, every, t, state, S, gap, press, slip, energy, converged, out)
         if status != OK:
             break
     _finish(state, f0, fstart, omega2, damp)

@@ -30,7 +30,8 @@ def friction_points(fr):
     (whose indptr has a single entry without friction) in the full model's."""
 
 
-@overload(friction_points, jit_options={"fastmath": True, "error_model": "numpy"})
+# inlined: a shape read, where a call would pass fr's arrays at every step
+@overload(friction_points, inline="always")
 def _friction_points_typed(fr):
     if isinstance(fr.types[0], types.Array):
         return lambda fr: fr[0].shape[0]
@@ -159,7 +160,7 @@ def friction_pass_sparse(fr, w, press, v, ff, f, slip):
     (2, m), when the system has friction: fr = (Ct, Cc, V, code, v_eps, table, speeds, values,
     counts) with Ct, Cc CSR triplets (Ct's indptr of one entry without friction). Returns the
     sliding's input power [W]."""
-    if friction_points(fr) == 0:
+    if fr[0][0].shape[0] <= 1:
         return 0.0
     for j in range(ff.shape[0]):
         ff[j] = 0.0
@@ -171,15 +172,13 @@ def friction_pass_sparse(fr, w, press, v, ff, f, slip):
 
 
 @njit_fast
-def friction_energy(fr, acc, energy, ff0, ff, dq, p_in, dt):
+def friction_energy(acc, energy, ff0, ff, dq, p_in, dt):
     """The friction's share of a step's energies. Its work on the structure is taken as the
     loads' is, 1/2 (ff0 + ff) . dq (ff0 at the step's start, ff at its end), so that the
     balance closes on the scheme's own arithmetic; the sliding's input, tau_t V, by the
     trapezoid of its power (acc[SLIDING_ACC] carries the power at the start) goes to the
     external work, and what of it the structure did not take to the dissipated energy. ff0
-    becomes ff. fr dense or with CSR rows (friction_points)."""
-    if friction_points(fr) == 0:
-        return
+    becomes ff."""
     onto = 0.0
     for j in range(ff.shape[0]):
         onto += 0.5 * (ff0[j] + ff[j]) * dq[j]

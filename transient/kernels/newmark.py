@@ -15,31 +15,31 @@ are left to the fixed-operator iteration, which they slow by at most that factor
 import numpy as np
 
 from ..jit import njit_fast
-from .bookkeeping import advance, close_step, energies, modal_step_end, step_buffers
+from .bookkeeping import close_step, energies, modal_step_end, step_buffers
 from .sparse import csr_abs_matvec, csr_matvec, csr_row_dot, factor_solve
 from .codes import OK
-from .layout import A_ROW, Q_ROW, V_ROW
+from .layout import A_ROW, Q_ROW, TIME_ROW, V_ROW
 from .contact import block_buffers, contact_pass
-from .stepping import contact_pass_sparse
+from .friction import friction_pass_sparse
+from .signals import external_forces
+from .stepping import remainder_sparse
 from .woodbury import (active_rows, coupled_rows, coupled_solve_sparse, friction_move,
                        move_start, newton_buffers, newton_coupled, newton_update, woodbury)
 
 
 @njit_fast
-def _corrected(kept, a, dt, q, v):
-    """Newmark's displacement and velocity from their predictors (kept = (q_old, v_old, qp,
-    vp)) and the accelerations."""
-    qp, vp = kept[2], kept[3]
+def _corrected(qp, vp, a, dt, q, v):
+    """Newmark's displacement and velocity from their predictors and the accelerations."""
     for k in range(q.shape[0]):
         q[k] = qp[k] + 0.25 * dt * dt * a[k]
         v[k] = vp[k] + 0.5 * dt * a[k]
 
 
 @njit_fast
-def _predicted(state, dt, h2, kept, signals, svals, fext):
-    """A step's start: kept = (q_old, v_old, qp, vp) the state there and Newmark's predictors
-    from it (h2 = dt^2 / 4), the state moved to the first iterate (the accelerations kept),
-    and the time and the loads at the step's end."""
+def _predicted(state, t, dt, h2, kept, patterns, sig, svals, fext):
+    """A step's start at time t: kept = (q_old, v_old, qp, vp) the state there and Newmark's
+    predictors from it (h2 = dt^2 / 4), the state moved to the first iterate (the
+    accelerations kept), and the loads at the step's end; returns the time there."""
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
     q_old, v_old, qp, vp = kept
     for k in range(q.shape[0]):
@@ -47,8 +47,10 @@ def _predicted(state, dt, h2, kept, signals, svals, fext):
         v_old[k] = v[k]
         qp[k] = q[k] + dt * v[k] + h2 * a[k]
         vp[k] = v[k] + 0.5 * dt * a[k]
-    _corrected(kept, a, dt, q, v)
-    advance(state, dt, signals, svals, fext)
+    _corrected(qp, vp, a, dt, q, v)
+    t += dt
+    external_forces(t, patterns, sig, svals, fext)
+    return t
 
 
 @njit_fast
@@ -58,11 +60,12 @@ def _kept(n):
 
 
 @njit_fast
-def _rayleigh(K, M, beta, v, mv, kv):
-    """The products of Rayleigh damping's two parts with v: M v, and K v where beta is not 0."""
-    csr_matvec(M[0], M[1], M[2], v, mv)
+def _rayleigh(Mp, Mi, Md, Kp, Ki, Kd, beta, v, mv, kv):
+    """The products of Rayleigh damping's two parts with v: M v, and K v where beta is not 0
+    (M, K: CSR triplets)."""
+    csr_matvec(Mp, Mi, Md, v, mv)
     if beta != 0.0:
-        csr_matvec(K[0], K[1], K[2], v, kv)
+        csr_matvec(Kp, Ki, Kd, v, kv)
 
 
 @njit_fast
@@ -80,15 +83,18 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
     outputs as in stepping.explicit_reduced; friction at the end velocity, the state's
     FRICTION_ROW and the SLIDING_ACC accumulator carrying its force and input power
     (friction.friction_energy)."""
+    patterns, sig, S = signals
     GQ, GV, tol, max_iter = iteration
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
+    t = state[TIME_ROW, 0]
     n = q.shape[0]
     friction = fr[0].shape[0] > 0
     rem, fext, fext_old, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
         state, contact, fr, signals)
     fbuf, ffbuf = block_buffers(blocks.shape[0] - 1, n)
     kept = _kept(n)
-    start = (kept[0], kept[1], fext_old)
+    q_old, v_old, qp, vp = kept
+    start = (q_old, v_old, fext_old)
     y, uz, move, coupled = newton_buffers(a, gap.shape[0], friction)
     op = np.empty(n)
     h2 = 0.25 * dt * dt
@@ -100,7 +106,7 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
     passed = (0.0, 0.0, 0.0)
     status, step = OK, 0
     for step in range(1, n_steps + 1):
-        _predicted(state, dt, h2, kept, signals, svals, fext)
+        t = _predicted(state, t, dt, h2, kept, patterns, sig, svals, fext)
         converged, rprev, alpha, newton = move_start(friction)
         for it in range(max_iter):
             passed = contact_pass(contact, q, fr, v, rem, ff, gap, press, slip, blocks, fbuf,
@@ -121,9 +127,9 @@ def newmark_reduced(state, acc, n_steps, every, dt, damp, omega2, contact, fr, s
             if solve:
                 newton_coupled(y, Dq, Dv, op, contact, fr, gap, press, slip, GQ, GV, coupled,
                                uz, move)
-            _corrected(kept, a, dt, q, v)
+            _corrected(qp, vp, a, dt, q, v)
         modal_step_end(q, v, start, fext, damp, omega2, passed, dt, fr, ff0, ff, dq, acc, energy)
-        status = close_step(step, every, state, signals, gap, press, slip, energy, converged, out)
+        status = close_step(step, every, t, state, S, gap, press, slip, energy, converged, out)
         if status != OK:
             break
     return status, step
@@ -140,17 +146,21 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
     dt/2 [Ct; Cc] Z for coupled_rows, the fixed point first and then Newton with backtracking,
     as newmark_reduced. Otherwise as newmark_reduced."""
     C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
     factor, Z, G, GV, tol, max_iter = iteration
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
+    t = state[TIME_ROW, 0]
     n = q.shape[0]
     m = g0.shape[0]
     Kp, Ki, Kd = K
     Mp, Mi, Md = M
+    Cp, Ci, Cd = C
     perm_in, L, U, perm_out = factor
     friction = fr[0][0].shape[0] > 1
     rem, fext, fext_old, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
         state, contact, fr, signals)
     kept = _kept(n)
+    q_old, v_old, qp, vp = kept
     y, _, move, coupled = newton_buffers(a, m, friction)
     cu, size, active_terms = coupled
     ku = np.empty(n)
@@ -178,14 +188,15 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
     p_in = 0.0
     status, step = OK, 0
     for step in range(1, n_steps + 1):
-        _predicted(state, dt, h2, kept, signals, svals, fext)
+        t = _predicted(state, t, dt, h2, kept, patterns, sig, svals, fext)
         converged, rprev, frac, newton = move_start(friction)
         for it in range(max_iter):
-            phi, lin, p_in = contact_pass_sparse(contact, q, fr, v, rem, ff, gap, press, slip)
+            phi, lin = remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, rem, gap, press)
+            p_in = friction_pass_sparse(fr, w, press, v, ff, rem, slip)
             csr_matvec(Kp, Ki, Kd, q, ku)
             csr_abs_matvec(Kp, Ki, Kd, q, kabs)
             csr_matvec(Mp, Mi, Md, a, ma)
-            _rayleigh(K, M, beta, v, mv, kv)
+            _rayleigh(Mp, Mi, Md, Kp, Ki, Kd, beta, v, mv, kv)
             rnorm = 0.0
             fnorm = 0.0
             for k in range(n):
@@ -215,10 +226,9 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
                             u[j] = csr_row_dot(C, active[j], y)
                         woodbury(y, u, active, n_active, e, Z, G)
                 newton_update(move, y)
-            _corrected(kept, a, dt, q, v)
+            _corrected(qp, vp, a, dt, q, v)
         csr_matvec(Kp, Ki, Kd, q, ku)
-        _rayleigh(K, M, beta, v, mv, kv)
-        q_old = kept[0]
+        _rayleigh(Mp, Mi, Md, Kp, Ki, Kd, beta, v, mv, kv)
         work = 0.0
         kin = 0.0
         strain = -lin
@@ -235,7 +245,7 @@ def newmark_full(state, acc, n_steps, every, dt, K, M, alpha, beta, contact, fr,
         energies(energy, kin, strain, phi, acc, work, 0.5 * dt * (power_old + power), fr, ff0,
                  ff, dq, p_in, dt)
         power_old = power
-        status = close_step(step, every, state, signals, gap, press, slip, energy, converged, out)
+        status = close_step(step, every, t, state, S, gap, press, slip, energy, converged, out)
         if status != OK:
             break
     return status, step

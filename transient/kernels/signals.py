@@ -65,11 +65,9 @@ def signal_values(t, codes, params, table_t, table_v, table_n, out):
 
 
 @njit_fast
-def external_forces(t, signals, svals, fext):
-    """fext = patterns^T s(t), the loads at time t [s] on the reduced or the full dofs, from the
-    kernels' signals group (patterns, packed signals, sensors); svals gets the signals'
-    values."""
-    patterns, sig, _ = signals
+def external_forces(t, patterns, sig, svals, fext):
+    """fext = patterns^T s(t), the loads at time t [s] on the reduced or the full dofs (sig:
+    the packed signals); svals gets the signals' values."""
     signal_values(t, sig[0], sig[1], sig[2], sig[3], sig[4], svals)
     fext[:] = 0.0
     for j in range(patterns.shape[0]):

@@ -17,12 +17,13 @@ The exponential kernels are in exponential.py, the implicit Newmark ones in newm
 import numpy as np
 
 from ..jit import njit_fast
-from .bookkeeping import advance, close_step, energies, step_buffers
+from .bookkeeping import close_step, energies, step_buffers
 from .codes import OK
-from .layout import A_ROW, DAMPING_ACC, Q_ROW, V_ROW
+from .layout import A_ROW, DAMPING_ACC, Q_ROW, TIME_ROW, V_ROW
 from .contact import block_buffers, contact_pass
 from .friction import friction_pass_sparse
 from .laws import pressure_potential
+from .signals import external_forces
 from .sparse import csr_matvec
 
 
@@ -43,8 +44,10 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, contact, fr, 
     gmin (m,): smallest gap of each point so far (the critical step is rechecked against it).
     fr: the friction's arrays (contact.contact_pass), taken at the half-step velocity; the
     state's FRICTION_ROW and the SLIDING_ACC accumulator then carry its force and input power
-    (friction_energy). Returns (status, steps done)."""
+    (friction.friction_energy). Returns (status, steps done)."""
+    patterns, sig, S = signals
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
+    t = state[TIME_ROW, 0]
     n = q.shape[0]
     f, fext, fext_old, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
         state, contact, fr, signals)
@@ -58,7 +61,8 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, contact, fr, 
             power += damp[k] * v[k] * v[k]
             q[k] += dq[k]
             v[k] = vh
-        advance(state, dt, signals, svals, fext)
+        t += dt
+        external_forces(t, patterns, sig, svals, fext)
         phi, lin, p_in = contact_pass(contact, q, fr, v, f, ff, gap,
                                       press, slip, blocks, fbuf, ffbuf)
         _track_min(gap, gmin)
@@ -78,7 +82,7 @@ def explicit_reduced(state, acc, n_steps, every, dt, omega2, damp, contact, fr, 
             power += damp[k] * vn * vn
         energies(energy, kin, strain, phi, acc, work, 0.5 * dt * power, fr, ff0, ff, dq, p_in,
                  dt)
-        status = close_step(step, every, state, signals, gap, press, slip, energy, True, out)
+        status = close_step(step, every, t, state, S, gap, press, slip, energy, True, out)
         if status != OK:
             break
     return status, step
@@ -107,16 +111,6 @@ def remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press):
 
 
 @njit_fast
-def contact_pass_sparse(contact, q, fr, v, f, ff, gap, press, slip):
-    """contact.contact_pass on the full model: contact's C and fr's Ct, Cc CSR triplets
-    (friction_pass_sparse), one row at a time. Returns (contact potential,
-    1/2 sum w k_t* (g - g0)^2, the sliding's input power [W])."""
-    C, g0, w, kt0, code, params = contact
-    phi, lin = remainder_sparse(C[0], C[1], C[2], g0, w, kt0, code, params, q, f, gap, press)
-    return phi, lin, friction_pass_sparse(fr, w, press, v, ff, f, slip)
-
-
-@njit_fast
 def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, contact, fr, signals, gmin,
                   out):
     """Central differences on the free dofs of the full model: K = (indptr, indices, data) of
@@ -125,9 +119,13 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, contact,
     arrays with CSR rows (friction_pass_sparse), taken at the half-step velocity as in
     explicit_reduced. Same state and outputs as explicit_reduced; acc[DAMPING_ACC] carries the
     damping power at the end of the last step."""
-    Kp, Ki, Kd = K
+    C, g0, w, kt0, code, params = contact
+    patterns, sig, S = signals
     q, v, a = state[Q_ROW], state[V_ROW], state[A_ROW]
+    t = state[TIME_ROW, 0]
     n = q.shape[0]
+    Kp, Ki, Kd = K
+    Cp, Ci, Cd = C
     f, fext, fext_old, svals, gap, press, energy, ff, slip, dq, ff0 = step_buffers(
         state, contact, fr, signals)
     ku = np.empty(n)
@@ -142,8 +140,10 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, contact,
             dq[k] = dt * vh
             q[k] += dq[k]
             v[k] = vh
-        advance(state, dt, signals, svals, fext)
-        phi, lin, p_in = contact_pass_sparse(contact, q, fr, v, f, ff, gap, press, slip)
+        t += dt
+        external_forces(t, patterns, sig, svals, fext)
+        phi, lin = remainder_sparse(Cp, Ci, Cd, g0, w, kt0, code, params, q, f, gap, press)
+        p_in = friction_pass_sparse(fr, w, press, v, ff, f, slip)
         _track_min(gap, gmin)
         csr_matvec(Kp, Ki, Kd, q, ku)
         if beta != 0.0:
@@ -170,7 +170,7 @@ def explicit_full(state, acc, n_steps, every, dt, K, mass, alpha, beta, contact,
                  ff, dq, p_in, dt)
         power_old = power
         acc[DAMPING_ACC] = power
-        status = close_step(step, every, state, signals, gap, press, slip, energy, True, out)
+        status = close_step(step, every, t, state, S, gap, press, slip, energy, True, out)
         if status != OK:
             break
     return status, step
