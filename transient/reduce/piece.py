@@ -98,19 +98,21 @@ class Piece:
         return (with_statics(X, m, self.M),
                 (0.5 * (S + S.T), 0.5 * (Mh + Mh.T), B, omega2, C))
 
-    def extended(self, A, V, loads):
+    def extended(self, A, V, loads, empty=None):
         """((A2, ext), blocks): the cut's shapes V (g, c) extended into the interior, ext =
         Psi V (I, c), and A (I, a) with the interior's first dynamic correction to that
         motion beyond it, (K_II - sigma M_II)^-1 (M_II ext + M_IG V): the leading term of the
         fixed-cut modes it truncates (the interior's response at omega is ext + omega^2 times
         it + O(omega^4)). blocks: the piece's share of the part's K, M and loads on its
-        columns [A2, W], W = [ext; V] (piece_blocks)."""
+        columns [A2, W], W = [ext; V] (piece_blocks). empty(shape, order) makes the two
+        (I, .) arrays (a reduce.store.Store's files: they are the stage's working set)."""
+        empty = empty or (lambda shape, order: np.empty(shape, order=order))
         solve, sigma = self.solver()
         KG = (self.KG - sigma * self.MG).tocsr()
         n, a, c = self.K.shape[0], A.shape[1], V.shape[1]
-        X = np.empty((n, a + c), order="F")
+        X = empty((n, a + c), "F")
         X[:, :a] = A
-        ext = np.empty((n, c), order="F")
+        ext = empty((n, c), "F")
         width = block_columns(n)
         for start in range(0, c, width):
             cols = slice(start, start + width)

@@ -37,30 +37,36 @@ class Store:
     def _path(self, name):
         return self.folder / f"{name}.{os.getpid()}.{time.monotonic_ns()}.npy"
 
-    def empty(self, name, shape):
-        """A writable (n, w) array for a basis filled in place (a part in pieces, its rows a
-        piece at a time): mapped from a new file, or in memory."""
+    def empty(self, name, shape, order="C"):
+        """A writable (n, w) array for columns filled in place (a part in pieces, its rows a
+        piece at a time; a piece's extension): mapped from a new file, or in memory."""
         if self.folder is None:
-            return np.empty(shape)
+            return np.empty(shape, order=order)
         return np.lib.format.open_memmap(self._path(name), mode="w+", dtype=np.float64,
-                                         shape=shape)
+                                         shape=shape, fortran_order=order == "F")
 
     def written(self, name, T):
         """The path of a file holding T (on a worker, for the process that maps it), or T
         itself when the store keeps bases in memory."""
         if self.folder is None or isinstance(T, (str, Path)):
             return T
-        if isinstance(T, np.memmap):
+        if isinstance(T, np.memmap) and not isinstance(T.base, np.memmap):
             T.flush()
             return T.filename
         path = self._path(name)
         np.save(path, T)
+        if isinstance(T, np.memmap):
+            # the columns of a larger file of this store (a piece's A2 of its X): copied
+            # out, that file's name goes (its mapping stays while it is referenced)
+            whole = Path(T.base.filename)
+            if whole.parent == self.folder and whole.exists():
+                whole.unlink()
         return str(path)
 
     def mapped(self, T):
         """T read-only, mapped from the file written() gave (then unlinked: the mapping
         keeps it), or as it is."""
-        if isinstance(T, np.memmap) and T.filename is not None:
+        if isinstance(T, np.memmap) and not isinstance(T.base, np.memmap):
             T = self.written("", T)
         if not isinstance(T, (str, Path)):
             return T
