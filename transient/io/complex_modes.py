@@ -19,12 +19,12 @@ this one does not write again are removed, so that the folder holds one analysis
 """
 import csv
 import io
-import os
 import re
 from pathlib import Path
 
 import numpy as np
 
+from ..files import whole as _whole
 from .lock import check_writable
 from ..errors import CaseError
 
@@ -208,13 +208,3 @@ def _ours(path):
     return f'Name="{VTU_MARK}"'.encode() in head
 
 
-def _whole(path, write):
-    """write(temporary) under a temporary name in path's folder, then renamed to path: a
-    writer stopped half way leaves the old file or none."""
-    temporary = path.parent / f".{path.name}.{os.getpid()}.part"
-    try:
-        write(temporary)
-        os.replace(temporary, path)
-    finally:
-        if temporary.exists():
-            temporary.unlink()

@@ -1,8 +1,6 @@
 """Where the parts of the components path are reduced: in this process one after the other,
 on a Dask cluster one task a part, and through a cache folder that keeps each part's
 reduction under its task's key (reduce.parts.PartTask.key)."""
-import os
-import time
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -11,6 +9,7 @@ import numpy as np
 
 from ..cluster import WHERE, submitted
 from ..errors import CaseError
+from ..files import whole
 from .parts import PartBasis
 from .pieces import OnCluster, PiecesTask
 from .store import Store
@@ -129,20 +128,18 @@ def cached(runner, folder):
             folder.mkdir(parents=True, exist_ok=True)
             path = folder / f"part-{tasks[i].key()}.npz"
             basis = path.with_suffix(".T.npy")
-            _replaced(basis, lambda f: np.save(f, p.T))
-            _replaced(path, lambda f: np.savez(f, **{name: getattr(p, name)
-                                                    for name in _FIELDS}))
+            # through open files: np.save and savez add a suffix to a path lacking theirs
+            whole(basis, lambda t: _saved(t, np.save, p.T))
+            whole(path, lambda t: _saved(t, np.savez, **{name: getattr(p, name)
+                                                         for name in _FIELDS}))
             out[i] = replace(p, T=np.load(basis, mmap_mode="r"))
         return out
     return run
 
 
-def _replaced(path, write):
-    """path written by write(file) under a temporary name, then renamed over it."""
-    part = path.with_name(f".{path.name}.{os.getpid()}.{time.monotonic_ns()}")
-    with open(part, "wb") as f:
-        write(f)
-    os.replace(part, path)
+def _saved(path, save, *args, **kwargs):
+    with open(path, "wb") as f:
+        save(f, *args, **kwargs)
 
 
 def used(case, workers=0, scheduler=None, cache=None):
@@ -167,7 +164,8 @@ def engine_for(case, workers=0, scheduler=None, cache=None, on_part=None, on_sta
     """The Engine of the components path for one call of the API (without options: the
     parts in this process, uncached), its Dask client closed and its store removed at the
     end; on_part(name, seconds, cached) as each part is done, on_stage(name, seconds, peak
-    GB) as each stage of the setup ends. Asked of an assembled case, the options are refused or unused (used)."""
+    GB) as each stage of the setup ends. Asked of an assembled case, the options are
+    refused or unused (used)."""
     done = None if on_part is None else (
         lambda task, part: on_part(task.name, sum(part.seconds.values()),
                                    "cache" in part.seconds))

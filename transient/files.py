@@ -1,0 +1,15 @@
+"""A file written whole: the package's outputs replace an old file only once complete."""
+import os
+import time
+
+
+def whole(path, write):
+    """write(temporary) under a temporary name in path's folder, then renamed to path: a
+    writer stopped half way leaves the old file or none (two writers, their own names)."""
+    temporary = path.parent / f".{path.name}.{os.getpid()}.{time.monotonic_ns()}.part"
+    try:
+        write(temporary)
+        os.replace(temporary, path)
+    finally:
+        if temporary.exists():
+            temporary.unlink()
