@@ -264,8 +264,8 @@ def _condensed(piece, loads, fmax, store):
 
 def _extended(piece, A, V, loads, store):
     """Piece.extended, its columns (A2, ext) made and kept in store's files until the
-    expansion: a piece's extended columns, some 8 GB on a 225k-dof piece of the 1M disc,
-    were the workers' peak."""
+    expansion: a piece's extended columns (its dofs times the cut's shapes, twice) are a
+    worker's peak."""
     (A2, ext), blocks = piece.extended(
         A, V, loads, lambda shape, order: store.empty(piece.name, shape, order))
     return (store.kept(piece.name, A2), store.kept(piece.name, ext)), blocks

@@ -2,7 +2,7 @@
 the orchestrating process' own memory.
 
 The synthesis holds every part's basis side by side (reduce.synthesis), the largest of the
-path's arrays (a 1M-dof disc's T about 7 GB), and reads each only a part at a time: the
+path's arrays (a part's dofs times its columns), and reads each only a part at a time: the
 coupling's rows read its interface rows, the preload and the fields a product per part. On a
 file mapped read-only its pages are the system's cache, read when a product needs them and
 let go under pressure, as a superelement's basis is read back from disk for data recovery.
