@@ -47,7 +47,8 @@ CLIENT_MARGIN = 0.5e9
 # a part in pieces: a piece's stage on a worker holds up to twice its share of the part (its
 # condensation on the cut and its extension beside its own factors), and the client the
 # cut's condensation dense (its stiffness and mass, then their inertia's LDL^T or the
-# stiffness' Cholesky factor and the Lanczos basis of reduce.cut), CUT_MATRICES of them; the cut's dofs CUT_DOFS (pieces - 1) dofs^(2/3) of the part's, above
+# stiffness' Cholesky factor and the Lanczos basis of reduce.cut), CUT_MATRICES of them;
+# the cut's dofs CUT_DOFS (pieces - 1) dofs^(2/3) of the part's, above
 # the cuts measured (docs/performance.md, "A part in pieces")
 PIECE_SHARE = 2.0
 CUT_MATRICES = 4
