@@ -8,6 +8,18 @@ os.environ.setdefault("TRANSIENT_LOCK_NOTICE_S", "inf")
 # the suite's setups are not this machine's record of its setups (transient.setuptimes)
 os.environ.setdefault("TRANSIENT_SETUP_LOG", "off")
 
+# Each of the suite's workers takes its share of the cores for OpenMP, MKL and OpenBLAS, set
+# before any of them loads: with each worker's runtimes on every core, the workers' threads
+# outnumber the cores and wait on one another. A count the user set is kept. The tests of
+# several threads (marked every_core) run in a process of their own that has every core
+# (tests/test_blas.py), rather than pass here on one thread without testing what they say.
+_workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
+if _workers > 1 and "TRANSIENT_THREADS_SHARE" not in os.environ:
+    _share = str(max(1, len(os.sched_getaffinity(0)) // _workers))
+    _set = [n for n in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+            if n not in os.environ]
+    os.environ.update({n: _share for n in _set}, TRANSIENT_THREADS_SHARE=" ".join(_set))
+
 # the suite runs as the command line does, with the settings that speed it up (an import
 # alone makes none: tests/test_configure.py)
 import transient  # noqa: E402
@@ -43,6 +55,11 @@ def pytest_collection_modifyitems(items):
     stale = sorted(n for n in SLOW_INSTANCES if n not in names and n.split("[")[0] in functions)
     if stale:
         raise pytest.UsageError(f"tests/conftest.py SLOW_INSTANCES: no such instance {stale}")
+    shared = os.environ.get("TRANSIENT_THREADS_SHARE", "").split()
     for item in items:
         if item.name in SLOW_INSTANCES:
             item.add_marker(pytest.mark.slow)
+        if shared and item.get_closest_marker("every_core"):
+            item.add_marker(pytest.mark.skip(
+                reason=f"{' '.join(shared)} at this worker's share: run by "
+                       "tests/test_blas.py::test_every_core_tests_in_a_process_of_their_own"))

@@ -1,8 +1,12 @@
 """The setup's OpenBLAS thread counts: one thread by default, every core inside every_core, and
 the same products either way to round-off."""
 import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
+import pytest
 from threadpoolctl import threadpool_info
 
 from transient import blas
@@ -12,6 +16,7 @@ def openblas_threads():
     return [i["num_threads"] for i in threadpool_info() if i["internal_api"] == "openblas"]
 
 
+@pytest.mark.every_core
 def test_every_core_raises_the_threads_and_gives_them_back():
     cores = len(os.sched_getaffinity(0))
     with blas.one_thread():
@@ -25,6 +30,7 @@ def test_every_core_raises_the_threads_and_gives_them_back():
         assert max(inside) > 1
 
 
+@pytest.mark.every_core
 def test_products_on_every_core_equal_one_thread_to_round_off():
     rng = np.random.default_rng(0)
     A, B = rng.standard_normal((3000, 300)), rng.standard_normal((300, 200))
@@ -54,13 +60,13 @@ def test_every_core_keeps_to_a_one_thread_worker(monkeypatch):
     assert blas.budget() == len(os.sched_getaffinity(0))
 
 
+@pytest.mark.every_core
 def test_this_thread_alone_sets_numba_and_mkl_for_its_thread_only():
     """Inside, the calling thread has one Numba and one MKL thread, another thread keeps its
     own; after, the caller's come back."""
     import threading
 
     import numba
-    import pytest
 
     from transient.blas import mkl_runtime
     try:
@@ -85,3 +91,21 @@ def test_this_thread_alone_sets_numba_and_mkl_for_its_thread_only():
     assert seen["inside"] == (1, 1)
     assert seen["other"] == outside and (numba.get_num_threads(),
                                          mkl.MKL_Get_Max_Threads()) == outside
+
+
+@pytest.mark.slow
+def test_every_core_tests_in_a_process_of_their_own():
+    """The suite's workers run at their share of the cores (tests/conftest.py), where a test of
+    several threads would pass on one without testing them: those tests (every_core) run here
+    in one process without the suite's counts, and must all run and pass."""
+    shared = os.environ.get("TRANSIENT_THREADS_SHARE", "").split()
+    if not shared:
+        pytest.skip("this process has every core: the every_core tests ran in it")
+    drop = set(shared) | {"TRANSIENT_THREADS_SHARE", "PYTEST_XDIST_WORKER",
+                          "PYTEST_XDIST_WORKER_COUNT", "PYTEST_XDIST_TESTRUNUID"}
+    env = {k: v for k, v in os.environ.items() if k not in drop}
+    out = subprocess.run([sys.executable, "-m", "pytest", "-q", "-n", "0", "-p",
+                          "no:cacheprovider", "-m", "every_core", "-rs", "tests"],
+                         cwd=Path(__file__).parents[1], env=env, capture_output=True, text=True)
+    last = out.stdout.strip().splitlines()[-1]
+    assert out.returncode == 0 and "passed" in last and "skipped" not in last, out.stdout[-3000:]

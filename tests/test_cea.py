@@ -212,6 +212,7 @@ def test_an_analysis_setup_is_the_runs_without_its_critical_step(reduced):
     assert np.array_equal(run.state.q, analysis.state.q)
 
 
+@pytest.mark.every_core
 def test_the_unstable_shapes_are_the_same_with_the_pads_modes_beside_the_qz_or_after(
         monkeypatch):
     """analysis_of makes the still parts' own modes in a thread beside the dense QZ when the

@@ -13,7 +13,12 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def test_case_reference_is_up_to_date():
+    """cases/README.md holds what the command its message names prints."""
+    import subprocess
     text = (ROOT / "cases" / "README.md").read_text()
+    printed = subprocess.run([sys.executable, "-m", "transient.case"], capture_output=True,
+                             text=True, check=True).stdout
+    assert printed.strip() == reference_markdown().strip()
     assert reference_markdown() in text, "regenerate with: python -m transient.case"
 
 

@@ -66,11 +66,9 @@ def field(system):
     return replace(system, sensors=np.eye(n), sensor_names=(), n_field=n)
 
 
-def test_the_projection_of_a_linear_motion_gives_each_mode_its_own_exponential():
-    """z(t) = 2 Re sum_k c_k x_k exp(lambda_k t) over the two modes: the amplitudes are
-    |c_k| exp(Re lambda_k t) to round-off and the fits their real parts; right eigenvectors
-    in place of the left ones mix the pair (they are not orthogonal), a dropped normalization
-    scales them."""
+def projected_linear_motion():
+    """(ModalGrowth, eigenvalues, initial amplitudes) of the flutter pair's linear motion
+    z(t) = 2 Re sum_k c_k x_k exp(lambda_k t) over PERIODS."""
     system, state, lam, right = flutter()
     c = np.array([START["growing"], START["decaying"]])
     period = 2 * np.pi / lam[0].imag
@@ -78,11 +76,41 @@ def test_the_projection_of_a_linear_motion_gives_each_mode_its_own_exponential()
     q = linear_motion(system, state, lam, right, c, t)
     result = modal_growth(system, state.q, t, lambda i, j: q[i:j], 2 * lam.imag.max() / np.pi,
                           0.0)
+    return result, lam, c
+
+
+def test_the_projection_of_a_linear_motion_gives_each_mode_its_own_exponential():
+    """z(t) = 2 Re sum_k c_k x_k exp(lambda_k t) over the two modes: the amplitudes are
+    |c_k| exp(Re lambda_k t) to round-off and the fits their real parts; right eigenvectors
+    in place of the left ones mix the pair (they are not orthogonal), a dropped normalization
+    scales them."""
+    result, lam, c = projected_linear_motion()
     order = [int(np.argmin(np.abs(result.eigenvalues - x))) for x in lam]
     expected = c[:, None] * np.exp(np.outer(lam.real, result.time))
     assert result.amplitudes[order] == pytest.approx(expected, rel=1e-8)
     assert result.excited[order].all()
     assert result.growth[order] == pytest.approx(lam.real, rel=1e-8)
+
+
+def test_the_table_and_the_picture_of_a_projection(tmp_path):
+    """The flutter pair's projection as CSV (a row per mode, its fitted growth, the CEA's
+    cells empty without a CEA) and as a picture with both modes drawn."""
+    import csv
+    from matplotlib.image import imread
+    from transient.plots.growth import growth_figure, shown_modes, write_growth_csv
+    result, lam, _ = projected_linear_motion()
+    table, png = tmp_path / "growth.csv", tmp_path / "growth.png"
+    write_growth_csv(result, table)
+    with open(table, newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == len(result.eigenvalues)
+    growth = sorted(float(r["growth"]) for r in rows)
+    assert growth == pytest.approx(sorted(lam.real), rel=1e-8)
+    assert all(r["cea_real"] == "" and r["excited"] == "True" for r in rows)
+    assert len(shown_modes(result)) == 2
+    growth_figure(result, png, "flutter pair")
+    rgb = imread(png)[..., :3]
+    assert rgb.shape[1] >= 500 and (rgb.min(axis=2) < 0.9).mean() > 0.01
 
 
 @pytest.mark.parametrize("scheme, corrector", [("exponential", "propagated"),
