@@ -63,6 +63,40 @@ def test_a_parts_cells_give_its_block_of_the_model_and_a_piece_its_rows():
     assert same(task.Kc, restrict(K, cut, cut)) and same(task.Mc, restrict(M, cut, cut))
 
 
+def test_a_pieces_blocks_and_rows_made_a_block_at_a_time_are_those_made_whole(tmp_path,
+                                                                               monkeypatch):
+    """Piece.blocks forms A^T X A, A^T X W and W^T X W a block of columns at a time, and
+    Piece.expanded the part's rows a block of rows at a time: each the product made whole to
+    round-off (relative to its own size), the rows written into a file bit for bit those
+    held in memory."""
+    from transient.reduce import piece as piece_module
+    from transient.reduce.pieces import _piece
+    _, task = disc_tasks(3)
+    cut = np.flatnonzero(task.piece_of == CUT)
+    I = np.flatnonzero(task.piece_of == 0)
+    piece, G = _piece(task.name, task.cells.subset(task.cell_piece == 0), I, cut, {},
+                      task.shift_hz, task.backend)
+    rng = np.random.default_rng(0)
+    n, a, c = len(I), 300, 200
+    A, ext, V = (rng.standard_normal(s) for s in ((n, a), (n, c), (len(G), c)))
+    loads = sp.random(n, 5, density=0.01, random_state=1, format="csr")
+    monkeypatch.setattr(piece_module, "block_columns", lambda rows: 64)
+    blocks = piece.blocks(A, ext, V, loads)
+    for (AXA, AXW, WXW), (X, XG) in zip(blocks, ((piece.K, piece.KG), (piece.M, piece.MG))):
+        XW = X @ ext + XG @ V
+        for got, whole in ((AXA, A.T @ (X @ A)), (AXW, A.T @ XW),
+                           (WXW, ext.T @ XW + V.T @ (XG.T @ ext))):
+            assert np.abs(got - whole).max() <= 1e-13 * np.abs(whole).max()
+    Ta, Tw = rng.standard_normal((a, 40)), rng.standard_normal((c, 40))
+    monkeypatch.setattr(piece_module, "ROW_BLOCK", 100)
+    rows = np.lib.format.open_memmap(tmp_path / "T.npy", "w+", np.float64, (n + 7, 40))
+    piece.expanded((A, ext), Ta, Tw, rows, np.arange(n) + 7)
+    held = piece.expanded((A, ext), Ta, Tw)
+    assert np.array_equal(rows[7:], held)
+    whole = A @ Ta + ext @ Tw
+    assert np.abs(held - whole).max() <= 1e-13 * np.abs(whole).max()
+
+
 @pytest.mark.parametrize("pieces", [2, 3])
 def test_the_cut_leaves_no_piece_meeting_another(pieces):
     """Each piece's interior meets the cut alone (K, M and the interface's springs), the

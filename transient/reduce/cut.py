@@ -83,13 +83,13 @@ def _negatives(ldu, ipiv):
     return count
 
 
-def coupled_traces(S, Mh, couplings, top):
+def coupled_traces(S, Mh, couplings, top, overwrite=False):
     """(U (g, k), R): the traces on the cut of the coupled model's modes below top (each of
     unit K_cb-norm), but those of the modes that hold the cut still (STILL; a symmetric part
     cut along its nodal lines has them), and R the upper Cholesky factor of S (S = R^T R) for
-    the caller's further solves. couplings as modes_below's."""
+    the caller's further solves, in S's memory with overwrite. couplings as modes_below's."""
     count = modes_below(S, Mh, couplings, top)
-    R = sla.cho_factor(S.T, lower=False)[0]
+    R = sla.cho_factor(S.T, lower=False, overwrite_a=overwrite)[0]
     g = len(S)
     if count == 0:
         return np.zeros((g, 0)), R

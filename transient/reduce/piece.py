@@ -17,7 +17,7 @@ from ..solve.lowrank import block_columns
 from ..solve.modes import normal_modes, shift_sigma
 from .basis import MODES_TOL
 from .fields import field_map
-from .parts import PartError, with_statics
+from .parts import ROW_BLOCK, PartError, with_statics
 
 
 @dataclass(frozen=True)
@@ -125,17 +125,36 @@ class Piece:
 
     def blocks(self, A, ext, V, loads):
         """For X in (K, M): (A^T X A, A^T X W, the piece's share of W^T X W) with W = [ext;
-        V]; then the loads' (A^T F, ext^T F) (the cut's own rows are the caller's)."""
+        V]; then the loads' (A^T F, ext^T F) (the cut's own rows are the caller's). A block of
+        columns at a time: X A and X W are the piece's dofs times all its columns, the
+        stage's largest arrays were they made whole."""
+        a, c = A.shape[1], ext.shape[1]
+        width = block_columns(len(A))
         out = []
         for X, XG in ((self.K, self.KG), (self.M, self.MG)):
-            XW = X @ ext + XG @ V
-            out.append((A.T @ (X @ A), A.T @ XW, ext.T @ XW + V.T @ (XG.T @ ext)))
+            AXA, AXW, WXW = np.empty((a, a)), np.empty((a, c)), np.empty((c, c))
+            for start in range(0, a, width):
+                cols = slice(start, start + width)
+                AXA[:, cols] = A.T @ (X @ A[:, cols])
+            for start in range(0, c, width):
+                cols = slice(start, start + width)
+                XW = X @ ext[:, cols] + XG @ V[:, cols]
+                AXW[:, cols] = A.T @ XW
+                WXW[:, cols] = ext.T @ XW + V.T @ (XG.T @ ext[:, cols])
+            out.append((AXA, AXW, WXW))
         Ft = loads.T.tocsr()
         out.append(((Ft @ A).T, (Ft @ ext).T))
         return out
 
     @staticmethod
-    def expanded(held, Ta, Tw):
-        """The part's basis on the piece's rows: A2 Ta + ext Tw (held = (A2, ext))."""
+    def expanded(held, Ta, Tw, into=None, rows=None):
+        """The part's basis on the piece's rows, A2 Ta + ext Tw (held = (A2, ext)), made a
+        block of rows at a time into into[rows] (a new array without into): no piece's dofs
+        times the part's columns made whole beside it, and the same arithmetic either way."""
         A2, ext = held
-        return A2 @ Ta + ext @ Tw
+        if into is None:
+            into, rows = np.empty((len(A2), Ta.shape[1])), np.arange(len(A2))
+        for start in range(0, len(A2), ROW_BLOCK):
+            block = slice(start, start + ROW_BLOCK)
+            into[rows[block]] = A2[block] @ Ta + ext[block] @ Tw
+        return into

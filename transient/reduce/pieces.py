@@ -94,7 +94,7 @@ def piece_of_dofs(points, cells, dofs, n, coupling=None):
     return out, piece
 
 
-def cut_basis(S, Mh, B, couplings, fmax, shift_hz):
+def cut_basis(S, Mh, B, couplings, fmax, shift_hz, overwrite=False):
     """V (g, c): the cut's shapes, Mh-orthonormal: the traces on the cut of the modes to fmax
     of the pieces' fixed-cut modes coupled to the whole cut (Craig-Bampton's model with every
     constraint mode: the characteristic constraint modes of the condensation alone miss the
@@ -102,11 +102,12 @@ def cut_basis(S, Mh, B, couplings, fmax, shift_hz):
     (g, g): the pieces' condensation summed with the cut's own; B (g, s) the loads carried to
     the cut; couplings: (G, omega2 (m,), C (m, len(G))) of each piece, its modes' squared
     frequencies and their mass coupling Phi^T (M_II Psi + M_IG) with the cut's dofs G. The
-    coupled model is applied by blocks, never formed (reduce.cut)."""
+    coupled model is applied by blocks, never formed (reduce.cut); overwrite: S's memory
+    taken for its Cholesky factor."""
     sigma = shift_sigma(-shift_hz)
     top = (2 * np.pi * fmax) ** 2 - sigma
     traces, R = coupled_traces(S, Mh, [(G, omega2 - sigma, C) for G, omega2, C in couplings],
-                               top)
+                               top, overwrite)
     traces = _orthonormal(traces, Mh, None)
     return np.hstack([traces, _orthonormal(sla.cho_solve((R, False), B), Mh, traces)])
 
@@ -131,15 +132,16 @@ class Here:
     """The pieces' stages in this process, a piece after the other: each stage's arguments
     taken as it comes to them, so that what a piece's stage lets go is freed before the
     next piece's."""
-    def split(self, fn, arguments):
+    def split(self, fn, arguments, one_by_one=False):
         """([fn(*a)[0]], [fn(*a)[1]]) for a in arguments: the large results held, the small
-        ones gathered."""
+        ones gathered (one_by_one: given one at a time, each let go once the caller has
+        taken it)."""
         held, small = [], []
         for args in arguments:
             h, m = fn(*args)
             held.append(h)
             small.append(m)
-        return held, small
+        return held, _drained(small) if one_by_one else small
 
     def each(self, fn, arguments):
         """fn(*a) for a in arguments, one at a time."""
@@ -157,18 +159,25 @@ class OnCluster:
     def _call(self, fn, args):
         return submitted(self.client, _on_worker, fn, *args, pure=False)
 
-    def split(self, fn, arguments):
+    def split(self, fn, arguments, one_by_one=False):
         futures = [self._call(fn, args) for args in arguments]
         held = [self.client.submit(operator.getitem, f, 0, pure=False) for f in futures]
-        small = self.client.gather([self.client.submit(operator.getitem, f, 1, pure=False)
-                                    for f in futures])
-        return held, small
+        small = [self.client.submit(operator.getitem, f, 1, pure=False) for f in futures]
+        if one_by_one:
+            return held, (f.result() for f in _drained(small))
+        return held, self.client.gather(small)
 
     def each(self, fn, arguments):
         """fn(*a) for a in arguments, all submitted, gathered one at a time and let go."""
-        futures = [self._call(fn, args) for args in arguments]
-        while futures:
-            yield futures.pop(0).result()
+        for future in _drained([self._call(fn, args) for args in arguments]):
+            yield future.result()
+
+
+def _drained(items):
+    """The list's items in order, each out of the list as it is given: the caller's is then
+    the only reference."""
+    while items:
+        yield items.pop(0)
 
 
 def _on_worker(fn, *args):
@@ -215,18 +224,24 @@ def pieces_basis(task, where=None, store=None):
     loads = [F[I] for I in interior]
     # each piece held at the cut, then the cut condensed, reduced and extended
     A, small = where.split(_condensed, ((p, f, PIECE_REACH * task.fmax, store)
-                                        for p, f in zip(pieces, loads)))
+                                        for p, f in zip(pieces, loads)), one_by_one=True)
     Kc, Mc = task.Kc, task.Mc
     S = (Kc - shift_sigma(-task.shift_hz) * Mc).toarray()
     Mh, B = Mc.toarray(), F[cut].toarray()
-    for g, (Sp, Mp, Bp, _, _) in zip(Gs, small):
+    # each piece's condensation let go once summed (the pieces' together are about the cut's
+    # size twice over), its modes' couplings kept for the cut's modes
+    couplings = []
+    for g, (Sp, Mp, Bp, omega2, C) in zip(Gs, small):
         S[np.ix_(g, g)] += Sp
         Mh[np.ix_(g, g)] += Mp
         B[g] += Bp
+        couplings.append((g, omega2, C))
+        del Sp, Mp
     lap("pieces")
-    V = cut_basis(S, Mh, B, [(g, sm[3], sm[4]) for g, sm in zip(Gs, small)],
-                  PIECE_REACH * task.fmax, task.shift_hz)
-    del S, Mh, B, small
+    # S is overwritten by its Cholesky factor: the cut's stage holds two of its size, not three
+    V = cut_basis(S, Mh, B, couplings, PIECE_REACH * task.fmax, task.shift_hz,
+                  overwrite=True)
+    del S, Mh, B, couplings
     lap("cut")
     # each piece's first columns are in its extended ones: taken from the list as its
     # extension starts, they go once it has run
@@ -245,10 +260,14 @@ def pieces_basis(task, where=None, store=None):
     T = store.empty(task.name, (len(piece_of), red.T.shape[1]))
     Tw = red.T[at[-2]:]
     T[cut] = V @ Tw
-    rows = where.each(Piece.expanded, ((held.pop(0), red.T[at[i]:at[i + 1]], Tw)
-                                       for i in range(n)))
-    for I, r in zip(interior, rows):     # a piece's rows at a time, each let go once in T
-        T[I] = r
+    # each piece writes its rows into T's file where its columns are; T in memory (a store
+    # without files) takes them back a piece at a time, each let go once in T
+    target = T.filename if isinstance(T, np.memmap) else None
+    rows = where.each(_expanded, ((held.pop(0), red.T[at[i]:at[i + 1]], Tw, interior[i],
+                                   target) for i in range(n)))
+    for I, r in zip(interior, rows):
+        if r is not None:
+            T[I] = r
     lap("expansion")
     return PartBasis(task.name, T, red.Kr, red.mode_hz, red.n_shapes, red.n_static, seconds,
                      red.interface_mu, interface.E.shape[1] if interface is not None else 0)
@@ -269,6 +288,17 @@ def _extended(piece, A, V, loads, store):
     (A2, ext), blocks = piece.extended(
         A, V, loads, lambda shape, order: store.empty(piece.name, shape, order))
     return (store.kept(piece.name, A2), store.kept(piece.name, ext)), blocks
+
+
+def _expanded(held, Ta, Tw, I, target):
+    """Piece.expanded: the piece's rows I of the part's basis written into the file target
+    (the store's, mapped again where the piece's columns are: each piece its own rows) and
+    None returned, or the rows returned (target None)."""
+    if target is None:
+        return Piece.expanded(held, Ta, Tw)
+    T = np.load(target, mmap_mode="r+")
+    Piece.expanded(held, Ta, Tw, T, I)
+    T.flush()
 
 
 def _piece(name, cells, I, cut, share, shift_hz, backend):
