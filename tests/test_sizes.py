@@ -78,6 +78,26 @@ def test_on_workers_the_client_is_bounded_and_each_piece_by_its_share(machine, c
     assert load(PAD, roomy, Cluster(workers=2)).cluster.workers == 2
 
 
+def test_embedded_workers_share_what_the_client_leaves_while_they_reduce(machine):
+    """The client cuts a part in pieces between the workers' tasks, the workers waiting: its
+    need counts the cut and the waiting workers, and the workers' budget leaves both out. A
+    limit that fits the client's whole need, and the workers' peaks beside the model alone,
+    not beside the cut, is admitted; a little less is refused."""
+    case = load(PAD, BIG + COMPONENTS + ["limits.memory=1e6"], Cluster(workers=2))
+    need = sizes.memory_need(case, _cells(BIG))
+    terms = dict(need.terms)
+    cut, waiting = terms["the cut of disc in 4 pieces"], terms["2 workers waiting"]
+    assert cut > 0 and waiting == 2 * sizes.WORKER_IDLE
+    assert need.beside == pytest.approx(need.here - cut - waiting)
+    limit = 1.001 * max(need.here, need.beside + 2 * need.worker)
+    assert need.here + 2 * need.worker > limit
+    fits = BIG + COMPONENTS + [f"limits.memory={limit / GB}"]
+    assert load(PAD, fits, Cluster(workers=2)).cluster.workers == 2
+    with pytest.raises(CaseError):
+        load(PAD, BIG + COMPONENTS + [f"limits.memory={0.99 * limit / GB}"],
+             Cluster(workers=2))
+
+
 def test_the_count_of_pieces_that_fits_is_named(machine, capsys):
     """A worker's share that more pieces would fit: the refusal names the count, which loads
     (the client's cut grows with the count, and is counted)."""

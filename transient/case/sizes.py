@@ -53,6 +53,10 @@ CLIENT_MARGIN = 0.5e9
 PIECE_SHARE = 2.0
 CUT_MATRICES = 4
 CUT_DOFS = 0.5
+# an embedded cluster's worker between its tasks: its process and what its pieces' columns
+# in files keep resident, which the client's stages (the cut, the synthesis) find beside them
+# ("The parts' bases and the pieces' columns in files")
+WORKER_IDLE = 1.5e9
 
 
 @dataclass(frozen=True)
@@ -80,13 +84,16 @@ class Need:
     client's on a cluster), the sum of its terms ((what, bytes) pairs, said); part, the part
     whose reduction that counts (None: none alone); worker, the largest part's (or piece's)
     reduction on a worker, and its part (None: no worker); disk, the parts' bases in files
-    under the temporary directory (reduce.store: the components path on this machine)."""
+    under the temporary directory (reduce.store: the components path on this machine);
+    beside, what of here the client holds while an embedded cluster's workers reduce (the
+    model and the process: its cuts and the waiting workers come between their tasks)."""
     here: float
     part: str = None
     worker: float = None
     worker_part: str = None
     terms: tuple = ()
     disk: float = 0.0
+    beside: float = None
 
     def said(self):
         """The terms in words: 'the model 5.8 GB, ...'."""
@@ -233,21 +240,27 @@ def memory_need(case, cells, dofs=None, pieces=None):
     if case.cluster.remote:
         terms.append(("the parts' bases side by side", bases))
     n = part_dofs(cells, dofs)
-    terms += [(f"the cut of {name} in {pieces[name]} pieces", cut_bytes(n[name], pieces[name]))
-              for name in cells if pieces[name] > 1]
-    terms.append(("the coupling and the process", CLIENT_MARGIN))
-    return Need(sum(b for _, b in terms), None, worker[largest], largest, tuple(terms), disk)
+    between = [(f"the cut of {name} in {pieces[name]} pieces", cut_bytes(n[name], pieces[name]))
+               for name in cells if pieces[name] > 1]
+    if case.cluster.workers:
+        between.append((f"{case.cluster.workers} workers waiting",
+                        case.cluster.workers * WORKER_IDLE))
+    terms += between + [("the coupling and the process", CLIENT_MARGIN)]
+    here = sum(b for _, b in terms)
+    return Need(here, None, worker[largest], largest, tuple(terms), disk,
+                here - sum(b for _, b in between))
 
 
 def worker_budget(case, need):
     """The memory [B] each worker of an embedded cluster may take: what limits.memory leaves
-    beside this process (need.here), shared by the workers, and no more than the LocalCluster
-    gives each (the machine's memory shared by them); None without workers on this machine
-    (a scheduler's tell their own: reduce.components.check_parts)."""
+    beside this process while the workers reduce (need.beside: the client cuts a part in
+    pieces and synthesizes between their tasks), shared by the workers, and no more than the
+    LocalCluster gives each (the machine's memory shared by them); None without workers on
+    this machine (a scheduler's tell their own: reduce.components.check_parts)."""
     workers = case.cluster.workers
     if not workers or not case.solver.reduction.components:
         return None
-    return min(case.limits.memory_bytes - need.here, physical_memory()) / workers
+    return min(case.limits.memory_bytes - need.beside, physical_memory()) / workers
 
 
 def check_workers(case, cells, budget, whose="a worker's memory"):
