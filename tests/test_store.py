@@ -65,6 +65,31 @@ def test_the_api_leaves_no_file_of_its_store(tmp_path, monkeypatch):
     assert np.isfinite((X @ AW).sum())
 
 
+@pytest.mark.parametrize("folder", [True, False])
+def test_a_fresh_part_is_written_once_into_the_cache(tmp_path, monkeypatch, folder):
+    """Through --cache a part reduced fresh goes from the store to the cache's file (renamed,
+    or written there by a store in memory): its basis saved once, not to the store and again
+    to the cache; the store left empty, the cache read back as the same numbers."""
+    saves = []
+    save = np.save
+    monkeypatch.setattr(np, "save", lambda file, a, *args, **kwargs: (
+        saves.append(np.shape(a)), save(file, a, *args, **kwargs))[1])
+    store = Store(tmp_path / "store") if folder else Store()
+    if folder:
+        store.folder.mkdir()
+    case = load(PAD, PAD_DISC + COMPONENTS)
+    fresh = prepare(case, analysis=True, parts=Engine(cache=tmp_path / "cache", store=store))
+    shapes = [T.shape for _, T in fresh.basis[0].parts]
+    assert sorted(saves) == sorted(shapes)
+    assert folder is False or list(store.folder.iterdir()) == []
+    bases = sorted((tmp_path / "cache").glob("part-*.T.npy"))
+    assert len(bases) == 2 and sorted(np.load(b).shape for b in bases) == sorted(shapes)
+    again = prepare(case, analysis=True, parts=Engine(cache=tmp_path / "cache", store=store))
+    assert len(saves) == 2
+    for (_, a), (_, b) in zip(fresh.basis[0].parts, again.basis[0].parts):
+        assert np.array_equal(a, b)
+
+
 def test_a_store_without_a_folder_keeps_arrays_as_they_are():
     """Store() (a cluster whose workers do not share this disk): bases stay in memory."""
     T = np.arange(6.0).reshape(3, 2)

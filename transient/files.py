@@ -13,3 +13,10 @@ def whole(path, write):
     finally:
         if temporary.exists():
             temporary.unlink()
+
+
+def saved(path, save, *args, **kwargs):
+    """save(file, *args, **kwargs) into path through an open file: NumPy's savers add their
+    suffix to a path that lacks it (a temporary name of whole's)."""
+    with open(path, "wb") as f:
+        save(f, *args, **kwargs)

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..cluster import WHERE, submitted
 from ..errors import CaseError
-from ..files import whole
+from ..files import saved, whole
 from .parts import PartBasis
 from .pieces import OnCluster, PiecesTask
 from .store import Store
@@ -42,33 +42,39 @@ class Engine:
 
     def run(self, tasks):
         store = self.store or Store()
-        runner = serial(store) if self.client is None else on_cluster(self.client, store)
+        # a fresh part's basis goes from the store straight to the cache's file
+        to = None if self.cache is None else (lambda task: _basis_path(self.cache, task))
+        runner = (serial(store, to) if self.client is None
+                  else on_cluster(self.client, store, to))
         if self.cache is not None:
             runner = cached(runner, self.cache)
         return runner(tasks, self.done)
 
 
-def serial(store):
-    """A runner of each task in this process, in order, its basis kept in store;
-    done(task, PartBasis) after each."""
+def serial(store, to=None):
+    """A runner of each task in this process, in order, its basis kept in store (or moved to
+    the file to(task) names); done(task, PartBasis) after each."""
+    to = to or (lambda task: None)
+
     def run(tasks, done=None):
         out = []
         for task in tasks:
             part = task.run(None, store) if isinstance(task, PiecesTask) else task.run()
-            out.append(replace(part, T=store.kept(task.name, part.T)))
+            out.append(replace(part, T=store.kept(task.name, part.T, to(task))))
             if done is not None:
                 done(task, out[-1])
         return out
     return run
 
 
-def on_cluster(client, store=None):
+def on_cluster(client, store=None, to=None):
     """A runner of the tasks on a Dask client, one task a part (a part in pieces, a task a
     piece and stage: reduce.pieces), their results in order, each basis kept in store (a
-    worker writes it there, this process maps it); done(task, PartBasis) as each
-    finishes. A task whose worker dies is run again on another
+    worker writes it there, this process maps it, or moves it to the file to(task) names);
+    done(task, PartBasis) as each finishes. A task whose worker dies is run again on another
     (the scheduler's), the same arithmetic on one thread."""
     store = store or Store()
+    to = to or (lambda task: None)
 
     def run(tasks, done=None):
         from dask.distributed import as_completed
@@ -81,13 +87,13 @@ def on_cluster(client, store=None):
         for i, task in enumerate(tasks):
             if i not in index.values():
                 part = task.run(OnCluster(client), store)
-                out[i] = replace(part, T=store.kept(task.name, part.T))
+                out[i] = replace(part, T=store.kept(task.name, part.T, to(task)))
                 if done is not None:
                     done(task, out[i])
         for future in as_completed(futures):
             i = index[future.key]
             part = future.result()
-            out[i] = replace(part, T=store.mapped(part.T))
+            out[i] = replace(part, T=store.mapped(part.T, to(tasks[i])))
             if done is not None:
                 done(tasks[i], out[i])
         return out
@@ -102,11 +108,19 @@ def _run(task, store):
     return replace(part, T=store.written(task.name, part.T))
 
 
+def _basis_path(folder, task):
+    """The file of a task's basis in a cache folder (made if need be)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder / f"part-{task.key()}.T.npy"
+
+
 def cached(runner, folder):
     """runner through the folder: a task whose key is there is read back (its basis mapped
     from its file), the others run and are written (each file under a temporary name then
-    renamed, the basis first: a killed run leaves no part half written). Nothing else in
-    the folder is read, changed or deleted."""
+    renamed, the basis first: a killed run leaves no part half written; a basis the runner
+    moved there already is not written again). Nothing else in the folder is read, changed
+    or deleted."""
     folder = Path(folder)
 
     def run(tasks, done=None):
@@ -128,18 +142,15 @@ def cached(runner, folder):
             folder.mkdir(parents=True, exist_ok=True)
             path = folder / f"part-{tasks[i].key()}.npz"
             basis = path.with_suffix(".T.npy")
-            # through open files: np.save and savez add a suffix to a path lacking theirs
-            whole(basis, lambda t: _saved(t, np.save, p.T))
-            whole(path, lambda t: _saved(t, np.savez, **{name: getattr(p, name)
-                                                         for name in _FIELDS}))
-            out[i] = replace(p, T=np.load(basis, mmap_mode="r"))
+            if not (isinstance(p.T, np.memmap)
+                    and Path(p.T.filename).resolve() == basis.resolve()):
+                whole(basis, lambda t: saved(t, np.save, p.T))
+                p = replace(p, T=np.load(basis, mmap_mode="r"))
+            whole(path, lambda t: saved(t, np.savez, **{name: getattr(p, name)
+                                                        for name in _FIELDS}))
+            out[i] = p
         return out
     return run
-
-
-def _saved(path, save, *args, **kwargs):
-    with open(path, "wb") as f:
-        save(f, *args, **kwargs)
 
 
 def used(case, workers=0, scheduler=None, cache=None):

@@ -14,6 +14,7 @@ this machine's disk). Otherwise its folder is made under the system's temporary 
 (TMPDIR), each file unlinked as soon as it is mapped (the mapping keeps it while the basis
 lives), and the folder removed at close(): nothing is left of it after the run.
 """
+import errno
 import os
 import shutil
 import tempfile
@@ -22,6 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from ..files import saved, whole
 
 
 @dataclass(frozen=True)
@@ -63,23 +66,44 @@ class Store:
                 whole.unlink()
         return str(path)
 
-    def mapped(self, T):
+    def mapped(self, T, to=None):
         """T read-only, mapped from the file written() gave (then unlinked: the mapping
-        keeps it), or as it is."""
+        keeps it), or as it is; with to (a path outside the store: a cache's), mapped from
+        there, T's file moved to it (moved)."""
         if isinstance(T, np.memmap) and not isinstance(T.base, np.memmap):
             T = self.written("", T)
+        if to is not None:
+            return np.load(moved(T, Path(to)), mmap_mode="r")
         if not isinstance(T, (str, Path)):
             return T
         out = np.load(T, mmap_mode="r")
         os.unlink(T)
         return out
 
-    def kept(self, name, T):
-        """T written to this store's file and mapped back: its memory given back now."""
-        return self.mapped(self.written(name, T))
+    def kept(self, name, T, to=None):
+        """T written to this store's file and mapped back (from to, with to: mapped's): its
+        memory given back now."""
+        return self.mapped(self.written(name, T), to)
 
     def close(self):
         """Removes the store's folder (its files are unlinked as they are mapped: what is
         left is a killed stage's)."""
         if self.folder is not None:
             shutil.rmtree(self.folder, ignore_errors=True)
+
+
+def moved(T, to):
+    """to, holding T: T's file renamed to it where both share a file system, else copied
+    there through a temporary name and unlinked; an array in memory written there. The
+    basis is written once, not once to the store and again to its destination."""
+    if not isinstance(T, (str, Path)):
+        whole(to, lambda temporary: saved(temporary, np.save, T))
+        return to
+    try:
+        os.replace(T, to)
+    except OSError as exc:      # another file system: a copy, whole or not at all
+        if exc.errno != errno.EXDEV:
+            raise
+        whole(to, lambda temporary: shutil.copyfile(T, temporary))
+        os.unlink(T)
+    return to
