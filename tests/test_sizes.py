@@ -129,7 +129,8 @@ def test_the_client_past_limits_memory_is_refused_by_the_model(capsys):
 def test_in_this_process_a_part_in_pieces_counts_whole():
     """In one process a part in pieces takes no less than whole (its pieces' columns and the
     cut's model beside each piece's stage): the estimate counts it whole, while a worker's
-    counts the piece."""
+    counts the piece, never above the part whole, below it on a large part (a worker's own
+    floor beside a small one's)."""
     cells = _cells([])
     alone = sizes.memory_need(load(PAD, COMPONENTS), cells)
     cut = sizes.memory_need(load(PAD, COMPONENTS + ["parts.disc.pieces=4"]), cells)
@@ -139,7 +140,9 @@ def test_in_this_process_a_part_in_pieces_counts_whole():
     on = sizes.memory_need(load(PAD, COMPONENTS + ["parts.disc.pieces=4"],
                                 Cluster(workers=2)), cells)
     assert on.worker_part == "disc" and on.worker == part_bytes(cells["disc"], 4)
-    assert on.worker < part_bytes(cells["disc"])
+    assert on.worker <= part_bytes(cells["disc"])
+    big = _cells(BIG)["disc"]
+    assert part_bytes(big, 4) < part_bytes(big, 2) < part_bytes(big)
 
 
 def test_the_synthesis_is_each_part_dofs_by_its_columns():

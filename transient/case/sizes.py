@@ -44,19 +44,21 @@ COLUMNS_CUTOFF = 32000.0
 ENTRIES_PER_DOF = 150
 # and beside them the coupling's dense reduced matrices and the process itself
 CLIENT_MARGIN = 0.5e9
-# a part in pieces: a piece's stage on a worker holds up to twice its share of the part (its
-# condensation on the cut and its extension beside its own factors), and the client the
-# cut's condensation dense (its stiffness and mass, then their inertia's LDL^T or the
-# stiffness' Cholesky factor and the Lanczos basis of reduce.cut), CUT_MATRICES of them;
-# the cut's dofs CUT_DOFS (pieces - 1) dofs^(2/3) of the part's, above
-# the cuts measured (docs/performance.md, "A part in pieces")
-PIECE_SHARE = 2.0
-CUT_MATRICES = 4
+# a part in pieces: a piece's stage on a worker holds the worker's process and libraries
+# (PIECE_FLOOR) and PIECE_SHARE times its share of the part (its factors, its fixed-cut modes
+# and its condensation on the cut); the client the cut's condensation dense, CUT_MATRICES of
+# its size at once (its stiffness, then its Cholesky factor in its place, its mass and their
+# inertia's LDL^T: reduce.cut); the cut's dofs CUT_DOFS (pieces - 1) dofs^(2/3) of the
+# part's. Each above what was measured, on the 4x pad_disc's disc and the 1M pad and disc's
+# (docs/performance.md, "A part in pieces", "The parts' bases and the pieces' columns in
+# files")
+PIECE_FLOOR = 2.2e9
+PIECE_SHARE = 1.0
+CUT_MATRICES = 3
 CUT_DOFS = 0.5
 # an embedded cluster's worker between its tasks: its process and what its pieces' columns
 # in files keep resident, which the client's stages (the cut, the synthesis) find beside them
-# ("The parts' bases and the pieces' columns in files")
-WORKER_IDLE = 1.5e9
+WORKER_IDLE = 2.5e9
 
 
 @dataclass(frozen=True)
@@ -124,12 +126,15 @@ def setup_bytes(cells):
 
 def part_bytes(cells, pieces=1):
     """Estimated peak memory [bytes] of one part's reduction on a worker: cells (count, nodes)
-    pairs of the part; in pieces (reduce.pieces), each piece's stage on a worker holds
-    PIECE_SHARE times its share of the part. In one process a part in pieces takes no less
-    than whole (its pieces' columns and the cut's model beside each piece's stage):
-    memory_need counts it whole."""
-    share = 1.0 if pieces == 1 else min(1.0, PIECE_SHARE / pieces)
-    return PART_BYTES_FLOOR + PART_BYTES_PER_ENTRY * entries(cells) * share
+    pairs of the part; in pieces (reduce.pieces), each piece's stage on a worker holds the
+    worker's own PIECE_FLOOR and PIECE_SHARE times its share of the part, never more than the
+    part whole. In one process a part in pieces takes no less than whole (its pieces' columns
+    and the cut's model beside each piece's stage): memory_need counts it whole."""
+    whole = PART_BYTES_FLOOR + PART_BYTES_PER_ENTRY * entries(cells)
+    if pieces == 1:
+        return whole
+    return min(whole, PIECE_FLOOR + PART_BYTES_PER_ENTRY * entries(cells) * PIECE_SHARE
+               / pieces)
 
 
 def cut_bytes(dofs, pieces):
