@@ -61,9 +61,9 @@ class Store:
         if isinstance(T, np.memmap):
             # the columns of a larger file of this store (a piece's A2 of its X): copied
             # out, that file's name goes (its mapping stays while it is referenced)
-            whole = Path(T.base.filename)
-            if whole.parent == self.folder and whole.exists():
-                whole.unlink()
+            larger = Path(T.base.filename)
+            if larger.parent == self.folder and larger.exists():
+                larger.unlink()
         return str(path)
 
     def mapped(self, T, to=None):
