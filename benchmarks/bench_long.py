@@ -60,7 +60,7 @@ def main(argv=None):
     parser.add_argument("--warm", action="store_true", help="compile the kernels first")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
-    from transient.io.history import summary
+    from transient.io.reading import summary
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "run.h5"
         if args.warm:

@@ -39,7 +39,7 @@ def main(argv=None):
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
-    from transient.io.history import summary
+    from transient.io.reading import summary
     case = ROOT / "cases" / "pad_disc.toml"
     rows = []
     for f in sorted(float(x) for x in args.dofs_factors.split(",")):

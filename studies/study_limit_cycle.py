@@ -190,7 +190,7 @@ def analyse(path, args, t_stop):
     """The limit cycle of one stored run over [cycle_from, t_stop] (see the module
     docstring)."""
     from transient.contact.friction import STATUS_NAMES, contact_status
-    from transient.io.history import summary
+    from transient.io.reading import summary
     info = summary(path)
     meta = info["meta"]
     out = {"file": str(path), "status": info["status"], "dt": meta["dt"],
@@ -442,7 +442,7 @@ def main(argv=None):
             if failed and cached(path, args.case, sets) is None:
                 sys.exit(f"transient run failed at dt = {dt!r}: {failed}")
         paths.append(path)
-    from transient.io.history import summary
+    from transient.io.reading import summary
     # one window for every run: up to where the shortest (an aborted one) stops
     t_stop = min([args.t_end] + [summary(p)["t_end"] for p in paths])
     runs = [analyse(p, args, t_stop) for p in paths]

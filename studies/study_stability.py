@@ -277,7 +277,7 @@ def inspect(path):
     path = Path(path)
     if not path.exists():
         return None
-    from transient.io.history import summary
+    from transient.io.reading import summary
     with h5py.File(path, "r", locking=False) as f:
         status = f.attrs.get("status")
         status = status.decode() if isinstance(status, bytes) else status

@@ -11,7 +11,7 @@ import vtk
 from transient.case.loading import load
 from transient.cli import main
 from transient.io.export import exported_rows
-from transient.io.history import CASE_TEXT
+from transient.io.attributes import CASE_TEXT
 from transient.model.model import build_model
 from transient.integration import run
 

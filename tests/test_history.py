@@ -11,7 +11,10 @@ import pytest
 
 from transient.cli.report import format_summary
 from transient.errors import RunAborted
-from transient.io.history import CASE_TEXT, History, energy_drift, load_checkpoint, summary
+from transient.io.attributes import CASE_TEXT
+from transient.io.history import History
+from transient.dynamics.energy import drift as energy_drift
+from transient.io.reading import load_checkpoint, summary
 
 ROOT = Path(__file__).resolve().parent.parent
 M = 7

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from transient.cli import main
-from transient.io.history import summary
+from transient.io.reading import summary
 from transient.io.lock import writing
 
 CASES = Path(__file__).resolve().parent.parent / "cases"

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from transient.cli import main
-from transient.io.history import summary
+from transient.io.reading import summary
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 ONE_THREAD = {"OPENBLAS_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",

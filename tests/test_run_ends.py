@@ -12,7 +12,7 @@ from test_resume import assert_same, series
 from test_validation import BAR
 from transient.cli import main
 from transient.dynamics.plan import Plan
-from transient.io.history import summary
+from transient.io.reading import summary
 from transient.io.stored import open_history
 from transient.integration import run
 

@@ -9,7 +9,7 @@ import pytest
 from transient.case.loading import load
 from transient.cli import main
 from transient.dynamics.chunks import buffer
-from transient.io.history import summary
+from transient.io.reading import summary
 from transient.model.model import build_model
 from transient.stages import prepare, stepper
 from transient.studies.modal import compare

@@ -17,7 +17,7 @@ from test_validation import BAR
 from transient.case.loading import load
 from transient.stability.linearize import linearized
 from transient.cli import main
-from transient.io.history import summary
+from transient.io.reading import summary
 from transient.integration import run
 from transient.stages import prepare
 

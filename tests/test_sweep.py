@@ -14,7 +14,7 @@ import pytest
 import transient
 from transient.cli import main
 from transient.errors import CaseError
-from transient.io.history import summary
+from transient.io.reading import summary
 from transient.campaign.campaign import THREAD_ENV
 from transient.campaign.variants import make_variants, parse_parameter, variant_name
 

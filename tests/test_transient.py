@@ -9,7 +9,7 @@ import pytest
 
 from transient.case.loading import load
 from transient.cli import main
-from transient.io.history import summary
+from transient.io.reading import summary
 from transient.integration import run
 
 CASES = Path(__file__).resolve().parent.parent / "cases"

@@ -16,7 +16,8 @@ from .case.checks import check_transient
 from .dynamics.chunks import stop_requests, threaded_blocks
 from .dynamics.energy import Balance
 from .dynamics.plan import Plan
-from .io.history import CASE_TEXT, History
+from .io.attributes import CASE_TEXT
+from .io.history import History
 from .io.lock import writing
 from .io.resume import resumed
 from .io.series import layout, series

@@ -134,7 +134,8 @@ def _stored_run(path):
     """(root attributes, steps of its checkpoint or None) of a history."""
     import h5py
     from ..io.attributes import read_attrs
-    from ..io.history import CHECKPOINT, SYSTEM, load_checkpoint
+    from ..io.history import CHECKPOINT, SYSTEM
+    from ..io.reading import load_checkpoint
     with h5py.File(path, "r", locking=False) as f:
         meta = read_attrs(f.attrs)
         # a resume continues the system the history stores, from its checkpoint

@@ -1,4 +1,4 @@
-"""`transient info`'s table: a history's summary (io.history.summary) as text."""
+"""`transient info`'s table: a history's summary (io.reading.summary) as text."""
 import json
 
 

@@ -10,24 +10,25 @@ closes it before returning, so between chunks the file on disk is complete and a
 (h5py, h5dump, `transient info`) can open it without SWMR. The writer opens it without HDF5's
 file lock: a reader that keeps the file open never stops the run; the price is that a reader
 opening it during the few milliseconds of a write may fail and should retry. A killed run
-leaves the file readable with every appended chunk and status 'running'. (SWMR was not used: it
+leaves the file readable with every appended chunk and status 'running' (or with its last
+chunk cut short, which its first reader repairs: io.reading). (SWMR was not used: it
 needs SWMR-aware readers, forbids new attributes while writing, and a crashed SWMR file must be
 repaired with h5clear before it opens normally.) In the writing process, close any reader
 before the next append: HDF5 will not reopen for writing a file it holds open read-only.
 
 The root attribute `rows` counts the complete rows and is written last in `append`: rows past
-it (an append interrupted half way) are cut off by `finish` and `open_for_resume`.
+it (an append interrupted half way) are cut off by `finish` and `open_for_resume`. Readers
+go through `io.reading`, which checks every array first.
 """
+import zlib
 from pathlib import Path
 
 import h5py
 import numpy as np
 
-from ..dynamics.energy import drift as energy_drift
 from ..errors import DamagedHistory, RunAborted, interrupted
-from ..kernels.codes import ENERGY_TERMS
-from .attributes import CASE_TEXT, read_attrs, short, write_attrs
-from .checksums import FILTER, create, verify
+from .attributes import short, write_attrs
+from .checksums import FILTER, create
 from .systems import GROUP as SYSTEM, write_system
 
 CHUNK_BYTES = 2 ** 16      # 64 kB chunks: with the checksum (io.checksums) an append reads,
@@ -36,10 +37,12 @@ CHUNK_BYTES = 2 ** 16      # 64 kB chunks: with the checksum (io.checksums) an a
 #                            for them; a row read decodes its chunk whole, too
 CHECKPOINT = "checkpoint"       # a soft link to the last checkpoint written whole
 CHECKPOINTS = "checkpoints"     # its two slots, written in turn
+TAILS = "tails"            # a slot's attribute: [first row of its last chunk, CRC] of each
+#                            series, in the order of their sorted names
 GEOMETRY = "geometry"      # fixed arrays written once (contact points, weights, normals)
 
 
-def _open(path, mode):
+def open_history(path, mode):
     return h5py.File(path, mode, locking=False)
 
 
@@ -86,7 +89,7 @@ class History:
         for reserved in (CHECKPOINT, CHECKPOINTS, GEOMETRY, SYSTEM):
             if reserved in shapes or any(n.startswith(reserved + "/") for n in shapes):
                 raise ValueError(f"series name '{reserved}' is reserved")
-        with _open(path, "w") as f:
+        with open_history(path, "w") as f:
             for name, shape in shapes.items():
                 rows = _chunk_rows(shape, expected_rows)
                 # zero-length row axes cannot be chunked as fixed dimensions
@@ -112,27 +115,27 @@ class History:
         attributes to store anew (what the resumed run changed: its case, t_end...).
         """
         path = Path(path)
-        with _open(path, "r+") as f:
-            rows = _rows(f, path)
-            if CHECKPOINT in f and 0 <= _checkpoint_rows(f) < rows:
-                rows = _checkpoint_rows(f)
-            layout = _series_shapes(f)
-            _truncate(f, layout, rows)
+        with open_history(path, "r+") as f:
+            rows = stored_rows(f, path)
+            if CHECKPOINT in f and 0 <= checkpoint_rows(f) < rows:
+                rows = checkpoint_rows(f)
+            layout = series_shapes(f)
+            truncate_series(f, layout, rows)
             write_attrs(f.attrs, meta or {})
             f.attrs["status"] = "running"
         return cls(path, layout)
 
     def rows(self):
         """Number of complete rows stored."""
-        with _open(self.path, "r") as f:
-            return _rows(f, self.path)
+        with open_history(self.path, "r") as f:
+            return stored_rows(f, self.path)
 
     def append(self, rows):
         """Append n rows to every series: rows maps each series name to an array (n, *shape)."""
         self._check_open()
         arrays = self._check_rows(rows)
         n = len(next(iter(arrays.values()), ()))
-        with _open(self.path, "r+") as f:
+        with open_history(self.path, "r+") as f:
             start = int(f.attrs["rows"])
             for name, value in arrays.items():
                 ds = f[name]
@@ -155,7 +158,7 @@ class History:
         for name in arrays:
             if "/" in name:
                 raise ValueError(f"checkpoint name '{name}': no '/' allowed")
-        with _open(self.path, "r+") as f:
+        with open_history(self.path, "r+") as f:
             link = f.get(CHECKPOINT, getlink=True)
             last = link.path if isinstance(link, h5py.SoftLink) else ""
             slot = f"/{CHECKPOINTS}/{'1' if last.endswith('/0') else '0'}"
@@ -172,7 +175,11 @@ class History:
                     if old is not None:
                         del group[name]
                     create(group, name, value)
-            group.attrs["rows"] = f.attrs["rows"]
+            rows = int(f.attrs["rows"])
+            # numbers of one shape: rewritten in place, the file does not grow
+            group.attrs.modify(TAILS, np.array([tail(f[name], rows)
+                                                for name in sorted(self.layout)], np.int64))
+            group.attrs["rows"] = rows
             f.flush()
             if link is not None:
                 del f[CHECKPOINT]
@@ -182,14 +189,14 @@ class History:
         """Drop the rows past the first `rows` (a subdivided step goes back to a row before
         them); the checkpoint's rows stay."""
         self._check_open()
-        with _open(self.path, "r+") as f:
-            _truncate(f, self.layout, rows)
+        with open_history(self.path, "r+") as f:
+            truncate_series(f, self.layout, rows)
 
     def annotate(self, meta):
         """Store root attributes (name -> value, as `create`'s meta) while the run goes: what
         it learns on the way (a subdivided step, its end row)."""
         self._check_open()
-        with _open(self.path, "r+") as f:
+        with open_history(self.path, "r+") as f:
             write_attrs(f.attrs, meta)
 
     def finish(self, status, timings=None):
@@ -206,8 +213,8 @@ class History:
         if status != "complete" and not status.startswith("aborted: "):
             raise ValueError(f"status: expected 'complete' or 'aborted: <reason>', got "
                              f"{status!r}")
-        with _open(self.path, "r+") as f:
-            _truncate(f, self.layout, int(f.attrs["rows"]))
+        with open_history(self.path, "r+") as f:
+            truncate_series(f, self.layout, int(f.attrs["rows"]))
             if timings is not None:
                 write_attrs(f.attrs, {"timings": timings})
             f.attrs["status"] = status
@@ -242,19 +249,26 @@ class History:
         return arrays
 
 
+def tail(ds, rows):
+    """[first row, CRC-32] of the rows below `rows` in the chunk of series ds that holds row
+    `rows`: the committed rows the next append rewrites in place."""
+    start = rows - rows % ds.chunks[0]
+    return [start, zlib.crc32(np.ascontiguousarray(ds[start:rows]).tobytes())]
+
+
 def _chunk_rows(shape, expected_rows):
     rows = max(1, CHUNK_BYTES // (8 * max(1, int(np.prod(shape)))))
     return min(rows, max(1, expected_rows)) if expected_rows else rows
 
 
-def _rows(f, path):
+def stored_rows(f, path):
     """The complete rows, checked against the series: a damaged count or series is an error."""
     if "rows" not in f.attrs:
         raise DamagedHistory("attribute rows", "missing (not a history written by transient?)")
     value = f.attrs["rows"]
     if not isinstance(value, (int, np.integer)) or value < 0:
         raise DamagedHistory("attribute rows", f"{short(value)}, expected a count")
-    for name in _series_shapes(f):
+    for name in series_shapes(f):
         ds = f[name]
         # a row axis of numbers is what every reader indexes and plots
         if ds.ndim == 0 or ds.dtype.kind not in "fiu":
@@ -268,39 +282,7 @@ def _rows(f, path):
     return int(value)
 
 
-def verify_history(f, rows):
-    """Read every checksummed array of the open history f that its readers may take (the
-    series' `rows` complete rows, the checkpoint linked, the system and geometry): a
-    DamagedHistory names the first whose data fail their checksum (io.checksums)."""
-    link = f.get(CHECKPOINT, getlink=True)
-    linked = link.path.strip("/") if isinstance(link, h5py.SoftLink) else ""
-    # the other slot may be one a kill cut short while it was written: never read
-    slots = f.get(CHECKPOINTS)
-    skip = tuple(f"{CHECKPOINTS}/{slot}/" for slot in
-                 (slots if isinstance(slots, h5py.Group) else ())
-                 if f"{CHECKPOINTS}/{slot}" != linked)
-    verify(f, rows, _series_shapes(f), skip)
-
-
-def check_appendable(f, layout):
-    """Raise DamagedHistory unless the series of the open file f are those of layout (name ->
-    shape of one row), each resizable along its rows as `create` makes them: what
-    `open_for_resume` and `append` rely on."""
-    stored = _series_shapes(f)
-    for name in sorted(set(stored) | set(layout)):
-        if name not in layout:
-            raise DamagedHistory(name, "not a series the run writes")
-        if name not in stored:
-            raise DamagedHistory(name, "missing, the run writes it")
-        if stored[name] != tuple(layout[name]):
-            raise DamagedHistory(name, f"rows of shape {stored[name]}, expected "
-                                 f"{tuple(layout[name])}")
-        if f[name].chunks is None or f[name].maxshape[0] is not None:
-            raise DamagedHistory(name, "a dataset that cannot grow (not written by "
-                                 "transient)")
-
-
-def _series_shapes(f):
+def series_shapes(f):
     shapes = {}
 
     def visit(name, obj):
@@ -314,7 +296,7 @@ def _series_shapes(f):
     return shapes
 
 
-def _truncate(f, layout, rows):
+def truncate_series(f, layout, rows):
     for name in layout:
         if f[name].shape[0] != rows:
             f[name].resize(rows, axis=0)
@@ -331,21 +313,7 @@ def _reason(exc):
     return f"{type(exc).__name__}: {lines[0]}" if lines else type(exc).__name__
 
 
-def load_checkpoint(path):
-    """The state stored by the last `History.checkpoint` (name -> array, bit for bit)."""
-    with _open(path, "r") as f:
-        if CHECKPOINT not in f:
-            raise ValueError(f"{path}: no checkpoint")
-        if _checkpoint_rows(f) < 0:
-            raise ValueError(f"{path}: the checkpoint was interrupted while being written")
-        group = f[CHECKPOINT]
-        for name in group:
-            if not isinstance(group[name], h5py.Dataset):
-                raise DamagedHistory(f"{CHECKPOINT}/{name}", "a group, expected an array")
-        return {name: group[name][()] for name in group}
-
-
-def _checkpoint_rows(f):
+def checkpoint_rows(f):
     """The rows the checkpoint of the open file f was taken at, -1 while it is written."""
     group = f[CHECKPOINT]
     value = group.attrs.get("rows") if isinstance(group, h5py.Group) else None
@@ -353,32 +321,3 @@ def _checkpoint_rows(f):
         raise DamagedHistory(f"{CHECKPOINT} attribute rows", f"{short(value)}, expected a "
                              "count")
     return int(value)
-
-
-def summary(path):
-    """What `transient info` shows of a history file, as JSON-ready data.
-
-    Returns
-    -------
-    dict
-        path, status, steps (rows stored), t_end [s] (None without rows or /time), timings
-        (dict), energy_drift (`energy_drift` of the /energy/<term> series, None without them),
-        series (name -> shape of one row), meta (the other root attributes, the case text
-        left out), file_size [bytes].
-    """
-    path = Path(path)
-    with _open(path, "r") as f:
-        rows = _rows(f, path)
-        verify_history(f, rows)
-        series = {name: list(shape) for name, shape in _series_shapes(f).items()}
-        meta = read_attrs(f.attrs)
-        t_end = float(f["time"][rows - 1]) if rows and "time" in series else None
-        drift = energy_drift({name: f[f"energy/{name}"][:rows] for name in ENERGY_TERMS
-                              if f"energy/{name}" in series})
-    meta.pop(CASE_TEXT, None)
-    meta.pop("rows")
-    if "status" not in meta:
-        raise DamagedHistory("attribute status", "missing")
-    return {"path": str(path), "status": meta.pop("status"), "steps": rows, "t_end": t_end,
-            "timings": meta.pop("timings", {}), "energy_drift": drift, "series": series,
-            "meta": meta, "file_size": path.stat().st_size}

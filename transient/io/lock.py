@@ -14,7 +14,7 @@ from pathlib import Path
 import h5py
 
 from ..errors import CaseError
-from .history import CASE_TEXT
+from .attributes import CASE_TEXT
 
 
 def is_history(path):

@@ -13,7 +13,8 @@ from ..kernels.layout import ACC_SLOTS, STATE_ROWS
 from ..errors import CaseError, DamagedHistory
 from ..kernels.codes import BILATERAL, TABLE
 from .attributes import read_attrs
-from .history import CHECKPOINT, _rows, check_appendable, load_checkpoint, verify_history
+from .history import CHECKPOINT
+from .reading import check_appendable, load_checkpoint, verified
 from .series import layout
 from .stored import run_case
 from .systems import GROUP, read_system
@@ -33,10 +34,12 @@ class Resumed:
 
 
 def resumed(path, case):
-    """The run stored at path, to continue with case (which must be the one it ran)."""
+    """The run stored at path, to continue with case (which must be the one it ran); the
+    caller holds the history's lock (io.lock.writing), under which a killed run's cut-short
+    append is repaired (io.reading.verified)."""
     try:
+        verified(path, held=True)
         with h5py.File(path, "r", locking=False) as f:
-            verify_history(f, _rows(f, path))
             meta = read_attrs(f.attrs)
             if GROUP not in f or CHECKPOINT not in f:
                 raise CaseError(path, "--resume", "the history keeps no system or checkpoint "

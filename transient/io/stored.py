@@ -11,7 +11,8 @@ import numpy as np
 
 from ..errors import CaseError, DamagedHistory
 from .attributes import CASE_TEXT, read_attrs
-from .history import GEOMETRY, summary
+from .history import GEOMETRY
+from .reading import summary
 
 
 @dataclass(frozen=True)
@@ -25,7 +26,7 @@ class Stored:
     path: Path
     rows: int            # complete rows
     series: dict         # name -> shape of one row
-    meta: dict           # root attributes decoded (`history.summary`), status included
+    meta: dict           # root attributes decoded (`reading.summary`), status included
 
     def uniform(self):
         """This history without its end row when that row is off the rows' grid (a run whose
@@ -181,7 +182,7 @@ def run_case(path, meta):
 
 
 def read_summary(path):
-    """`history.summary` of the file at path; a missing or foreign file is a CaseError."""
+    """`reading.summary` of the file at path; a missing or foreign file is a CaseError."""
     path = Path(path)
     if not path.exists():
         raise CaseError(path, "", "file not found")
