@@ -5,6 +5,7 @@ import pytest
 
 from transient.case.loading import load
 from transient.reduce.engine import Engine
+from transient.reduce.parts import PartTask
 from transient.reduce.store import Store
 from transient.stages import prepare
 
@@ -70,10 +71,14 @@ def test_a_fresh_part_is_written_once_into_the_cache(tmp_path, monkeypatch, fold
     """Through --cache a part reduced fresh goes from the store to the cache's file (renamed,
     or written there by a store in memory): its basis saved once, not to the store and again
     to the cache; the store left empty, the cache read back as the same numbers."""
-    saves = []
+    saves, digests = [], []
     save = np.save
     monkeypatch.setattr(np, "save", lambda file, a, *args, **kwargs: (
         saves.append(np.shape(a)), save(file, a, *args, **kwargs))[1])
+    # a task's key, asked by the cache's lookup, its file names and its writing, hashed once
+    digest = PartTask._digest
+    monkeypatch.setattr(PartTask, "_digest", lambda task: (digests.append(task.name),
+                                                           digest(task))[1])
     store = Store(tmp_path / "store") if folder else Store()
     if folder:
         store.folder.mkdir()
@@ -81,6 +86,7 @@ def test_a_fresh_part_is_written_once_into_the_cache(tmp_path, monkeypatch, fold
     fresh = prepare(case, analysis=True, parts=Engine(cache=tmp_path / "cache", store=store))
     shapes = [T.shape for _, T in fresh.basis[0].parts]
     assert sorted(saves) == sorted(shapes)
+    assert sorted(digests) == ["disc", "pad"]
     assert folder is False or list(store.folder.iterdir()) == []
     bases = sorted((tmp_path / "cache").glob("part-*.T.npy"))
     assert len(bases) == 2 and sorted(np.load(b).shape for b in bases) == sorted(shapes)

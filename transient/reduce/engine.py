@@ -112,7 +112,13 @@ def _basis_path(folder, task):
     """The file of a task's basis in a cache folder (made if need be)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    return folder / f"part-{task.key()}.T.npy"
+    return _files(folder, task)[1]
+
+
+def _files(folder, task):
+    """(its reduced matrices' file, its basis' file) of a task in a cache folder."""
+    stem = folder / f"part-{task.key()}"
+    return stem.with_suffix(".npz"), stem.with_suffix(".T.npy")
 
 
 def cached(runner, folder):
@@ -126,8 +132,7 @@ def cached(runner, folder):
     def run(tasks, done=None):
         out, todo = [None] * len(tasks), []
         for i, task in enumerate(tasks):
-            path = folder / f"part-{task.key()}.npz"
-            basis = path.with_suffix(".T.npy")
+            path, basis = _files(folder, task)
             if path.is_file() and basis.is_file():
                 with np.load(path) as data:
                     out[i] = PartBasis(task.name, np.load(basis, mmap_mode="r"), data["Kr"],
@@ -140,8 +145,7 @@ def cached(runner, folder):
                 todo.append(i)
         for i, p in zip(todo, runner([tasks[i] for i in todo], done)):
             folder.mkdir(parents=True, exist_ok=True)
-            path = folder / f"part-{tasks[i].key()}.npz"
-            basis = path.with_suffix(".T.npy")
+            path, basis = _files(folder, tasks[i])
             if not (isinstance(p.T, np.memmap)
                     and Path(p.T.filename).resolve() == basis.resolve()):
                 whole(basis, lambda t: saved(t, np.save, p.T))

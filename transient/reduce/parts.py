@@ -258,7 +258,14 @@ class PartTask:
 
     def key(self):
         """The hex digest of what the reduction is made from (not the part's name: two equal
-        parts share it)."""
+        parts share it), hashed once a task: the cells and arrays of a large part take a
+        while, and the cache, its file names and the cluster's task names each ask."""
+        if "_key" not in self.__dict__:
+            # frozen: the digest is no field, set past the dataclass' guard
+            object.__setattr__(self, "_key", self._digest())
+        return self.__dict__["_key"]
+
+    def _digest(self):
         h = hashlib.sha256()
         for text in _source_texts():
             h.update(text)

@@ -353,8 +353,8 @@ class PiecesTask(PartTask):
         with blas.one_thread():
             return pieces_basis(self, where, store)
 
-    def key(self):
-        h = hashlib.sha256(super().key().encode())
+    def _digest(self):
+        h = hashlib.sha256(super()._digest().encode())
         for text in _texts():
             h.update(text)
         for a in (self.piece_of, self.cell_piece):
