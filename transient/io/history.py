@@ -120,9 +120,12 @@ class History:
             if CHECKPOINT in f and 0 <= checkpoint_rows(f) < rows:
                 rows = checkpoint_rows(f)
             layout = series_shapes(f)
+            # running on disk before the cut rewrites a chunk in place: a kill inside it
+            # leaves a history its first reader repairs (io.reading)
+            f.attrs["status"] = "running"
+            f.flush()
             truncate_series(f, layout, rows)
             write_attrs(f.attrs, meta or {})
-            f.attrs["status"] = "running"
         return cls(path, layout)
 
     def rows(self):
