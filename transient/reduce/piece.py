@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..kernels.sparse import csr_dot
 from ..model.dofs import shifted
 from ..solve.linsolve import FactorizationError, factorize
 from ..solve.lowrank import block_columns
@@ -79,7 +80,7 @@ class Piece:
             Psi = -solve(KG[:, cols].toarray())
             S[:, cols] = KGt @ Psi
             # Psi^T x = -K_GI K_II^-1 x: Psi^T M_IG + Psi^T M_II Psi in one solve
-            Y = self.MG[:, cols].toarray() + self.M @ Psi
+            Y = self.MG[:, cols].toarray() + csr_dot(self.M, Psi)
             C[:, cols] = Phi.T @ Y
             Mh[:, cols] = MGt @ Psi - KGt @ solve(Y)
         # only the loads that reach the piece: one away from the contact has no field's rows,
@@ -117,7 +118,7 @@ class Piece:
         for start in range(0, c, width):
             cols = slice(start, start + width)
             ext[:, cols] = -solve(KG @ V[:, cols])
-            X[:, a + start:a + start + width] = solve(self.M @ ext[:, cols]
+            X[:, a + start:a + start + width] = solve(csr_dot(self.M, ext[:, cols])
                                                       + self.MG @ V[:, cols])
         solve = None
         A2 = with_statics(X, a, self.M)
@@ -135,10 +136,10 @@ class Piece:
             AXA, AXW, WXW = np.empty((a, a)), np.empty((a, c)), np.empty((c, c))
             for start in range(0, a, width):
                 cols = slice(start, start + width)
-                AXA[:, cols] = A.T @ (X @ A[:, cols])
+                AXA[:, cols] = A.T @ csr_dot(X, A[:, cols])
             for start in range(0, c, width):
                 cols = slice(start, start + width)
-                XW = X @ ext[:, cols] + XG @ V[:, cols]
+                XW = csr_dot(X, ext[:, cols]) + XG @ V[:, cols]
                 AXW[:, cols] = A.T @ XW
                 WXW[:, cols] = ext.T @ XW + V.T @ (XG.T @ ext[:, cols])
             out.append((AXA, AXW, WXW))
