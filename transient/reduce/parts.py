@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+from ..kernels.sparse import csr_dot
 from ..model.dofs import shifted
 from ..model.partcells import PartCells
 from .. import blas, progress
@@ -124,7 +125,7 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
     width = block_columns(len(X))   # columns solved, or multiplied by K or M, at a time
     X[:, :m] = modes.shapes
     Phi, frequencies, modes = X[:, :m], modes.frequencies, None
-    MPhi = M @ Phi
+    MPhi = csr_dot(M, Phi)
 
     def beyond(b):
         """(K - sigma M)^-1 beyond the modes, P^T (K - sigma M)^-1 P with P = I - M Phi Phi^T,
@@ -172,7 +173,7 @@ def part_basis(name, K, M, interface, loads, fmax, shift_hz, tol, backend="auto"
     Kr = np.empty((T.shape[1], T.shape[1]))
     for start in range(0, T.shape[1], width):     # no n x r product of K beside T
         cols = slice(start, start + width)
-        Kr[:, cols] = T.T @ (K @ T[:, cols])
+        Kr[:, cols] = T.T @ csr_dot(K, T[:, cols])
     lap("orthonormalization")
     return PartBasis(name, T, 0.5 * (Kr + Kr.T), frequencies, n_shapes,
                      int(loads.shape[1]), seconds, mu, n_loads)
@@ -203,14 +204,14 @@ def with_statics(X, m, M):
     Phi, S = X[:, :m], X[:, m:]
     if not S.shape[1]:
         return Phi
-    MPhi = M @ Phi
+    MPhi = csr_dot(M, Phi)
     for _ in range(2):
         _take_out(S, Phi, MPhi)
     G = np.empty((S.shape[1], S.shape[1]))
     width = block_columns(len(S))
     for start in range(0, S.shape[1], width):      # no n x k product of M beside S
         cols = slice(start, start + width)
-        G[:, cols] = S.T @ (M @ S[:, cols])
+        G[:, cols] = S.T @ csr_dot(M, S[:, cols])
     norms = np.sqrt(np.maximum(np.diag(G), 0.0))
     big = norms > 1e-12 * norms.max()
     if not big.any():          # no load on the part and no interface direction kept
