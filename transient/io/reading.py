@@ -11,6 +11,7 @@ CRC, written again whole, the rows after the checkpoint dropped, which a resume 
 """
 import fcntl
 import zlib
+from contextlib import contextmanager
 from pathlib import Path
 
 import h5py
@@ -64,25 +65,29 @@ def _cut_tails(f):
     return rows, cut
 
 
+@contextmanager
 def verified(path, held=False):
-    """The complete rows of the history at path, every array its readers may take checked
-    against its checksum; a killed run's history whose last append was cut short is repaired
-    first (module docstring), under the writer's lock (held: the caller holds it already), and
-    reads as its checkpoint's rows. A DamagedHistory otherwise."""
+    """(f, rows): the history at path open read-only and its complete rows, every array its
+    readers may take checked against its checksum; a killed run's history whose last append
+    was cut short is repaired first (module docstring), under the writer's lock (held: the
+    caller holds it already), and reads as its checkpoint's rows. A DamagedHistory
+    otherwise."""
     with open_history(path, "r") as f:
         rows = stored_rows(f, path)
         try:
             verify_history(f, rows)
-            return rows
         except DamagedHistory:
             found = _cut_tails(f)
             if not found or not found[1]:
                 raise
+        else:
+            yield f, rows
+            return
     _repair(path, held)
     with open_history(path, "r") as f:
         rows = stored_rows(f, path)
         verify_history(f, rows)
-        return rows
+        yield f, rows
 
 
 def _repair(path, held):
@@ -169,8 +174,7 @@ def summary(path):
         left out), file_size [bytes].
     """
     path = Path(path)
-    rows = verified(path)
-    with open_history(path, "r") as f:
+    with verified(path) as (f, rows):
         series = {name: list(shape) for name, shape in series_shapes(f).items()}
         meta = read_attrs(f.attrs)
         t_end = float(f["time"][rows - 1]) if rows and "time" in series else None

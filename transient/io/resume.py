@@ -4,7 +4,6 @@ given to resume must be the one stored, but for the keys a resume may change
 (case.compare.RESUMABLE); anything else is refused by name."""
 from dataclasses import dataclass
 
-import h5py
 import numpy as np
 
 from ..case.compare import RESUMABLE, changed
@@ -38,8 +37,7 @@ def resumed(path, case):
     caller holds the history's lock (io.lock.writing), under which a killed run's cut-short
     append is repaired (io.reading.verified)."""
     try:
-        verified(path, held=True)
-        with h5py.File(path, "r", locking=False) as f:
+        with verified(path, held=True) as (f, _):
             meta = read_attrs(f.attrs)
             if GROUP not in f or CHECKPOINT not in f:
                 raise CaseError(path, "--resume", "the history keeps no system or checkpoint "
