@@ -153,7 +153,7 @@ def test_a_kill_inside_an_append_is_repaired_by_the_first_reader(tmp_path):
     with h5py.File(path, "r") as f:     # whole again for every reader
         for name, value in before.items():
             np.testing.assert_array_equal(f[name][()], value)
-        assert f[name].id.get_num_chunks() == 1
+            assert f[name].id.get_num_chunks() == 1
 
 
 def test_a_cut_after_the_checkpoint_drops_the_rows_it_took(tmp_path):
