@@ -337,3 +337,29 @@ def test_a_setup_frees_the_factors_it_owns_after_its_last_solve(monkeypatch):
     assert np.isfinite(built.solver.solve0(np.ones(built.solver.n))).all()
     assert np.array_equal(owned.basis[0], shared.basis[0])
     assert np.array_equal(owned.basis[1], shared.basis[1])
+
+
+@pytest.mark.parametrize("shift", [0.0, 0.3 + 1e-3j])
+def test_pardiso_schur_complement_is_the_condensation_by_dense_solves(shift):
+    """schur_complement: A_GG - A_GI A_II^-1 A_IG of a real symmetric and of a complex
+    symmetric (not Hermitian) A on its last dofs, against NumPy's dense solve, each to
+    round-off of its own size; A_GG's diagonal stored as explicit zeros where it is empty."""
+    from transient.solve.linsolve import available, schur_complement
+    if "pardiso" not in available():
+        pytest.skip("PARDISO not installed")
+    rng = np.random.default_rng(3)
+    n, g = 300, 40
+    B = sp.random(n, n, density=0.02, random_state=4)
+    D = (B + B.T + sp.diags(rng.uniform(4, 5, n))).toarray() - shift * np.eye(n)
+    D[n - g:, n - g:] = 0.0
+    C = sp.coo_matrix(D)
+    diagonal = np.arange(n - g, n)
+    A = sp.csr_matrix((np.r_[C.data, np.zeros(g)], (np.r_[C.row, diagonal],
+                                                    np.r_[C.col, diagonal])), shape=(n, n))
+    A.sort_indices()
+    assert A[n - g:, n - g:].nnz == g
+    I, G = slice(0, n - g), slice(n - g, n)
+    want = D[G, G] - D[G, I] @ np.linalg.solve(D[I, I], D[I, G])
+    got = schur_complement(A, g)
+    assert got.dtype == want.dtype
+    assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()

@@ -97,6 +97,33 @@ def test_a_pieces_blocks_and_rows_made_a_block_at_a_time_are_those_made_whole(tm
     assert np.abs(held - whole).max() <= 1e-13 * np.abs(whole).max()
 
 
+def test_a_pieces_condensation_from_its_schur_complement_is_the_one_by_solves(monkeypatch):
+    """Piece.condensed with PARDISO's Schur complement of K - z M at the complex shift (S
+    and Mh from one factorization, C a solve a mode) and with Psi by solves (two for each cut
+    dof): the same condensation, each array to round-off of its own size, the piece's columns
+    the same."""
+    from transient.reduce import piece as piece_module
+    from transient.reduce.pieces import PIECE_REACH, _piece, _share
+    from transient.solve.linsolve import available
+    if "pardiso" not in available():
+        pytest.skip("PARDISO not installed")
+    _, task = disc_tasks(3)
+    cut = np.flatnonzero(task.piece_of == CUT)
+    I = np.flatnonzero(task.piece_of == 1)
+    piece, G = _piece(task.name, task.cells.subset(task.cell_piece == 1), I, cut,
+                      _share(task.interface, I, False), task.shift_hz, task.backend)
+    loads = sp.csr_matrix(task.loads)[I]
+    by_schur = piece.condensed(loads, PIECE_REACH * task.fmax)
+    monkeypatch.setattr(piece_module, "schur_by_pardiso", lambda backend: False)
+    by_solves = piece.condensed(loads, PIECE_REACH * task.fmax)
+    assert np.array_equal(by_schur[0], by_solves[0])
+    S, Mh, _, _, C = by_solves[1]
+    assert min(np.abs(S).max(), np.abs(Mh).max(), np.abs(C).max()) > 0
+    for got, want in zip(by_schur[1], by_solves[1]):
+        assert got.shape == want.shape
+        assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
+
+
 @pytest.mark.parametrize("pieces", [2, 3])
 def test_the_cut_leaves_no_piece_meeting_another(pieces):
     """Each piece's interior meets the cut alone (K, M and the interface's springs), the

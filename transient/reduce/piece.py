@@ -13,12 +13,17 @@ import scipy.sparse as sp
 
 from ..kernels.sparse import csr_dot
 from ..model.dofs import shifted
-from ..solve.linsolve import FactorizationError, factorize
+from ..solve.linsolve import FactorizationError, factorize, schur_by_pardiso, schur_complement
 from ..solve.lowrank import block_columns
 from ..solve.modes import normal_modes, shift_sigma
 from .basis import MODES_TOL
 from .fields import field_map
 from .parts import ROW_BLOCK, PartError, with_statics
+
+
+# the complex step of the condensation, relative to the piece's largest ratio of stiffness to
+# mass: far below round-off of every eigenvalue, far above underflow
+STEP = 1e-30
 
 
 @dataclass(frozen=True)
@@ -70,9 +75,60 @@ class Piece:
         solve, sigma = self.solver()
         modes = normal_modes(self.K, self.M, None, count=40, fmax=fmax, shift=-self.shift_hz,
                              solve=solve, tol=MODES_TOL)
+        Phi, g, by_schur = modes.shapes, self.KG.shape[1], schur_by_pardiso(self.backend)
         KG = (self.KG - sigma * self.MG).tocsc()
+        if by_schur:
+            # C^T = M_GI Phi + Psi^T M_II Phi = M_GI Phi - K_GI K_II^-1 M_II Phi: a solve a
+            # mode, the condensation itself from a factorization of its own (condensation)
+            C = (self.MG.T @ Phi - KG.T @ solve(csr_dot(self.M, Phi))).T
+        else:
+            S, Mh, C = self._condensation_by_solves(solve, KG, Phi)
+        # only the loads that reach the piece: one away from the contact has no field's rows,
+        # and its responses to them, and their relaxations on the cut, are zero
+        loads = sp.csc_matrix(loads)
+        loaded = np.flatnonzero(np.diff(loads.indptr))
+        m, width = Phi.shape[1], block_columns(self.K.shape[0])
+        X = np.empty((self.K.shape[0], m + len(loaded)), order="F")
+        X[:, :m] = Phi
+        for start in range(0, len(loaded), width):
+            cols = loaded[start:start + width]
+            X[:, m + start:m + start + len(cols)] = solve(loads[:, cols].toarray())
+        B = np.zeros((g, loads.shape[1]))
+        B[:, loaded] = -(KG.T @ X[:, m:])
+        omega2 = np.sign(modes.frequencies) * (2 * np.pi * modes.frequencies) ** 2
+        A = with_statics(X, m, self.M)
+        if by_schur:
+            solve = X = None     # its factors let go before the condensation's own
+            S, Mh = self.condensation(sigma)
+        return A, (S, Mh, B, omega2, C)
+
+    def condensation(self, sigma):
+        """(S, Mh) (g, g) of condensed(), by one complex symmetric factorization with the cut
+        last: the Schur complement of K - z M on the cut at z = sigma + i h is S(z) = -K_GI
+        K_II^-1 K_IG there, and dS/dz = -Mh, so that its real part is S and its imaginary
+        part -h Mh, both to round-off for h below round-off of the spectrum (the complex
+        step: no difference taken, nothing cancels). PARDISO forms it within the
+        factorization (iparm 36), where Psi by solves costs two solves for each cut dof."""
+        g = self.KG.shape[1]
+        scale = abs(self.K.diagonal()).max() / abs(self.M.diagonal()).max()
+        h = STEP * scale
+        zero = sp.csr_matrix((np.zeros(g), (np.arange(g), np.arange(g))), shape=(g, g))
+        Z = sp.bmat([[self.K - complex(sigma, h) * self.M,
+                      self.KG - complex(sigma, h) * self.MG], [None, zero]], format="csr")
+        Z.sort_indices()
+        X = schur_complement(Z, g)
+        Z = None
+        S = np.ascontiguousarray(X.real)
+        Mh = X.imag * (-1.0 / h)
+        X = None
+        return 0.5 * (S + S.T), 0.5 * (Mh + Mh.T)
+
+    def _condensation_by_solves(self, solve, KG, Phi):
+        """(S, Mh, C) of condensed() by Psi's solves, a block of cut dofs at a time: where
+        PARDISO is not (another backend asked), and the reference condensation() is tested
+        against."""
         KGt, MGt = KG.T.tocsr(), self.MG.T.tocsr()
-        g, Phi = KG.shape[1], modes.shapes
+        g = KG.shape[1]
         S, Mh, C = np.empty((g, g)), np.empty((g, g)), np.empty((Phi.shape[1], g))
         width = block_columns(self.K.shape[0])
         for start in range(0, g, width):
@@ -83,21 +139,7 @@ class Piece:
             Y = self.MG[:, cols].toarray() + csr_dot(self.M, Psi)
             C[:, cols] = Phi.T @ Y
             Mh[:, cols] = MGt @ Psi - KGt @ solve(Y)
-        # only the loads that reach the piece: one away from the contact has no field's rows,
-        # and its responses to them, and their relaxations on the cut, are zero
-        loads = sp.csc_matrix(loads)
-        loaded = np.flatnonzero(np.diff(loads.indptr))
-        m = Phi.shape[1]
-        X = np.empty((self.K.shape[0], m + len(loaded)), order="F")
-        X[:, :m] = Phi
-        for start in range(0, len(loaded), width):
-            cols = loaded[start:start + width]
-            X[:, m + start:m + start + len(cols)] = solve(loads[:, cols].toarray())
-        B = np.zeros((g, loads.shape[1]))
-        B[:, loaded] = -(KGt @ X[:, m:])
-        omega2 = np.sign(modes.frequencies) * (2 * np.pi * modes.frequencies) ** 2
-        return (with_statics(X, m, self.M),
-                (0.5 * (S + S.T), 0.5 * (Mh + Mh.T), B, omega2, C))
+        return 0.5 * (S + S.T), 0.5 * (Mh + Mh.T), C
 
     def extended(self, A, V, loads, empty=None):
         """((A2, ext), blocks): the cut's shapes V (g, c) extended into the interior, ext =

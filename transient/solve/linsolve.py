@@ -101,7 +101,26 @@ def factorize_complex(A):
     return solve
 
 
-COMPLEX_UNSYMMETRIC = 13     # PARDISO's mtype
+COMPLEX_UNSYMMETRIC = 13     # PARDISO's mtypes
+COMPLEX_SYMMETRIC = 6
+
+
+def schur_by_pardiso(backend):
+    """Whether Schur complements are formed by PARDISO (schur_complement): where it is
+    installed and the case did not ask for another backend."""
+    return backend in ("auto", "pardiso") and "pardiso" in available()
+
+
+def schur_complement(A, g):
+    """S = A_GG - A_GI A_II^-1 A_IG (g, g), dense, of a symmetric (real, or complex and not
+    Hermitian) sparse A on its last g rows and columns G, by PARDISO's partial factorization
+    (iparm 36): the cost of a factorization, where forming it by solves would take one solve
+    for each of G's dofs. The diagonal of A_GG must be stored (zeros explicit)."""
+    if "pardiso" not in available():
+        raise FactorizationError("a Schur complement needs PARDISO (pypardiso)")
+    complex_ = np.iscomplexobj(A.data)
+    solver = _Pardiso(A, COMPLEX_SYMMETRIC if complex_ else -2, phase=11, schur=g)
+    return solver.schur()
 
 
 class _Pardiso:
@@ -113,8 +132,8 @@ class _Pardiso:
     """
     backend = "pardiso"
 
-    def __init__(self, A, mtype, phase=12):
-        self._lib = mkl_runtime()
+    def __init__(self, A, mtype, phase=12, schur=0):
+        self._lib, self.perm, self.data = mkl_runtime(), None, None
         fn = self._lib.pardiso
         i32 = ctypes.POINTER(ctypes.c_int32)
         fn.argtypes = [ctypes.POINTER(ctypes.c_int64), i32, i32, i32, i32, i32, ctypes.c_void_p,
@@ -126,8 +145,16 @@ class _Pardiso:
             A = A.copy()
             A.sum_duplicates()
         self.n = A.shape[0]
-        self.dtype = np.complex128 if mtype == COMPLEX_UNSYMMETRIC else np.float64
-        if mtype == COMPLEX_UNSYMMETRIC:
+        self.dtype = (np.complex128 if mtype in (COMPLEX_UNSYMMETRIC, COMPLEX_SYMMETRIC)
+                      else np.float64)
+        if mtype == COMPLEX_SYMMETRIC:
+            # its upper triangle, real and imaginary parts through one pattern
+            A = A.astype(self.dtype, copy=False)
+            self.indptr, self.indices, real = csr_upper(A.indptr, A.indices,
+                                                        np.ascontiguousarray(A.data.real))
+            imag = csr_upper(A.indptr, A.indices, np.ascontiguousarray(A.data.imag))[2]
+            self.data = real + 1j * imag
+        elif mtype == COMPLEX_UNSYMMETRIC:
             A.sort_indices()
             self.indptr, self.indices = (A.indptr.astype(np.int32), A.indices.astype(np.int32))
             self.data = A.data.astype(self.dtype)
@@ -149,7 +176,23 @@ class _Pardiso:
         self.iparm[33] = max(1, int(self._lib.mkl_get_max_threads()))
         if phase == 11:
             self.iparm[17] = self.iparm[18] = -1     # report the factors' nonzeros and MFLOP
+        # the Schur complement's dofs marked in perm (not a user ordering: iparm 5 stays 0)
+        if schur:
+            self.perm = np.zeros(self.n, dtype=np.int32)
+            self.perm[self.n - schur:] = 1
+            self.iparm[35], self._schur = 1, schur
         self._call(phase, np.zeros(self.n, self.dtype), np.zeros(self.n, self.dtype))
+
+    def schur(self):
+        """The Schur complement on the dofs marked at the analysis, by the numerical
+        factorization (phase 22), which returns it dense in x; the factors then released."""
+        g = self._schur
+        x = np.zeros(g * g, self.dtype)
+        try:
+            self._call(22, np.zeros(self.n, self.dtype), x)
+        finally:
+            self._release()
+        return x.reshape(g, g)
 
     def _call(self, phase, b, x):
         err = ctypes.c_int32(0)
@@ -160,7 +203,9 @@ class _Pardiso:
                  ctypes.byref(one), ctypes.byref(ctypes.c_int32(self.mtype)),
                  ctypes.byref(ctypes.c_int32(phase)), ctypes.byref(ctypes.c_int32(self.n)),
                  self.data.ctypes.data, self.indptr.ctypes.data_as(i32),
-                 self.indices.ctypes.data_as(i32), None, ctypes.byref(ctypes.c_int32(nrhs)),
+                 self.indices.ctypes.data_as(i32),
+                 None if self.perm is None else self.perm.ctypes.data_as(i32),
+                 ctypes.byref(ctypes.c_int32(nrhs)),
                  self.iparm.ctypes.data_as(i32), ctypes.byref(ctypes.c_int32(0)),
                  b.ctypes.data, x.ctypes.data, ctypes.byref(err))
         if err.value != 0:
