@@ -52,6 +52,7 @@ def timed_solver(self):
         seconds["solves"] += time.perf_counter() - t0
         seconds["rhs"] += b.shape[1] if b.ndim > 1 else 1
         return x
+    counted.free = getattr(solve, "free", lambda: None)
     return counted, sigma
 
 

@@ -175,6 +175,10 @@ def test_reduced_complex_modes_match_the_full_model_mode_by_mode():
     # each part reduced on its own (reduce.components) holds the same modes
     parts = analyse(load(PAD, overrides + ['solver.reduction.method="components"']))
     assert "factorization" not in parts.stages
+    # its --json says each part's stages; the assembled path's has none to say
+    stages = parts.summary()["part_stages"]
+    assert set(stages) == {"disc", "pad"} and all(stages.values())
+    assert "part_stages" not in reduced.summary()
     pairs = pair_modes(full.modes, parts.modes, fmax)
     assert sum(p.unstable for p in pairs) >= 6
     assert [p for p in pairs if not p.within()] == []

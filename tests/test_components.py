@@ -192,11 +192,14 @@ def test_a_cached_part_is_read_back_and_only_a_changed_part_is_reduced_again(tmp
 def test_a_part_larger_than_a_worker_is_refused_naming_its_key(monkeypatch):
     """The cluster's smallest worker bounds each part's reduction (estimated from its cells):
     a part above it is refused before any is reduced, by the key that sizes it (a piece's
-    floor taken as a whole part's: a worker's own would leave no count of pieces of this
-    small disc below the disc whole)."""
+    floor taken as a whole part's, its share of the part whole and no dense term: a worker's
+    own floor would leave no count of pieces of this small disc below the disc whole, and a
+    smaller share no piece of it above the pad whole)."""
     from transient.case import sizes
     from transient.reduce.components import check_parts
     monkeypatch.setattr(sizes, "PIECE_FLOOR", sizes.PART_BYTES_FLOOR)
+    monkeypatch.setattr(sizes, "PIECE_SHARE", 1.0)
+    monkeypatch.setattr(sizes, "PIECE_DENSE", 0.0)
     case = load(PAD, PAD_DISC + ['solver.reduction.method="components"'])
     model = build_model(case)
     check_parts(case, model, None)

@@ -45,15 +45,19 @@ ENTRIES_PER_DOF = 150
 # and beside them the coupling's dense reduced matrices and the process itself
 CLIENT_MARGIN = 0.5e9
 # a part in pieces: a piece's stage on a worker holds the worker's process and libraries
-# (PIECE_FLOOR) and PIECE_SHARE times its share of the part (its factors, its fixed-cut modes
-# and its condensation on the cut); the client the cut's condensation dense, CUT_MATRICES of
-# its size at once (its stiffness, then its Cholesky factor in its place, its mass and their
-# inertia's LDL^T: reduce.cut); the cut's dofs CUT_DOFS (pieces - 1) dofs^(2/3) of the
-# part's. Each above what was measured, on the 4x pad_disc's disc and the 1M pad and disc's
-# (docs/performance.md, "A part in pieces", "The parts' bases and the pieces' columns in
-# files")
+# (PIECE_FLOOR), PIECE_SHARE times its share of the part (its factors, complex in its
+# condensation, and its fixed-cut modes) and PIECE_DENSE dense matrices of the cut's dofs it
+# touches (the complex Schur complement PARDISO forms and returns, its real and imaginary
+# parts made S and Mh, the last piece's still to be gathered: reduce.piece); the client the
+# cut's condensation dense, CUT_MATRICES of its size at once (its stiffness, then its Cholesky
+# factor in its place, its mass and their inertia's LDL^T: reduce.cut); the cut's dofs
+# CUT_DOFS (pieces - 1) dofs^(2/3) of the part's. Each above what was measured, on the 4x
+# pad_disc's disc and the 1M pad and disc's in 4 and 5 pieces (docs/performance.md, "A part in
+# pieces", "The parts' bases and the pieces' columns in files", "Where a piece's first stage
+# goes")
 PIECE_FLOOR = 2.2e9
-PIECE_SHARE = 1.0
+PIECE_SHARE = 0.6
+PIECE_DENSE = 9
 CUT_MATRICES = 3
 CUT_DOFS = 0.5
 # an embedded cluster's worker between its tasks: its process and what its pieces' columns
@@ -124,17 +128,25 @@ def setup_bytes(cells):
     return BYTES_PER_ENTRY * entries(cells)
 
 
-def part_bytes(cells, pieces=1):
+def part_bytes(cells, pieces=1, dofs=None):
     """Estimated peak memory [bytes] of one part's reduction on a worker: cells (count, nodes)
-    pairs of the part; in pieces (reduce.pieces), each piece's stage on a worker holds the
-    worker's own PIECE_FLOOR and PIECE_SHARE times its share of the part, never more than the
-    part whole. In one process a part in pieces takes no less than whole (its pieces' columns
-    and the cut's model beside each piece's stage): memory_need counts it whole."""
+    pairs of the part (dofs: its mesh's, where read); in pieces (reduce.pieces), each piece's
+    stage on a worker holds the worker's own PIECE_FLOOR, PIECE_SHARE times its share of the
+    part, and PIECE_DENSE dense matrices of the cut's dofs it touches (piece_cut_dofs), never
+    more than the part whole. In one process a part in pieces takes no less than whole (its
+    pieces' columns and the cut's model beside each piece's stage): memory_need counts it
+    whole."""
     whole = PART_BYTES_FLOOR + PART_BYTES_PER_ENTRY * entries(cells)
     if pieces == 1:
         return whole
+    n = dofs if dofs is not None else entries(cells) / ENTRIES_PER_DOF
     return min(whole, PIECE_FLOOR + PART_BYTES_PER_ENTRY * entries(cells) * PIECE_SHARE
-               / pieces)
+               / pieces + PIECE_DENSE * 8.0 * piece_cut_dofs(n, pieces) ** 2)
+
+
+def piece_cut_dofs(dofs, pieces):
+    """The cut's dofs a piece of a part of dofs touches: its share of the cut's two sides."""
+    return 2.0 * CUT_DOFS * (pieces - 1) * dofs ** (2.0 / 3.0) / pieces
 
 
 def cut_bytes(dofs, pieces):
@@ -207,7 +219,7 @@ def check_memory(case, cells, keys, dofs=None):
             return worker_budget(case, memory_need(case, cells, dofs, {**pieces, name: count}))
         check_workers(case, {n: c for n, c in cells.items() if n in keys}, budget,
                       f"a worker's share of limits.memory beside this process, "
-                      f"{case.cluster.workers} workers")
+                      f"{case.cluster.workers} workers", dofs)
 
 
 def check_disk(case, need, key):
@@ -240,11 +252,11 @@ def memory_need(case, cells, dofs=None, pieces=None):
         terms.append((f"the reduction of {largest}", part_bytes(cells[largest])))
         return Need(sum(b for _, b in terms), largest, terms=tuple(terms), disk=disk)
     pieces = pieces or {name: case.parts[name].pieces for name in cells}
-    worker = {name: part_bytes(c, pieces[name]) for name, c in cells.items()}
+    n = part_dofs(cells, dofs)
+    worker = {name: part_bytes(c, pieces[name], n[name]) for name, c in cells.items()}
     largest = max(worker, key=worker.get)
     if case.cluster.remote:
         terms.append(("the parts' bases side by side", bases))
-    n = part_dofs(cells, dofs)
     between = [(f"the cut of {name} in {pieces[name]} pieces", cut_bytes(n[name], pieces[name]))
                for name in cells if pieces[name] > 1]
     if case.cluster.workers:
@@ -268,16 +280,17 @@ def worker_budget(case, need):
     return min(case.limits.memory_bytes - need.beside, physical_memory()) / workers
 
 
-def check_workers(case, cells, budget, whose="a worker's memory"):
+def check_workers(case, cells, budget, whose="a worker's memory", dofs=None):
     """Refuse a part whose reduction's estimated memory (cells: (count, nodes) by part)
     exceeds budget(part, pieces) [B], a worker's with the part in that many pieces (whose:
     what bounds it, said), naming parts.NAME.pieces and the count that fits, if any."""
+    n = part_dofs(cells, dofs)
     for name, c in cells.items():
         pieces = case.parts[name].pieces
-        need, have = part_bytes(c, pieces), budget(name, pieces)
+        need, have = part_bytes(c, pieces, n[name]), budget(name, pieces)
         if need > have:
             fits = next((k for k in range(pieces + 1, 65)
-                         if part_bytes(c, k) <= budget(name, k)), None)
+                         if part_bytes(c, k, n[name]) <= budget(name, k)), None)
             more = (f"parts.{name}.pieces = {fits}" if fits else "workers with more memory")
             raise CaseError(case.path, f"parts.{name}.pieces", f"the part's reduction would "
                             f"take about {need / 1e9:.3g} GB{' a piece' if pieces > 1 else ''}, "

@@ -17,7 +17,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from ..case.sizes import cells_by_part, check_workers, peak_rss_gb
+from ..case.sizes import cells_by_part, check_workers, dofs_by_part, peak_rss_gb
 from ..contact.blocks import points_gram
 from ..contact.contactset import first_tangent
 from ..dynamics.critical import critical_tangent
@@ -273,7 +273,8 @@ def check_parts(case, model, budget):
     a worker's, naming the key that sizes it (case.sizes.check_workers); None: no bound here
     (limits.memory's, at the model, holds the largest part)."""
     if budget is not None:
-        check_workers(case, cells_by_part(model.parts), lambda name, pieces: budget)
+        check_workers(case, cells_by_part(model.parts), lambda name, pieces: budget,
+                      dofs=dofs_by_part(model.parts))
 
 
 def _preload(case, contacts, pairs, X, Kr, rows, constant):

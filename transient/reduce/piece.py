@@ -98,7 +98,10 @@ class Piece:
         omega2 = np.sign(modes.frequencies) * (2 * np.pi * modes.frequencies) ** 2
         A = with_statics(X, m, self.M)
         if by_schur:
-            solve = X = None     # its factors let go before the condensation's own
+            # its factors, and MKL's buffers that held them, let go before the
+            # condensation's complex ones (a piece's stage peaks there)
+            getattr(solve, "free", lambda: None)()
+            solve = X = None
             S, Mh = self.condensation(sigma)
         return A, (S, Mh, B, omega2, C)
 
@@ -109,19 +112,24 @@ class Piece:
         part -h Mh, both to round-off for h below round-off of the spectrum (the complex
         step: no difference taken, nothing cancels). PARDISO forms it within the
         factorization (iparm 36), where Psi by solves costs two solves for each cut dof."""
-        g = self.KG.shape[1]
-        scale = abs(self.K.diagonal()).max() / abs(self.M.diagonal()).max()
-        h = STEP * scale
-        zero = sp.csr_matrix((np.zeros(g), (np.arange(g), np.arange(g))), shape=(g, g))
-        Z = sp.bmat([[self.K - complex(sigma, h) * self.M,
-                      self.KG - complex(sigma, h) * self.MG], [None, zero]], format="csr")
-        Z.sort_indices()
-        X = schur_complement(Z, g)
-        Z = None
+        h = STEP * abs(self.K.diagonal()).max() / abs(self.M.diagonal()).max()
+        # K - z M made here and handed over unnamed: the solver's copy of its upper triangle
+        # is all that stays beside the factors
+        X = schur_complement(self._with_cut(complex(sigma, h)), self.KG.shape[1])
         S = np.ascontiguousarray(X.real)
         Mh = X.imag * (-1.0 / h)
         X = None
         return 0.5 * (S + S.T), 0.5 * (Mh + Mh.T)
+
+    def _with_cut(self, z):
+        """K - z M on the piece's dofs and the cut's it touches, the cut last, its own block
+        empty but for explicit zeros on its diagonal (what PARDISO asks of a symmetric
+        matrix): the piece's share of the cut's stiffness is the caller's."""
+        g = self.KG.shape[1]
+        zero = sp.csr_matrix((np.zeros(g), (np.arange(g), np.arange(g))), shape=(g, g))
+        Z = sp.bmat([[self.K - z * self.M, self.KG - z * self.MG], [None, zero]], format="csr")
+        Z.sort_indices()
+        return Z
 
     def _condensation_by_solves(self, solve, KG, Phi):
         """(S, Mh, C) of condensed() by Psi's solves, a block of cut dofs at a time: where

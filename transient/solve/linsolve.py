@@ -118,8 +118,9 @@ def schur_complement(A, g):
     for each of G's dofs. The diagonal of A_GG must be stored (zeros explicit)."""
     if "pardiso" not in available():
         raise FactorizationError("a Schur complement needs PARDISO (pypardiso)")
-    complex_ = np.iscomplexobj(A.data)
-    solver = _Pardiso(A, COMPLEX_SYMMETRIC if complex_ else -2, phase=11, schur=g)
+    solver = _Pardiso(A, COMPLEX_SYMMETRIC if np.iscomplexobj(A.data) else -2, phase=11,
+                      schur=g)
+    del A      # the solver holds its own upper triangle: a caller's unnamed A goes here
     return solver.schur()
 
 
@@ -185,13 +186,13 @@ class _Pardiso:
 
     def schur(self):
         """The Schur complement on the dofs marked at the analysis, by the numerical
-        factorization (phase 22), which returns it dense in x; the factors then released."""
+        factorization (phase 22), which returns it dense in x; the factors then freed."""
         g = self._schur
         x = np.zeros(g * g, self.dtype)
         try:
             self._call(22, np.zeros(self.n, self.dtype), x)
         finally:
-            self._release()
+            self.free()
         return x.reshape(g, g)
 
     def _call(self, phase, b, x):

@@ -46,11 +46,17 @@ class Analysis:
         return X @ (A @ self.modes.vectors[:, j])
 
     def summary(self):
-        """What `transient cea --json` prints, but for the total time."""
-        return {"modes": self.modes.table(), "ndof": self.ndof, "reduced": self.reduced,
-                "fmax_hz": self.fmax, "growth_rate_threshold": self.modes.threshold,
-                "shapes": self.shapes, "files": [str(p) for p in self.files],
-                "stages": self.stages}
+        """What `transient cea --json` prints, but for the total time; on the components
+        path with each part's stages [s] (where a part's reduction went: a part in pieces'
+        pieces, cut, extension)."""
+        out = {"modes": self.modes.table(), "ndof": self.ndof, "reduced": self.reduced,
+               "fmax_hz": self.fmax, "growth_rate_threshold": self.modes.threshold,
+               "shapes": self.shapes, "files": [str(p) for p in self.files],
+               "stages": self.stages}
+        parts = ((self.meta or {}).get("basis_timings") or {}).get("part_stages")
+        if parts is not None:
+            out["part_stages"] = parts
+        return out
 
 
 def analysed_case(case):
