@@ -68,10 +68,11 @@ print(json.dumps(dict(part=task.name, ndof=task.n, k_nnz=int(k_nnz),
 """
 
 
-def child(code, args, pythonpath, folder):
+def child(code, args, pythonpath, folder, env=None):
     """Runs code in a fresh process on the package at pythonpath, from folder: from here
-    `python -c` would put this checkout's package first whatever PYTHONPATH says."""
-    env = dict(os.environ, PYTHONPATH=pythonpath)
+    `python -c` would put this checkout's package first whatever PYTHONPATH says; env: more
+    of its environment."""
+    env = dict(os.environ, PYTHONPATH=pythonpath, **(env or {}))
     out = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True,
                          env=env, cwd=folder)
     if out.returncode:

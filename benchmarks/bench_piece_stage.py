@@ -1,12 +1,12 @@
 """Where a piece's first stage goes (reduce.piece.Piece.condensed, the stage that sets the time
 of a part reduced in pieces): the part's task in pieces pickled (bench_parts's DUMP), then one
-piece assembled from its cells and its first stage run in a fresh process on one thread, as a
-worker runs it, its solves timed and counted: the factorization, the fixed-cut modes (their
-Lanczos' solves among them), the solves of the condensation and the loads' statics (one for
-each fixed-cut mode and each load reaching the piece; with --by-solves, the condensation's
-reference, two for each cut dof the piece touches), PARDISO's Schur complement (the
-condensation: none with --by-solves), and the rest (the products with K and M beside the
-solves, the modes' orthonormalization).
+piece assembled from its cells and its first stage run in a fresh process with every runtime
+on one thread (MKL's too: transient.cluster.THREAD_ENV), as a worker runs it, its solves timed
+and counted: the factorization, the fixed-cut modes (their Lanczos' solves among them), the
+solves of the condensation and the loads' statics (one for each fixed-cut mode and each load
+reaching the piece; with --by-solves, the condensation's reference, two for each cut dof the
+piece touches), PARDISO's Schur complement (the condensation: none with --by-solves), and the
+rest (the products with K and M beside the solves, the modes' orthonormalization).
 
     python benchmarks/bench_piece_stage.py CASE --part disc --pieces 4 [--piece 0]
                                    [--by-solves] [--mu 0.4] [--set key=value ...]
@@ -20,6 +20,7 @@ from pathlib import Path
 
 from bench_parts import DUMP, ROOT, child, parsed  # noqa: E402  (siblings)
 from tables import publish, table  # noqa: E402
+from transient.cluster import THREAD_ENV  # noqa: E402
 
 RUN = """
 import json, pickle, resource, sys, time
@@ -109,9 +110,10 @@ def main(argv=None):
         child(DUMP, [folder, str(Path(args.case).resolve()), args.part, *overrides],
               str(ROOT), folder)
         import json
+        # every runtime on one thread, as the embedded cluster's workers are
         row = json.loads(child(RUN, [f"{folder}/{args.part}.pkl", str(args.piece),
                                      "solves" if args.by_solves else "schur"],
-                               str(ROOT), folder))
+                               str(ROOT), folder, THREAD_ENV))
     row.update(case=Path(args.case).name, pieces=args.pieces,
                condensation="solves" if args.by_solves else "schur",
                load=round(0.5 * (load0 + os.getloadavg()[0]), 1))
