@@ -118,12 +118,12 @@ def main(argv=None):
                condensation="solves" if args.by_solves else "schur",
                load=round(0.5 * (load0 + os.getloadavg()[0]), 1))
     cond = row["solves"] - row["modes_solves"]
-    header = ["case", "condensation", "part", "pieces", "piece", "interior dofs", "cut dofs it touches (of)",
-              "fixed-cut modes", "seconds", "factorization", "fixed-cut modes [s] (solves, "
+    header = ["case", "condensation", "part", "pieces", "piece", "interior dofs",
+              "cut dofs it touches (of)", "fixed-cut modes", "seconds", "factorization", "fixed-cut modes [s] (solves, "
               "right-hand sides)", "condensation and statics' solves [s] (right-hand sides)",
               "Schur complement [s]", "the rest [s]", "peak [GB]", "load"]
-    cells = [row["case"], row["condensation"], row["part"], args.pieces, args.piece, f"{row['interior']:,}",
-             f"{row['touched']:,} ({row['cut']:,})", row["modes"], f"{row['seconds']:.1f}",
+    cells = [row["case"], row["condensation"], row["part"], args.pieces, args.piece,
+             f"{row['interior']:,}", f"{row['touched']:,} ({row['cut']:,})", row["modes"], f"{row['seconds']:.1f}",
              f"{row['factorization']:.1f}",
              f"{row['modes_seconds']:.1f} ({row['modes_solves']:.1f}, {row['modes_rhs']:,})",
              f"{cond:.1f} ({row['rhs'] - row['modes_rhs']:,})", f"{row['schur']:.1f}",

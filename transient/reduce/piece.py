@@ -13,7 +13,8 @@ import scipy.sparse as sp
 
 from ..kernels.sparse import csr_dot
 from ..model.dofs import shifted
-from ..solve.linsolve import FactorizationError, factorize, schur_by_pardiso, schur_complement
+from ..solve.linsolve import (FactorizationError, factorize, release, schur_by_pardiso,
+                              schur_complement)
 from ..solve.lowrank import block_columns
 from ..solve.modes import normal_modes, shift_sigma
 from .basis import MODES_TOL
@@ -100,7 +101,7 @@ class Piece:
         if by_schur:
             # its factors, and MKL's buffers that held them, let go before the
             # condensation's complex ones (a piece's stage peaks there)
-            getattr(solve, "free", lambda: None)()
+            release(solve)
             solve = X = None
             S, Mh = self.condensation(sigma)
         return A, (S, Mh, B, omega2, C)

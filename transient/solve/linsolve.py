@@ -105,6 +105,14 @@ COMPLEX_UNSYMMETRIC = 13     # PARDISO's mtypes
 COMPLEX_SYMMETRIC = 6
 
 
+def release(solve):
+    """Free a factorization's memory for good where its backend can (PARDISO's: its factors
+    and MKL's buffers); the others' is freed with the solver. A solve after it is an error."""
+    free = getattr(solve, "free", None)
+    if free is not None:
+        free()
+
+
 def schur_by_pardiso(backend):
     """Whether Schur complements are formed by PARDISO (schur_complement): where it is
     installed and the case did not ask for another backend."""

@@ -20,7 +20,7 @@ from ..contact.regularize import factored_rows
 from ..kernels.sparse import csr_dot, csr_dot_pair
 from ..model.dofs import restrict, restricted, shifted
 from .. import blas, progress
-from .linsolve import factorize
+from .linsolve import factorize, release
 from .rowspace import factored_row_space, row_space
 
 MAX_BYTES = 1.5e9     # Z = A0^-1 C^T held dense up to this; G (rank^2) too, beyond it the
@@ -223,9 +223,7 @@ class ContactSolver:
         solve (reduce: the basis' orthonormalization and the sampling solve nothing): at 1M
         dofs they were 10.3 GB of the 24 the Grams ran out of. A shared solver (a campaign's)
         is not released. Only PARDISO's factors can be freed in place (the solves hold them)."""
-        free = getattr(self.solve0, "free", None)
-        if free is not None:
-            free()
+        release(self.solve0)
 
     def __getstate__(self):
         # a factorization does not travel between processes (PARDISO's handle is its own):
